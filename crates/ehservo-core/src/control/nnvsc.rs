@@ -1,0 +1,451 @@
+//! The RBF-network-based VSC of Theorem 3 (NNBVSC).
+//!
+//! ```text
+//! u    = u_eq + u_sw                                                   (23)
+//! u_eq = {θ⃛d + ā1x1 + ā2x2 + ā3x3 + p1(θ̈d − x3) + p2(θ̇d − x2)
+//!         + p3(θd − x1) + WᵀΦ(x, z)}/b̄                                 (24)
+//! u_sw = {γ1·σΔ + γ2·σΔ/(|σΔ| + μ)}/(b̄ − β)                            (25)
+//! Ẇ    = H⁻¹·(σΔ·Φ − η·|σΔ|·W)                                         (26)
+//! σΔ   = σ − Δ·sgn(σ) if |σ| > Δ = ᾱ‖E‖, else 0                         (27)
+//! γ2   = η·W²max/4 + ε0‖Φ‖ + ε1 + ε2                                    (34)
+//! μ    = (α − ᾱ)·‖E‖·ε2/c,  c = η·W²max/4 + ε0‖Φ‖ + ε1                 (SPEC §5)
+//! ```
+//!
+//! Φ is the 130-entry vector of (20) ([`crate::rbf`]), β = bound_b·b̄,
+//! H = h·I. The printed (33) is garbled (read literally μ < 0); SPEC §5 takes
+//! the μ that Remark 7 back-solves from (29)–(30), which sits on the bound
+//! (32). ξ = ᾱ·EᵀĖ·sgn(σ)/‖E‖ is not part of the law; it is returned for the
+//! learning target of (19), plotted in Fig. 2(d).
+//!
+//! **‖E‖ = 0.** Then Δ = μ = 0 and ξ would divide by zero: the law sets
+//! σΔ = μ = ξ = 0 (no switching, no learning) and raises
+//! [`flags::ZERO_ERROR_NORM`]. Whenever |σΔ| + μ = 0 the switching fraction
+//! is 0, never 0/0.
+//!
+//! Paper's Fig. 2 values ([`NnVscParams::paper`]): γ1 = 100, η = 0.25,
+//! ᾱ = 5, α = 250, Wmax = 4, ε0 = ε1 = 0.1, ε2 = 0.01, h = 1, bound_b = 0.5.
+
+use super::{flags, ControlOutput, Controller, Measurement};
+use crate::error::{non_negative, positive, ParamError};
+use crate::math::sgn;
+use crate::rbf::{Rbf, N_PHI};
+use crate::rk4::OdeState;
+use crate::servo::NominalModel;
+use crate::surface::SwitchingSurface;
+
+/// Gains of the NNBVSC.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NnVscParams {
+    /// γ1 > 0, the linear switching gain.
+    pub gamma1: f64,
+    /// η ≥ 0, the revised ε-modification gain.
+    pub eta: f64,
+    /// α > ᾱ, the exponential-tracking rate parameter of Theorem 2.
+    pub alpha: f64,
+    /// ᾱ ≥ 0, the dead-zone slope.
+    pub alpha_bar: f64,
+    /// Wmax ≥ 0, the assumed bound on ‖W̄‖ (21).
+    pub w_max: f64,
+    /// ε0 ≥ 0 of (22).
+    pub eps0: f64,
+    /// ε1 ≥ 0 of (22).
+    pub eps1: f64,
+    /// ε2 > 0 of (34).
+    pub eps2: f64,
+    /// h > 0, H = h·I in (26).
+    pub h: f64,
+    /// β = bound_b·b̄, 0 ≤ bound_b < 1.
+    pub bound_b: f64,
+}
+
+impl NnVscParams {
+    /// The Fig. 2 values.
+    pub const fn paper() -> Self {
+        Self {
+            gamma1: 100.0,
+            eta: 0.25,
+            alpha: 250.0,
+            alpha_bar: 5.0,
+            w_max: 4.0,
+            eps0: 0.1,
+            eps1: 0.1,
+            eps2: 0.01,
+            h: 1.0,
+            bound_b: 0.5,
+        }
+    }
+
+    /// Checks every gain; the error names the first one that is wrong.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        positive("gamma1", self.gamma1)?;
+        non_negative("eta", self.eta)?;
+        positive("alpha", self.alpha)?;
+        non_negative("alpha_bar", self.alpha_bar)?;
+        if self.alpha_bar >= self.alpha {
+            return Err(ParamError::new(
+                "alpha_bar",
+                "must be < alpha (Theorem 3: 0 ≤ ᾱ < α)",
+                self.alpha_bar,
+            ));
+        }
+        non_negative("w_max", self.w_max)?;
+        non_negative("eps0", self.eps0)?;
+        non_negative("eps1", self.eps1)?;
+        positive("eps2", self.eps2)?;
+        positive("h", self.h)?;
+        non_negative("bound_b", self.bound_b)?;
+        if self.bound_b >= 1.0 {
+            return Err(ParamError::new(
+                "bound_b",
+                "must be < 1 (Assumption A1: β < b̄)",
+                self.bound_b,
+            ));
+        }
+        // c = ηW²/4 + ε0‖Φ‖ + ε1 ≥ ηW²/4 + ε0 + ε1 (‖Φ‖ ≥ 1): μ divides by it.
+        if self.eta * self.w_max * self.w_max / 4.0 + self.eps0 + self.eps1 <= 0.0 {
+            return Err(ParamError::new(
+                "eps1",
+                "η·Wmax²/4 + ε0 + ε1 must be > 0 (μ(t) divides by it)",
+                self.eps1,
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The NNBVSC state: ∫e and the 130 weights (W[0] is the bias weight, the
+/// paper's w_1 is W[1], w_128 is W[128]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NnState {
+    /// ∫e.
+    pub int_e: f64,
+    /// Connection weights W.
+    pub w: [f64; N_PHI],
+}
+
+impl OdeState for NnState {
+    #[inline]
+    fn zero() -> Self {
+        Self {
+            int_e: 0.0,
+            w: [0.0; N_PHI],
+        }
+    }
+    #[inline]
+    fn axpy(&mut self, a: f64, o: &Self) {
+        self.int_e += a * o.int_e;
+        self.w.axpy(a, &o.w);
+    }
+    #[inline]
+    fn all_finite(&self) -> bool {
+        self.int_e.is_finite() && self.w.all_finite()
+    }
+}
+
+/// The NNBVSC of Theorem 3.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NnVsc {
+    model: NominalModel,
+    surface: SwitchingSurface,
+    params: NnVscParams,
+    rbf: Rbf,
+    c_fixed: f64,
+    b_floor: f64,
+}
+
+impl NnVsc {
+    /// Validates the gains and builds the controller.
+    pub fn try_new(
+        model: NominalModel,
+        surface: SwitchingSurface,
+        params: NnVscParams,
+        rbf: Rbf,
+    ) -> Result<Self, ParamError> {
+        params.validate()?;
+        Ok(Self {
+            model,
+            surface,
+            rbf,
+            c_fixed: params.eta * params.w_max * params.w_max / 4.0 + params.eps1,
+            b_floor: 1e-3 * model.b_at_rest(),
+            params,
+        })
+    }
+
+    /// The gains.
+    pub fn params(&self) -> &NnVscParams {
+        &self.params
+    }
+
+    /// The network.
+    pub fn rbf(&self) -> &Rbf {
+        &self.rbf
+    }
+
+    /// The switching surface.
+    pub fn surface(&self) -> &SwitchingSurface {
+        &self.surface
+    }
+
+    /// The nominal model.
+    pub fn model(&self) -> &NominalModel {
+        &self.model
+    }
+}
+
+impl Controller for NnVsc {
+    type State = NnState;
+
+    fn name(&self) -> &'static str {
+        "nnvsc"
+    }
+
+    fn initial_state(&self) -> NnState {
+        NnState::zero()
+    }
+
+    #[inline]
+    fn law(&self, m: &Measurement, s: &NnState, ds: &mut NnState) -> ControlOutput {
+        let p = &self.params;
+        let x = &m.x;
+        let st = self.surface.evaluate(x, &m.z, s.int_e);
+
+        let mut phi = [0.0; N_PHI];
+        let phi_norm = self.rbf.phi(x, &m.z, &mut phi);
+        let mut wphi = 0.0;
+        for (w, f) in s.w.iter().zip(phi.iter()) {
+            wphi += w * f;
+        }
+
+        // c = ηW²max/4 + ε0‖Φ‖ + ε1; γ2 = c + ε2 (34).
+        let c = self.c_fixed + p.eps0 * phi_norm;
+        let gamma2 = c + p.eps2;
+
+        let mut fl = 0;
+        let (sd, mu, xi) = if st.norm_e > 0.0 {
+            let delta = p.alpha_bar * st.norm_e;
+            let sd = if st.sigma.abs() > delta {
+                st.sigma - delta * sgn(st.sigma)
+            } else {
+                0.0
+            };
+            let mu = (p.alpha - p.alpha_bar) * st.norm_e * p.eps2 / c;
+            let e = st.e_vec();
+            let ed = st.e_vec_dot();
+            let ete = e[0] * ed[0] + e[1] * ed[1] + e[2] * ed[2];
+            let xi = p.alpha_bar * ete * sgn(st.sigma) / st.norm_e;
+            (sd, mu, xi)
+        } else {
+            fl |= flags::ZERO_ERROR_NORM;
+            (0.0, 0.0, 0.0)
+        };
+
+        let denom = sd.abs() + mu;
+        let frac = if denom > 0.0 { sd / denom } else { 0.0 };
+        // (b̄ − β)·u_sw = γ1σΔ + γ2σΔ/(|σΔ| + μ), and b̄ − β = b̄(1 − bound_b).
+        let sw_num = p.gamma1 * sd + gamma2 * frac;
+        let n = self
+            .surface
+            .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
+        let v = n + wphi + sw_num / (1.0 - p.bound_b);
+        let (b, clamped) = self.model.b(x, sgn(v));
+        let b_bar = if clamped || b < self.b_floor {
+            fl |= flags::VALVE_ROOT_CLAMPED;
+            b.max(self.b_floor)
+        } else {
+            b
+        };
+        let u_eq = (n + wphi) / b_bar;
+        let u_sw = sw_num / (b_bar * (1.0 - p.bound_b));
+
+        // Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26); ∫e' = e.
+        ds.int_e = st.e;
+        let inv_h = 1.0 / p.h;
+        let a = sd * inv_h;
+        let bw = p.eta * sd.abs() * inv_h;
+        for ((dw, f), w) in ds.w.iter_mut().zip(phi.iter()).zip(s.w.iter()) {
+            *dw = a * f - bw * w;
+        }
+
+        ControlOutput {
+            u: u_eq + u_sw,
+            u_eq,
+            u_sw,
+            e: st.e,
+            sigma: st.sigma,
+            sigma_delta: sd,
+            wphi,
+            phi_norm,
+            xi,
+            b_bar,
+            gain: gamma2,
+            mu,
+            norm_e: st.norm_e,
+            flags: fl,
+        }
+    }
+
+    fn weights<'a>(&self, s: &'a NnState) -> &'a [f64] {
+        &s.w
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
+mod tests {
+    use super::*;
+    use crate::reference::{Reference, Sine};
+    use crate::servo::{Load, ServoParams};
+
+    fn paper_nn(load: Load) -> NnVsc {
+        NnVsc::try_new(
+            NominalModel::new(ServoParams::paper(), load),
+            SwitchingSurface::paper(),
+            NnVscParams::paper(),
+            Rbf::paper(),
+        )
+        .unwrap()
+    }
+
+    /// The first sample of the Fig. 2 run, by hand. x = 0, W = 0, ∫e = 0,
+    /// t = 0: z = (0, A·2π, 0, −A·(2π)³) with A = 5° = 0.08726646 rad, so
+    /// θ̇d = 0.54831136, θ⃛d = −21.6464647.
+    /// e = 0, ė = 0.54831136, ë = 0 → σ = 90·0.54831136 = 49.348022;
+    /// ‖E‖ = 0.54831136; Δ = 5·‖E‖ = 2.7415568; σΔ = 46.606465.
+    /// Φ at x = 0: the 125 Gaussians are exp(−r²/0.25) over the grid, and
+    /// Σφ² factors per axis: (Σ_l exp(−2l²/0.25))³ over l ∈ {−1,−.5,0,.5,1}
+    /// = (1 + 2e^−2 + 2e^−8)³ = 1.2713415³ = 2.0548809; plus 1 (bias) and
+    /// z·z = 0.3006453 + 468.56943 → ‖Φ‖² = 471.92496, ‖Φ‖ = 21.723834.
+    /// c = 0.25·4²/4 + 0.1·21.723834 + 0.1 = 3.2723834; γ2 = 3.2823834;
+    /// μ = (250 − 5)·0.54831136·0.01/3.2723834 = 0.4105151.
+    /// sw = 100·46.606465 + 3.2823834·46.606465/(46.606465 + 0.4105151)
+    ///    = 4660.6465 + 3.2537242 = 4663.9002;
+    /// N = θ⃛d + p2·θ̇d = −21.6464647 + 2600·0.54831136 = 1403.96306;
+    /// v = N + sw/0.5 = 10731.7636 > 0, so b̄ = b(0, +) = 17911.7547 (Pl = 0);
+    /// u_eq = 1403.96306/17911.7547 = 0.0783822; u_sw = 9327.8005/17911.7547
+    /// = 0.5207642; u = 0.5991464.
+    /// Ẇ[0] = σΔ·1 = 46.606465 (W = 0, so no η term); Ẇ[129] = σΔ·θ⃛d
+    /// = −1008.8652.
+    #[test]
+    fn first_sample_of_fig2_by_hand() {
+        let c = paper_nn(Load::paper());
+        let m = Measurement {
+            t: 0.0,
+            x: [0.0; 3],
+            z: Sine::paper().z(0.0),
+        };
+        let mut ds = NnState::zero();
+        let o = c.law(&m, &NnState::zero(), &mut ds);
+        let close = |a: f64, b: f64, tol: f64| assert!((a - b).abs() < tol, "{a} vs {b}");
+        close(o.sigma, 49.348022, 1e-5);
+        close(o.sigma_delta, 46.606465, 1e-5);
+        close(o.phi_norm, 21.723834, 1e-5);
+        close(o.gain, 3.2823834, 1e-6);
+        close(o.mu, 0.4105151, 1e-6);
+        close(o.u_eq, 0.0783822, 1e-6);
+        close(o.u_sw, 0.5207642, 1e-6);
+        close(o.u, 0.5991464, 1e-6);
+        close(ds.w[0], 46.606465, 1e-5);
+        close(ds.w[129], -1008.8652, 1e-3);
+        assert_eq!(o.wphi, 0.0);
+        assert_eq!(ds.int_e, 0.0);
+    }
+
+    /// Inside the dead zone (|σ| ≤ ᾱ‖E‖) σΔ = 0 exactly: no learning, no
+    /// switching, u = u_eq. Here ∫e = 0.01 makes ‖E‖ ≥ 0.01 while σ = 0
+    /// by choice of ë: x = 0, z = (0, 0, θ̈d, 0) with
+    /// σ = θ̈d + p3·0.01 = 0 → θ̈d = −240.
+    #[test]
+    fn dead_zone_is_exact() {
+        let c = paper_nn(Load::none());
+        let m = Measurement {
+            t: 0.0,
+            x: [0.0; 3],
+            z: [0.0, 0.0, -240.0, 0.0],
+        };
+        let s = NnState {
+            int_e: 0.01,
+            w: [0.3; N_PHI],
+        };
+        let mut ds = NnState::zero();
+        let o = c.law(&m, &s, &mut ds);
+        assert_eq!(o.sigma, 0.0);
+        assert_eq!(o.sigma_delta, 0.0);
+        assert_eq!(o.u_sw, 0.0);
+        assert_eq!(o.u, o.u_eq);
+        assert!(ds.w.iter().all(|&d| d == 0.0));
+    }
+
+    /// ‖E‖ = 0: no division, σΔ = μ = ξ = 0, flag raised, u finite.
+    #[test]
+    fn zero_error_norm_is_guarded() {
+        let c = paper_nn(Load::paper());
+        let m = Measurement {
+            t: 0.0,
+            x: [0.0, 0.0, 1.0],
+            z: [0.0, 0.0, 0.0, 0.0],
+        };
+        let o = c.law(&m, &NnState::zero(), &mut NnState::zero());
+        assert_eq!(o.norm_e, 0.0);
+        assert_eq!(o.sigma_delta, 0.0);
+        assert_eq!(o.mu, 0.0);
+        assert_eq!(o.xi, 0.0);
+        assert!(o.u.is_finite());
+        assert_ne!(o.flags & flags::ZERO_ERROR_NORM, 0);
+    }
+
+    /// The ε-modification pulls W toward 0: with Φ's direction removed
+    /// (compare two weight vectors), Ẇ(W) − Ẇ(0) = −η|σΔ|W/h.
+    #[test]
+    fn epsilon_modification_sign() {
+        let c = paper_nn(Load::paper());
+        let m = Measurement {
+            t: 0.0,
+            x: [0.0; 3],
+            z: Sine::paper().z(0.0),
+        };
+        let mut d0 = NnState::zero();
+        let mut d1 = NnState::zero();
+        let mut s1 = NnState::zero();
+        s1.w[5] = 2.0;
+        let o = c.law(&m, &NnState::zero(), &mut d0);
+        let _ = c.law(&m, &s1, &mut d1);
+        // σΔ does not depend on W, so the difference is −0.25·|σΔ|·2.
+        let expect = -0.25 * o.sigma_delta.abs() * 2.0;
+        assert!((d1.w[5] - d0.w[5] - expect).abs() < 1e-9);
+    }
+
+    #[test]
+    fn rejects_bad_gains() {
+        let bad = |p: NnVscParams| {
+            NnVsc::try_new(
+                NominalModel::new(ServoParams::paper(), Load::paper()),
+                SwitchingSurface::paper(),
+                p,
+                Rbf::paper(),
+            )
+            .unwrap_err()
+            .name
+        };
+        let p = NnVscParams::paper();
+        assert_eq!(bad(NnVscParams { gamma1: 0.0, ..p }), "gamma1");
+        assert_eq!(
+            bad(NnVscParams {
+                alpha_bar: 250.0,
+                ..p
+            }),
+            "alpha_bar"
+        );
+        assert_eq!(bad(NnVscParams { eps2: 0.0, ..p }), "eps2");
+        assert_eq!(bad(NnVscParams { eta: f64::NAN, ..p }), "eta");
+        assert_eq!(
+            bad(NnVscParams {
+                eta: 0.0,
+                eps0: 0.0,
+                eps1: 0.0,
+                ..p
+            }),
+            "eps1"
+        );
+    }
+}

@@ -1,0 +1,269 @@
+//! The traditional variable structure controller of Theorem 1.
+//!
+//! ```text
+//! u    = u_eq + u_sw                                                    (11)
+//! u_eq = {θ⃛d + ā1x1 + ā2x2 + ā3x3 + p1(θ̈d − x3) + p2(θ̇d − x2) + p3(θd − x1)}/b̄   (12)
+//! u_sw = k·sgn(σ)                                                       (13)
+//! k    = [α1|x1| + α2|x2| + α3|x3| + γ + β|u_eq|]/(b̄ − β)               (14)
+//! ```
+//!
+//! with the bounds the controller knows: α_i = bound_a·|ā_i|,
+//! β = bound_b·b̄(t), γ = |d(t)| (the nominal load term at the measured
+//! state). The paper's Fig. 2 bounds are bound_a = 1, bound_b = 0.5.
+//! Remark 2's boundary-layer variant replaces sgn(σ) by sat(σ/μ).
+//! The state is ∫e alone (it enters σ through p3).
+
+use super::{flags, ControlOutput, Controller, Measurement};
+use crate::error::{non_negative, positive, ParamError};
+use crate::math::{sat, sgn};
+use crate::servo::NominalModel;
+use crate::surface::SwitchingSurface;
+
+/// How the switching term switches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Switching {
+    /// sgn(σ), eq. (13).
+    Sign,
+    /// sat(σ/μ) with a constant boundary-layer width μ (Remark 2).
+    Saturation {
+        /// Width μ of the boundary layer (rad/s²).
+        mu: f64,
+    },
+}
+
+/// Gains of the traditional VSC.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VscParams {
+    /// α_i = bound_a·|ā_i|.
+    pub bound_a: f64,
+    /// β = bound_b·b̄, 0 ≤ bound_b < 1 (A1: β < b̄).
+    pub bound_b: f64,
+    /// sgn or sat.
+    pub switching: Switching,
+}
+
+impl VscParams {
+    /// The paper's Theorem 1 controller with the Fig. 2 bounds.
+    pub const fn paper() -> Self {
+        Self {
+            bound_a: 1.0,
+            bound_b: 0.5,
+            switching: Switching::Sign,
+        }
+    }
+}
+
+/// The traditional VSC (Theorem 1), or its boundary-layer variant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Vsc {
+    model: NominalModel,
+    surface: SwitchingSurface,
+    params: VscParams,
+    alpha: [f64; 3],
+    b_floor: f64,
+}
+
+impl Vsc {
+    /// Validates the gains and builds the controller.
+    pub fn try_new(
+        model: NominalModel,
+        surface: SwitchingSurface,
+        params: VscParams,
+    ) -> Result<Self, ParamError> {
+        non_negative("bound_a", params.bound_a)?;
+        non_negative("bound_b", params.bound_b)?;
+        if params.bound_b >= 1.0 {
+            return Err(ParamError::new(
+                "bound_b",
+                "must be < 1 (Assumption A1: β < b̄)",
+                params.bound_b,
+            ));
+        }
+        if let Switching::Saturation { mu } = params.switching {
+            positive("mu", mu)?;
+        }
+        let a = model.coeffs.as_array();
+        Ok(Self {
+            alpha: [
+                params.bound_a * a[0].abs(),
+                params.bound_a * a[1].abs(),
+                params.bound_a * a[2].abs(),
+            ],
+            b_floor: 1e-3 * model.b_at_rest(),
+            model,
+            surface,
+            params,
+        })
+    }
+
+    /// The gains.
+    pub fn params(&self) -> &VscParams {
+        &self.params
+    }
+
+    /// The switching surface.
+    pub fn surface(&self) -> &SwitchingSurface {
+        &self.surface
+    }
+
+    /// The nominal model.
+    pub fn model(&self) -> &NominalModel {
+        &self.model
+    }
+}
+
+impl Controller for Vsc {
+    type State = [f64; 1];
+
+    fn name(&self) -> &'static str {
+        match self.params.switching {
+            Switching::Sign => "vsc",
+            Switching::Saturation { .. } => "vsc-sat",
+        }
+    }
+
+    fn initial_state(&self) -> [f64; 1] {
+        [0.0]
+    }
+
+    #[inline]
+    fn law(&self, m: &Measurement, s: &[f64; 1], ds: &mut [f64; 1]) -> ControlOutput {
+        let x = &m.x;
+        let st = self.surface.evaluate(x, &m.z, s[0]);
+        let a = self.model.coeffs.as_array();
+        let n = self.surface.equivalent_numerator(&a, x, &m.z);
+        let gamma = self.model.d(x).abs();
+        let bb = self.params.bound_b;
+        let (switch, mu) = match self.params.switching {
+            Switching::Sign => (sgn(st.sigma), 0.0),
+            Switching::Saturation { mu } => (sat(st.sigma / mu), mu),
+        };
+        // k·b̄ = [Σα|x| + γ + bb·|N|]/(1 − bb): independent of b̄ (module doc).
+        let kb = (self.alpha[0] * x[0].abs()
+            + self.alpha[1] * x[1].abs()
+            + self.alpha[2] * x[2].abs()
+            + gamma
+            + bb * n.abs())
+            / (1.0 - bb);
+        let v = n + switch * kb;
+        let (b, clamped) = self.model.b(x, sgn(v));
+        let mut fl = 0;
+        let b_bar = if clamped || b < self.b_floor {
+            fl |= flags::VALVE_ROOT_CLAMPED;
+            b.max(self.b_floor)
+        } else {
+            b
+        };
+        let u_eq = n / b_bar;
+        let k = kb / b_bar;
+        let u_sw = k * switch;
+        ds[0] = st.e;
+        ControlOutput {
+            u: u_eq + u_sw,
+            u_eq,
+            u_sw,
+            e: st.e,
+            sigma: st.sigma,
+            sigma_delta: st.sigma,
+            wphi: 0.0,
+            phi_norm: 0.0,
+            xi: 0.0,
+            b_bar,
+            gain: k,
+            mu,
+            norm_e: st.norm_e,
+            flags: fl,
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
+mod tests {
+    use super::*;
+    use crate::servo::{Load, ServoParams};
+
+    fn vsc(switching: Switching) -> Vsc {
+        Vsc::try_new(
+            NominalModel::new(ServoParams::paper(), Load::none()),
+            SwitchingSurface::paper(),
+            VscParams {
+                switching,
+                ..VscParams::paper()
+            },
+        )
+        .unwrap()
+    }
+
+    /// At rest (x = 0, no load) with z = (0, 0.5, 0, 0) and ∫e = 0:
+    /// e = 0, ė = 0.5, ë = 0 → σ = 90·0.5 = 45 > 0.
+    /// N = p2·θ̇d = 2600·0.5 = 1300; γ = 0 (no load); Σα|x| = 0.
+    /// b̄ = b(0, +) = 17911.75 (Pl = 0). u_eq = 1300/17911.75 = 0.0725780.
+    /// k = [0 + 0 + 0.5·b̄·|u_eq|]/(0.5·b̄) = |u_eq| → u = 2·u_eq = 0.1451561.
+    #[test]
+    fn law_by_hand_at_rest() {
+        let c = vsc(Switching::Sign);
+        let m = Measurement {
+            t: 0.0,
+            x: [0.0; 3],
+            z: [0.0, 0.5, 0.0, 0.0],
+        };
+        let mut ds = [0.0];
+        let o = c.law(&m, &[0.0], &mut ds);
+        assert!((o.sigma - 45.0).abs() < 1e-12);
+        assert!((o.u_eq - 0.0725780).abs() < 1e-7, "u_eq {}", o.u_eq);
+        assert!((o.u_sw - 0.0725780).abs() < 1e-7);
+        assert!((o.u - 0.1451561).abs() < 1e-7);
+        assert_eq!(ds[0], 0.0); // ∫e' = e = 0
+                                // Reverse the error: σ < 0 flips only the switching term.
+        let m2 = Measurement {
+            z: [0.0, -0.5, 0.0, 0.0],
+            ..m
+        };
+        let o2 = c.law(&m2, &[0.0], &mut ds);
+        assert!((o2.u_eq + 0.0725780).abs() < 1e-7);
+        assert!((o2.u + 0.1451561).abs() < 1e-7);
+    }
+
+    /// With a boundary layer of width μ = 90 and σ = 45: sat(0.5) = 0.5, so
+    /// u_sw is half the k above: u = 1.5·u_eq = 0.1088671.
+    #[test]
+    fn boundary_layer_scales_switching() {
+        let c = vsc(Switching::Saturation { mu: 90.0 });
+        let m = Measurement {
+            t: 0.0,
+            x: [0.0; 3],
+            z: [0.0, 0.5, 0.0, 0.0],
+        };
+        let o = c.law(&m, &[0.0], &mut [0.0]);
+        assert!((o.u - 0.1088671).abs() < 1e-7, "{}", o.u);
+    }
+
+    #[test]
+    fn rejects_bad_gains() {
+        let m = NominalModel::new(ServoParams::paper(), Load::paper());
+        let s = SwitchingSurface::paper();
+        let bad = |p: VscParams| Vsc::try_new(m, s, p).unwrap_err().name;
+        assert_eq!(
+            bad(VscParams {
+                bound_b: 1.0,
+                ..VscParams::paper()
+            }),
+            "bound_b"
+        );
+        assert_eq!(
+            bad(VscParams {
+                bound_a: -1.0,
+                ..VscParams::paper()
+            }),
+            "bound_a"
+        );
+        assert_eq!(
+            bad(VscParams {
+                switching: Switching::Saturation { mu: 0.0 },
+                ..VscParams::paper()
+            }),
+            "mu"
+        );
+    }
+}

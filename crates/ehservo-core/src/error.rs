@@ -1,0 +1,67 @@
+//! The one error of the core: a parameter rejected at construction.
+
+use core::fmt;
+
+/// A parameter rejected at construction. `Copy`, allocation-free, and it
+/// names the parameter and the reason, so that a board can report it and a
+/// scenario loader can map it back to its key.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamError {
+    /// The parameter's name (as in the paper, e.g. `"gamma1"`).
+    pub name: &'static str,
+    /// Why it was rejected.
+    pub reason: &'static str,
+    /// The offending value (NaN when the value is a combination).
+    pub value: f64,
+}
+
+impl ParamError {
+    /// A new error.
+    pub const fn new(name: &'static str, reason: &'static str, value: f64) -> Self {
+        Self {
+            name,
+            reason,
+            value,
+        }
+    }
+}
+
+impl fmt::Display for ParamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.value.is_nan() {
+            write!(f, "{}: {}", self.name, self.reason)
+        } else {
+            write!(f, "{}: {} (got {})", self.name, self.reason, self.value)
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for ParamError {}
+
+/// `Ok(v)` when `v` is finite and `> 0`, else an error naming `name`.
+pub(crate) fn positive(name: &'static str, v: f64) -> Result<f64, ParamError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(ParamError::new(name, "must be finite and > 0", v))
+    }
+}
+
+/// `Ok(v)` when `v` is finite and `>= 0`, else an error naming `name`.
+pub(crate) fn non_negative(name: &'static str, v: f64) -> Result<f64, ParamError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(ParamError::new(name, "must be finite and >= 0", v))
+    }
+}
+
+/// `Ok(v)` when `v` is finite.
+pub(crate) fn finite(name: &'static str, v: f64) -> Result<f64, ParamError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ParamError::new(name, "must be finite", v))
+    }
+}

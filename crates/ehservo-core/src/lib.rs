@@ -1,0 +1,63 @@
+//! # ehservo-core
+//!
+//! The allocation-free, `no_std` mathematics of an electrohydraulic servo
+//! controller, after C.-L. Hwang, *Neural-network-based variable structure
+//! control of electrohydraulic servosystems subject to huge uncertainties
+//! without persistent excitation* (equation numbers `(n)` below are the
+//! paper's).
+//!
+//! | module | what it holds | paper |
+//! |---|---|---|
+//! | [`servo`] | physical parameters (SI) → coefficients `a1, a2, a3`, the state-dependent gain `b` and load term `d`; the load `Tl` | (1)–(9) |
+//! | [`reference`] | the desired trajectory and its first three derivatives `z` | A3, §IV |
+//! | [`surface`] | the switching surface `σ`, the error vector `E`, design from poles | (10), (15)–(16) |
+//! | [`rbf`] | the modified radial-basis vector `Φ(x, z)` (130 entries) | (20) |
+//! | [`control`] | the [`Controller`](control::Controller) trait, the traditional VSC and the NNBVSC | (11)–(14), (23)–(34) |
+//! | [`rk4`] | one fixed-step classic Runge–Kutta step over any fixed-size state | §IV |
+//! | [`sampled`] | a fixed-rate loop for hardware: law + forward-Euler controller state | — |
+//!
+//! Nothing here allocates or touches `std`; `exp` and `sqrt` come from
+//! `libm`. Parameters are validated once, at construction (`try_new`), with a
+//! small `Copy` error naming the parameter; the control step itself is
+//! infallible.
+//!
+//! ```
+//! use ehservo_core::prelude::*;
+//!
+//! let servo = ServoParams::paper();
+//! let c = servo.coefficients();
+//! assert!((c.a2 - 13000.2711).abs() < 1e-3);
+//!
+//! let model = NominalModel::new(servo, Load::paper());
+//! let surface = SwitchingSurface::from_poles([-20.0, -30.0, -40.0]).unwrap();
+//! let nn = NnVsc::try_new(model, surface, NnVscParams::paper(), Rbf::paper()).unwrap();
+//! let mut ctl = SampledController::new(nn, 0.01).unwrap();
+//! let reference = Sine::paper();
+//! let out = ctl.step(0.0, [0.0, 0.0, 0.0], reference.z(0.0));
+//! assert!(out.u.is_finite());
+//! ```
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
+
+pub mod control;
+pub mod error;
+pub mod math;
+pub mod rbf;
+pub mod reference;
+pub mod rk4;
+pub mod sampled;
+pub mod servo;
+pub mod surface;
+
+/// The names most users need, in one import.
+pub mod prelude {
+    pub use crate::control::nnvsc::{NnState, NnVsc, NnVscParams};
+    pub use crate::control::vsc::{Switching, Vsc, VscParams};
+    pub use crate::control::{ControlOutput, Controller, Measurement};
+    pub use crate::error::ParamError;
+    pub use crate::rbf::{Rbf, N_KERNELS, N_PHI};
+    pub use crate::reference::{Reference, Sine};
+    pub use crate::rk4::{rk4_step, OdeState};
+    pub use crate::sampled::SampledController;
+    pub use crate::servo::{Coefficients, Friction, Load, NominalModel, ServoParams};
+    pub use crate::surface::{SurfaceState, SwitchingSurface};
+}

@@ -1,0 +1,420 @@
+//! The electrohydraulic servo: physical parameters and the quantities the
+//! paper derives from them.
+//!
+//! Servovalve and motor, eqs. (1)–(6), in SI units:
+//!
+//! ```text
+//! Kg = Cd·Ag·sqrt((Ps − sgn(xv)·Pl)/ρ)                 (2)
+//! (Vt/4βe)·Ṗl = Kg·xv − Dm·θ̇ − Kce·Pl                  (5)
+//! Jt·θ̈ = Pl·Dm − Bm·θ̇ − G·θ − Tl(θ, θ̇)                 (4)
+//! xv = Kv·u                                             (6)
+//! ```
+//!
+//! Differentiating (4) once and substituting (5) gives the third-order model
+//! (8) in x = (θ, θ̇, θ̈): `ẋ3 = −a1·x1 − a2·x2 − a3·x3 + b·u − d` with (9):
+//!
+//! ```text
+//! a1 = 4βe·Kce·G/(Vt·Jt)
+//! a2 = G/Jt + 4βe·Dm²/(Vt·Jt) + 4βe·Kce·Bm/(Vt·Jt)
+//! a3 = Bm/Jt + 4βe·Kce/Vt
+//! b  = 4βe·Dm·Kg·Kv/(Vt·Jt)
+//! d  = 4βe·Kce·Tl/(Vt·Jt) + Ṫl/Jt
+//! ```
+//!
+//! With the paper's Section IV numbers these are ā1 = 0.39982 s⁻³,
+//! ā2 = 13000.2711 s⁻², ā3 = 169.98043 s⁻¹ and b ≈ 17 912 s⁻³V⁻¹ at Pl = 0.
+//! `Pl`, needed by `Kg`, follows from (4): `Pl = (Jt·x3 + Bm·x2 + G·x1 + Tl)/Dm`.
+//!
+//! **Valve root.** When `Ps − sgn(xv)·Pl < 0` the valve cannot deliver flow
+//! in that direction: the argument of the root is clamped at 0 (so `Kg = 0`,
+//! never NaN) and the clamp is reported to the caller.
+
+use crate::error::{non_negative, positive, ParamError};
+use crate::math::{cos, exp, sgn, sin, sqrt, tanh};
+
+/// Physical parameters of the servo (eqs. 1–6), SI units throughout.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoParams {
+    /// Supply pressure Ps (Pa).
+    pub ps: f64,
+    /// Effective bulk modulus βe (Pa).
+    pub beta_e: f64,
+    /// Total compressed volume Vt (m³).
+    pub vt: f64,
+    /// Total flow-pressure coefficient Kce = Kc + Ctm (m³/(s·Pa)).
+    pub kce: f64,
+    /// Motor volumetric displacement Dm (m³/rad).
+    pub dm: f64,
+    /// Total inertia of motor and load Jt (N·m·s²).
+    pub jt: f64,
+    /// Viscous damping of the load Bm (N·m·s).
+    pub bm: f64,
+    /// Servovalve gain Kv (m/V).
+    pub kv: f64,
+    /// Torsional spring gradient of the load G (N·m/rad).
+    pub g: f64,
+    /// Fluid mass density ρ (kg/m³).
+    pub rho: f64,
+    /// Discharge coefficient Cd (–).
+    pub cd: f64,
+    /// Area gradient Ag (m).
+    pub ag: f64,
+}
+
+impl ServoParams {
+    /// The paper's Section IV parameters, converted to SI (MPa → Pa; the
+    /// printed Kce = 2.376e-6 m³/(s·MPa) is 2.376e-12 m³/(s·Pa)).
+    pub const fn paper() -> Self {
+        Self {
+            ps: 13.795e6,
+            beta_e: 344.875e6,
+            vt: 1.639e-4,
+            kce: 2.376e-12,
+            dm: 8.195e-6,
+            jt: 5.652e-2,
+            bm: 8.477,
+            kv: 0.508,
+            g: 1.13e-3,
+            rho: 850.0,
+            cd: 0.67,
+            ag: 3.385e-7,
+        }
+    }
+
+    /// Checks that every parameter is physical: finite, and positive (the
+    /// leakage `Kce`, damping `Bm` and spring `G` may be zero).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        positive("Ps", self.ps)?;
+        positive("beta_e", self.beta_e)?;
+        positive("Vt", self.vt)?;
+        non_negative("Kce", self.kce)?;
+        positive("Dm", self.dm)?;
+        positive("Jt", self.jt)?;
+        non_negative("Bm", self.bm)?;
+        positive("Kv", self.kv)?;
+        non_negative("G", self.g)?;
+        positive("rho", self.rho)?;
+        positive("Cd", self.cd)?;
+        positive("Ag", self.ag)?;
+        Ok(())
+    }
+
+    /// The coefficients a1, a2, a3 of (9).
+    pub fn coefficients(&self) -> Coefficients {
+        let k = 4.0 * self.beta_e / (self.vt * self.jt);
+        Coefficients {
+            a1: k * self.kce * self.g,
+            a2: self.g / self.jt + k * self.dm * self.dm + k * self.kce * self.bm,
+            a3: self.bm / self.jt + 4.0 * self.beta_e * self.kce / self.vt,
+        }
+    }
+
+    /// Servovalve flow gain Kg of (2) for load pressure `pl` and valve
+    /// direction `s = sgn(xv)`. Returns `(Kg, clamped)`, `clamped` when the
+    /// root's argument was negative and set to 0.
+    #[inline]
+    pub fn flow_gain(&self, pl: f64, s: f64) -> (f64, bool) {
+        let arg = self.ps - s * pl;
+        if arg >= 0.0 {
+            (self.cd * self.ag * sqrt(arg / self.rho), false)
+        } else {
+            (0.0, true)
+        }
+    }
+
+    /// The factor `4βe·Dm·Kv/(Vt·Jt)` with `b = factor · Kg`.
+    #[inline]
+    pub fn b_per_kg(&self) -> f64 {
+        4.0 * self.beta_e * self.dm * self.kv / (self.vt * self.jt)
+    }
+
+    /// The factor `4βe·Kce/(Vt·Jt)` of `Tl` in `d`.
+    #[inline]
+    pub fn d_per_torque(&self) -> f64 {
+        4.0 * self.beta_e * self.kce / (self.vt * self.jt)
+    }
+}
+
+/// The coefficients of the third-order model (8).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coefficients {
+    /// a1 (s⁻³).
+    pub a1: f64,
+    /// a2 (s⁻²).
+    pub a2: f64,
+    /// a3 (s⁻¹).
+    pub a3: f64,
+}
+
+impl Coefficients {
+    /// As an array `[a1, a2, a3]`.
+    pub fn as_array(&self) -> [f64; 3] {
+        [self.a1, self.a2, self.a3]
+    }
+}
+
+/// Coulomb, Stribeck and viscous friction on the motor shaft, one of the
+/// load components the paper names (refs. [6], [7]):
+///
+/// ```text
+/// Tf(v) = tanh(v/v0)·[Tc + (Ts − Tc)·exp(−(v/vs)²)] + Bv·v
+/// ```
+///
+/// `sgn(v)` is regularised as `tanh(v/v0)` with a small velocity `v0`
+/// (`smoothing`), because the third-order model needs `Ṫl` and a true sign
+/// has an impulse for a derivative.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Friction {
+    /// Coulomb level Tc (N·m).
+    pub coulomb: f64,
+    /// Break-away (static) level Ts ≥ Tc (N·m).
+    pub stiction: f64,
+    /// Stribeck velocity vs (rad/s).
+    pub stribeck_velocity: f64,
+    /// Extra viscous coefficient Bv (N·m·s), on top of the plant's Bm.
+    pub viscous: f64,
+    /// Regularisation velocity v0 of the sign (rad/s).
+    pub smoothing: f64,
+}
+
+impl Friction {
+    /// Checks the friction parameters.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        non_negative("coulomb", self.coulomb)?;
+        non_negative("stiction", self.stiction)?;
+        positive("stribeck_velocity", self.stribeck_velocity)?;
+        non_negative("viscous", self.viscous)?;
+        positive("smoothing", self.smoothing)?;
+        Ok(())
+    }
+
+    /// Friction torque at shaft speed `v`.
+    #[inline]
+    pub fn torque(&self, v: f64) -> f64 {
+        let r = v / self.stribeck_velocity;
+        tanh(v / self.smoothing) * (self.coulomb + (self.stiction - self.coulomb) * exp(-r * r))
+            + self.viscous * v
+    }
+
+    /// dTf/dv at shaft speed `v` (so that `Ṫf = dTf/dv · θ̈`).
+    #[inline]
+    pub fn slope(&self, v: f64) -> f64 {
+        let th = tanh(v / self.smoothing);
+        let r = v / self.stribeck_velocity;
+        let g = self.coulomb + (self.stiction - self.coulomb) * exp(-r * r);
+        let dg = (self.stiction - self.coulomb) * exp(-r * r) * (-2.0 * r / self.stribeck_velocity);
+        (1.0 - th * th) / self.smoothing * g + th * dg + self.viscous
+    }
+}
+
+/// The load torque `Tl(θ, θ̇) = A·sin(k·θ) [+ friction(θ̇)]` (N·m).
+/// The paper's load is `2·sin(4θ)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Load {
+    /// Amplitude A (N·m).
+    pub amplitude: f64,
+    /// Angular wavenumber k (1/rad).
+    pub wavenumber: f64,
+    /// Optional friction torque.
+    pub friction: Option<Friction>,
+}
+
+impl Load {
+    /// The paper's `Tl = 2·sin(4θm)` N·m, no friction.
+    pub const fn paper() -> Self {
+        Self {
+            amplitude: 2.0,
+            wavenumber: 4.0,
+            friction: None,
+        }
+    }
+
+    /// No load at all.
+    pub const fn none() -> Self {
+        Self {
+            amplitude: 0.0,
+            wavenumber: 0.0,
+            friction: None,
+        }
+    }
+
+    /// Checks the load parameters.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        crate::error::finite("amplitude", self.amplitude)?;
+        crate::error::finite("wavenumber", self.wavenumber)?;
+        if let Some(f) = &self.friction {
+            f.validate()?;
+        }
+        Ok(())
+    }
+
+    /// `Tl(θ, θ̇)`.
+    #[inline]
+    pub fn torque(&self, theta: f64, theta_dot: f64) -> f64 {
+        let mut t = self.amplitude * sin(self.wavenumber * theta);
+        if let Some(f) = &self.friction {
+            t += f.torque(theta_dot);
+        }
+        t
+    }
+
+    /// `Ṫl = A·k·cos(kθ)·θ̇ + dTf/dθ̇·θ̈`.
+    #[inline]
+    pub fn torque_rate(&self, theta: f64, theta_dot: f64, theta_ddot: f64) -> f64 {
+        let mut r = self.amplitude * self.wavenumber * cos(self.wavenumber * theta) * theta_dot;
+        if let Some(f) = &self.friction {
+            r += f.slope(theta_dot) * theta_ddot;
+        }
+        r
+    }
+}
+
+/// What the controller knows of the plant: the nominal parameters, the
+/// coefficients ā_i, and the load model. It evaluates the nominal gain
+/// `b̄(t)` and load term `d(t)` at a measured state (SPEC §2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NominalModel {
+    /// Physical parameters.
+    pub params: ServoParams,
+    /// ā1, ā2, ā3.
+    pub coeffs: Coefficients,
+    /// The load model.
+    pub load: Load,
+    b_per_kg: f64,
+    d_per_torque: f64,
+}
+
+impl NominalModel {
+    /// Builds the model (parameters are assumed validated; see
+    /// [`NominalModel::try_new`]).
+    pub fn new(params: ServoParams, load: Load) -> Self {
+        Self {
+            params,
+            coeffs: params.coefficients(),
+            load,
+            b_per_kg: params.b_per_kg(),
+            d_per_torque: params.d_per_torque(),
+        }
+    }
+
+    /// Builds the model after validating parameters and load.
+    pub fn try_new(params: ServoParams, load: Load) -> Result<Self, ParamError> {
+        params.validate()?;
+        load.validate()?;
+        Ok(Self::new(params, load))
+    }
+
+    /// Load pressure from the torque balance (4):
+    /// `Pl = (Jt·x3 + Bm·x2 + G·x1 + Tl)/Dm`.
+    #[inline]
+    pub fn load_pressure(&self, x: &[f64; 3]) -> f64 {
+        let p = &self.params;
+        (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + self.load.torque(x[0], x[1])) / p.dm
+    }
+
+    /// `b(t)` of (9) at state `x` with valve direction `s = sgn(u)`.
+    /// Returns `(b, clamped)` (see the module doc on the valve root).
+    #[inline]
+    pub fn b(&self, x: &[f64; 3], s: f64) -> (f64, bool) {
+        let (kg, clamped) = self.params.flow_gain(self.load_pressure(x), sgn(s));
+        (self.b_per_kg * kg, clamped)
+    }
+
+    /// `b` at zero load pressure: `4βe·Dm·Kv·Cd·Ag·sqrt(Ps/ρ)/(Vt·Jt)`.
+    pub fn b_at_rest(&self) -> f64 {
+        self.b_per_kg * self.params.flow_gain(0.0, 0.0).0
+    }
+
+    /// `d(t) = 4βe·Kce·Tl/(Vt·Jt) + Ṫl/Jt` of (9) at state `x`.
+    #[inline]
+    pub fn d(&self, x: &[f64; 3]) -> f64 {
+        self.d_per_torque * self.load.torque(x[0], x[1])
+            + self.load.torque_rate(x[0], x[1], x[2]) / self.params.jt
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
+mod tests {
+    use super::*;
+
+    /// ā_i from (9) with the Section IV parameters, computed by hand:
+    /// k = 4βe/(Vt·Jt) = 4·344.875e6/(1.639e-4·5.652e-2) = 1.489157e14;
+    /// a1 = k·Kce·G = 1.489157e14·2.376e-12·1.13e-3 = 0.399821;
+    /// a2 = G/Jt + k·Dm² + k·Kce·Bm = 0.0199929 + 10000.884 + 2999.364 = 13000.268
+    /// (hand rounding of k; the paper's 13000.2711 needs k to 7 digits);
+    /// a3 = Bm/Jt + 4βe·Kce/Vt = 149.98231 + 19.99812 = 169.98043.
+    /// The paper prints 0.39982, 13000.2711, 169.98043.
+    #[test]
+    fn coefficients_match_the_paper_printed_digits() {
+        let c = ServoParams::paper().coefficients();
+        assert!((c.a1 - 0.39982).abs() < 0.5e-5, "a1 = {}", c.a1);
+        assert!((c.a2 - 13000.2711).abs() < 0.5e-4, "a2 = {}", c.a2);
+        assert!((c.a3 - 169.98043).abs() < 0.5e-5, "a3 = {}", c.a3);
+    }
+
+    /// b at Pl = 0: Kg = 0.67·3.385e-7·sqrt(13.795e6/850) = 2.26795e-7·127.394
+    /// = 2.88925e-5; b = 4·344.875e6·8.195e-6·2.88925e-5·0.508/(1.639e-4·5.652e-2)
+    /// = 17 911.8 (SPEC: ≈ 17 912).
+    #[test]
+    fn b_at_rest_by_hand() {
+        let m = NominalModel::new(ServoParams::paper(), Load::paper());
+        assert!((m.b_at_rest() - 17911.8).abs() < 0.1, "{}", m.b_at_rest());
+        // At rest, x = 0 and Tl(0) = 0, so Pl = 0 and the sign is irrelevant.
+        let (b, clamped) = m.b(&[0.0; 3], 1.0);
+        assert!(!clamped);
+        assert!((b - m.b_at_rest()).abs() < 1e-9);
+    }
+
+    /// A positive load pressure reduces the flow gain for positive xv and
+    /// raises it for negative xv: Ps − Pl < Ps < Ps + Pl.
+    #[test]
+    fn flow_gain_direction_and_clamp() {
+        let p = ServoParams::paper();
+        let (k0, _) = p.flow_gain(0.0, 1.0);
+        let (kp, _) = p.flow_gain(1e6, 1.0);
+        let (kn, _) = p.flow_gain(1e6, -1.0);
+        assert!(kp < k0 && k0 < kn);
+        // sqrt((Ps − Pl)/Ps) scaling: Pl = Ps/4 → factor sqrt(3/4).
+        let (kq, _) = p.flow_gain(p.ps / 4.0, 1.0);
+        assert!((kq / k0 - (0.75f64).sqrt()).abs() < 1e-12);
+        // Pl beyond the supply: the root is clamped, never NaN.
+        let (kc, clamped) = p.flow_gain(2.0 * p.ps, 1.0);
+        assert!(clamped);
+        assert_eq!(kc, 0.0);
+    }
+
+    /// d = 4βe·Kce·Tl/(Vt·Jt) + Ṫl/Jt for Tl = 2 sin 4θ at θ = 0.1, θ̇ = 0.5:
+    /// Tl = 2·sin(0.4) = 0.778837; Ṫl = 8·cos(0.4)·0.5 = 3.684244;
+    /// 4βe·Kce/(Vt·Jt) = 3.277692e-3/9.263628e-6 = 353.8238;
+    /// d = 353.8238·0.778837 + 3.684244/0.05652 = 275.5710 + 65.1848 = 340.7558.
+    #[test]
+    fn load_term_by_hand() {
+        let m = NominalModel::new(ServoParams::paper(), Load::paper());
+        let d = m.d(&[0.1, 0.5, 0.0]);
+        assert!((d - 340.7558).abs() < 1e-3, "d = {d}");
+    }
+
+    /// Friction slope against a central finite difference.
+    #[test]
+    fn friction_slope_matches_finite_difference() {
+        let f = Friction {
+            coulomb: 0.3,
+            stiction: 0.5,
+            stribeck_velocity: 0.1,
+            viscous: 0.05,
+            smoothing: 0.01,
+        };
+        for &v in &[-0.3, -0.05, -0.002, 0.0, 0.003, 0.07, 0.4] {
+            let h = 1e-7;
+            let fd = (f.torque(v + h) - f.torque(v - h)) / (2.0 * h);
+            let an = f.slope(v);
+            assert!(
+                (fd - an).abs() < 1e-5 * (1.0 + an.abs()),
+                "v={v}: {fd} vs {an}"
+            );
+        }
+        // Far from zero speed the friction is Tc·sgn(v) + Bv·v (Stribeck term gone).
+        assert!((f.torque(2.0) - (0.3 + 0.05 * 2.0)).abs() < 1e-9);
+    }
+}

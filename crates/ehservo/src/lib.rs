@@ -1,0 +1,25 @@
+//! # ehservo
+//!
+//! Simulation and control of electrohydraulic servo systems, built around
+//! C.-L. Hwang's neural-network-based variable structure control (NNBVSC).
+//! The controllers and the servo mathematics live in the `no_std` crate
+//! [`ehservo_core`]; this crate adds what experiments need:
+//!
+//! | module | role |
+//! |---|---|
+//! | [`plant`] | the "true" plants (third-order and physical) with parameter variations and loads |
+//! | [`sim`] | the closed loop, in `continuous` and `sampled` modes |
+//! | [`metrics`] | SPEC §9 metrics, online |
+//! | [`scenario`] | TOML scenario files with the paper's defaults and clear errors |
+//! | [`run`] | scenario → plant + controller → result |
+//! | [`output`], [`plot`] | CSV, JSON and PNG/SVG outputs, written atomically |
+
+pub mod metrics;
+pub mod output;
+pub mod plant;
+pub mod plot;
+pub mod run;
+pub mod scenario;
+pub mod sim;
+
+pub use ehservo_core as core;

@@ -1,0 +1,238 @@
+//! Metrics of one run, SPEC §9, computed online (no trace kept).
+//!
+//! With samples k = 0..N at t_k = k·h, t_s the end of the transient
+//! (`settle`, 2 s by default: the paper's "after the transient") and T the
+//! last sample's time:
+//!
+//! | key | definition |
+//! |---|---|
+//! | `e_max_deg` | max \|e\| over t_k ∈ [t_s, T], degrees |
+//! | `e_final_deg` | max \|e\| over the last period of the reference, t_k ∈ [T − 1/f, T] (absent if the run diverged) |
+//! | `e_rms_deg` | RMS of e over t_k ≥ t_s (the L2 measure, per sample), degrees |
+//! | `u_max` | max \|u\| over the whole run (the transient included: Fig. 5 is about it), V |
+//! | `u_rms` | RMS of u over t_k ≥ t_s, V |
+//! | `chattering` | c[u] = sqrt(Σ Δu_k²)/sqrt(Σ u_k²) over t_k ≥ t_s, Δu_k = u_k − u_{k−1} |
+//! | `u_tv_per_s` | Σ \|Δu_k\| over t_k ≥ t_s, divided by T − t_s, V/s |
+//! | `w_norm_max`, `w_norm_final` | max and last ‖W‖ over the run |
+//! | `dead_zone_fraction` | share of samples with σΔ = 0 (NNBVSC only) |
+//! | `diverged`, `diverged_at_s` | the run ended early, and when |
+//!
+//! A value that is undefined (no sample after t_s, a run with u ≡ 0) is
+//! `None` (JSON `null`), never NaN.
+
+use crate::sim::{Divergence, Sample};
+use ehservo_core::math::DR;
+use serde::{Deserialize, Serialize};
+
+/// The metrics of one run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    /// max |e| after the transient (deg).
+    pub e_max_deg: Option<f64>,
+    /// max |e| over the last period of the reference (deg).
+    pub e_final_deg: Option<f64>,
+    /// RMS of e after the transient (deg).
+    pub e_rms_deg: Option<f64>,
+    /// max |u| over the run (V).
+    pub u_max: Option<f64>,
+    /// RMS of u after the transient (V).
+    pub u_rms: Option<f64>,
+    /// Chattering index L2[Δu]/L2[u] after the transient.
+    pub chattering: Option<f64>,
+    /// Total variation of u per second after the transient (V/s).
+    pub u_tv_per_s: Option<f64>,
+    /// max ‖W‖.
+    pub w_norm_max: Option<f64>,
+    /// Last ‖W‖.
+    pub w_norm_final: Option<f64>,
+    /// Share of samples inside the dead zone (σΔ = 0); NNBVSC only.
+    pub dead_zone_fraction: Option<f64>,
+    /// The run ended early.
+    pub diverged: bool,
+    /// When it ended early (s).
+    pub diverged_at_s: Option<f64>,
+    /// Samples in the run.
+    pub samples: u64,
+}
+
+/// Accumulates [`Metrics`] sample by sample.
+#[derive(Debug, Clone)]
+pub struct MetricsAccumulator {
+    settle: f64,
+    final_from: f64,
+    has_network: bool,
+    n: u64,
+    n_after: u64,
+    e_max: f64,
+    e_final: f64,
+    e_sq: f64,
+    u_max: f64,
+    u_sq: f64,
+    du_sq: f64,
+    du_abs: f64,
+    prev_u: Option<f64>,
+    t_first_after: Option<f64>,
+    t_last: f64,
+    w_max: f64,
+    w_last: f64,
+    dead: u64,
+    saw_final: bool,
+}
+
+impl MetricsAccumulator {
+    /// For a run of horizon `horizon` (s), transient end `settle` (s), a
+    /// reference of period `period` (s), and whether the controller has a
+    /// network (for the dead-zone share).
+    pub fn new(horizon: f64, settle: f64, period: f64, has_network: bool) -> Self {
+        // A relative tolerance keeps t_k = k·h on the right side of the
+        // window edges despite rounding.
+        let tol = 1e-9 * horizon.max(1.0);
+        Self {
+            settle: settle - tol,
+            final_from: horizon - period - tol,
+            has_network,
+            n: 0,
+            n_after: 0,
+            e_max: 0.0,
+            e_final: 0.0,
+            e_sq: 0.0,
+            u_max: 0.0,
+            u_sq: 0.0,
+            du_sq: 0.0,
+            du_abs: 0.0,
+            prev_u: None,
+            t_first_after: None,
+            t_last: 0.0,
+            w_max: 0.0,
+            w_last: 0.0,
+            dead: 0,
+            saw_final: false,
+        }
+    }
+
+    /// Takes one sample.
+    pub fn push(&mut self, s: &Sample) {
+        let e = s.out.e.abs() / DR;
+        let u = s.out.u;
+        self.n += 1;
+        self.t_last = s.t;
+        self.u_max = self.u_max.max(u.abs());
+        self.w_max = self.w_max.max(s.w_norm);
+        self.w_last = s.w_norm;
+        if s.out.sigma_delta == 0.0 {
+            self.dead += 1;
+        }
+        if s.t >= self.settle {
+            if self.t_first_after.is_none() {
+                self.t_first_after = Some(s.t);
+            }
+            self.n_after += 1;
+            self.e_max = self.e_max.max(e);
+            self.e_sq += e * e;
+            self.u_sq += u * u;
+            if let Some(p) = self.prev_u {
+                let du = u - p;
+                self.du_sq += du * du;
+                self.du_abs += du.abs();
+            }
+        }
+        if s.t >= self.final_from {
+            self.saw_final = true;
+            self.e_final = self.e_final.max(e);
+        }
+        self.prev_u = Some(u);
+    }
+
+    /// The metrics, given how the run ended.
+    pub fn finish(&self, diverged: Option<Divergence>) -> Metrics {
+        let after = self.n_after > 0;
+        let some_if = |c: bool, v: f64| if c && v.is_finite() { Some(v) } else { None };
+        let span = self.t_first_after.map(|t0| self.t_last - t0).unwrap_or(0.0);
+        Metrics {
+            e_max_deg: some_if(after, self.e_max),
+            e_final_deg: some_if(self.saw_final && diverged.is_none(), self.e_final),
+            e_rms_deg: some_if(after, (self.e_sq / self.n_after.max(1) as f64).sqrt()),
+            u_max: some_if(self.n > 0, self.u_max),
+            u_rms: some_if(after, (self.u_sq / self.n_after.max(1) as f64).sqrt()),
+            chattering: some_if(after && self.u_sq > 0.0, (self.du_sq / self.u_sq).sqrt()),
+            u_tv_per_s: some_if(after && span > 0.0, self.du_abs / span),
+            w_norm_max: some_if(self.has_network && self.n > 0, self.w_max),
+            w_norm_final: some_if(self.has_network && self.n > 0, self.w_last),
+            dead_zone_fraction: some_if(
+                self.has_network && self.n > 0,
+                self.dead as f64 / self.n.max(1) as f64,
+            ),
+            diverged: diverged.is_some(),
+            diverged_at_s: diverged.map(|d| d.t),
+            samples: self.n,
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
+mod tests {
+    use super::*;
+    use ehservo_core::control::ControlOutput;
+
+    fn sample(k: u64, h: f64, e_deg: f64, u: f64) -> Sample {
+        Sample {
+            k,
+            t: k as f64 * h,
+            out: ControlOutput {
+                e: e_deg * DR,
+                u,
+                sigma_delta: if k % 2 == 0 { 0.0 } else { 1.0 },
+                ..Default::default()
+            },
+            w_norm: k as f64,
+            ..Default::default()
+        }
+    }
+
+    /// Ten samples at h = 1 s, settle 5 s, period 2 s, horizon 9 s:
+    /// e_k = k degrees, u alternating ±1 after k = 5.
+    /// e_max = 9 (k = 9); e_final over t ≥ 7: 9; RMS over k = 5..9:
+    /// sqrt((25+36+49+64+81)/5) = sqrt(51) = 7.1414284.
+    /// u: k=5..9 → −1, +1, −1, +1, −1 (u_k = (−1)^k); Δu over k = 5..9 is
+    /// ±2 each (k = 5 has u_4 = +1 before it): Σ Δu² = 5·4 = 20; Σu² = 5;
+    /// c = sqrt(20/5) = 2. TV = 5·2 = 10 over 9 − 5 = 4 s → 2.5 V/s.
+    /// Dead zone: σΔ = 0 at even k: 5 of 10.
+    #[test]
+    fn metrics_by_hand() {
+        let mut m = MetricsAccumulator::new(9.0, 5.0, 2.0, true);
+        for k in 0..10 {
+            let u = if k % 2 == 0 { 1.0 } else { -1.0 };
+            m.push(&sample(k, 1.0, k as f64, u));
+        }
+        let r = m.finish(None);
+        let close = |a: Option<f64>, b: f64| assert!((a.unwrap() - b).abs() < 1e-9, "{a:?} vs {b}");
+        close(r.e_max_deg, 9.0);
+        close(r.e_final_deg, 9.0);
+        close(r.e_rms_deg, 51f64.sqrt());
+        close(r.u_max, 1.0);
+        close(r.chattering, 2.0);
+        close(r.u_tv_per_s, 2.5);
+        close(r.w_norm_max, 9.0);
+        close(r.w_norm_final, 9.0);
+        close(r.dead_zone_fraction, 0.5);
+        assert!(!r.diverged);
+        assert_eq!(r.samples, 10);
+    }
+
+    #[test]
+    fn early_divergence_leaves_metrics_undefined_not_nan() {
+        let mut m = MetricsAccumulator::new(10.0, 2.0, 1.0, false);
+        m.push(&sample(0, 0.01, 0.5, 0.0));
+        let r = m.finish(Some(Divergence {
+            t: 0.01,
+            reason: crate::sim::DivergenceReason::ThetaLimit,
+        }));
+        assert_eq!(r.e_max_deg, None);
+        assert_eq!(r.e_final_deg, None);
+        assert_eq!(r.chattering, None);
+        assert_eq!(r.w_norm_max, None);
+        assert!(r.diverged);
+        assert_eq!(r.diverged_at_s, Some(0.01));
+    }
+}

@@ -1,0 +1,348 @@
+//! What a run writes: `trace.csv`, `summary.json`, `trace.png`; all into a
+//! staging directory first, moved into place only when complete.
+
+use crate::metrics::Metrics;
+use crate::plot::{Dash, Figure, Panel, Series};
+use crate::run::RunResult;
+use crate::scenario::Scenario;
+use crate::sim::Divergence;
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The software that produced an output.
+#[derive(Debug, Clone, Serialize)]
+pub struct Software {
+    /// Crate name.
+    pub name: &'static str,
+    /// Crate version.
+    pub version: &'static str,
+}
+
+/// This build's name and version.
+pub const SOFTWARE: Software = Software {
+    name: env!("CARGO_PKG_NAME"),
+    version: env!("CARGO_PKG_VERSION"),
+};
+
+/// A directory written under a temporary name and moved into place on
+/// [`Staging::commit`]. Dropped without commit, it is removed: a failed run
+/// leaves nothing half-written.
+#[derive(Debug)]
+pub struct Staging {
+    dest: PathBuf,
+    tmp: PathBuf,
+    committed: bool,
+}
+
+impl Staging {
+    /// Creates the staging directory beside `dest`.
+    pub fn new(dest: &Path) -> Result<Self> {
+        let parent = match dest.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        fs::create_dir_all(&parent).with_context(|| format!("creating {}", parent.display()))?;
+        let base = dest
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        let mut i = 0u32;
+        let tmp = loop {
+            let cand = parent.join(format!(".{base}.tmp-{}-{i}", std::process::id()));
+            match fs::create_dir(&cand) {
+                Ok(()) => break cand,
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && i < 1000 => i += 1,
+                Err(e) => return Err(e).with_context(|| format!("creating {}", cand.display())),
+            }
+        };
+        Ok(Self {
+            dest: dest.to_path_buf(),
+            tmp,
+            committed: false,
+        })
+    }
+
+    /// Where to write.
+    pub fn path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Moves everything into `dest` (replacing files of the same name).
+    pub fn commit(mut self) -> Result<()> {
+        if !self.dest.exists() {
+            fs::rename(&self.tmp, &self.dest).with_context(|| {
+                format!("moving {} to {}", self.tmp.display(), self.dest.display())
+            })?;
+        } else {
+            for entry in fs::read_dir(&self.tmp)? {
+                let entry = entry?;
+                let target = self.dest.join(entry.file_name());
+                if target.is_dir() {
+                    fs::remove_dir_all(&target)
+                        .with_context(|| format!("replacing {}", target.display()))?;
+                }
+                fs::rename(entry.path(), &target)
+                    .with_context(|| format!("writing {}", target.display()))?;
+            }
+            fs::remove_dir_all(&self.tmp).ok();
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if !self.committed {
+            fs::remove_dir_all(&self.tmp).ok();
+        }
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary file and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = path.with_extension(format!(
+        "{}.tmp-{}",
+        path.extension().and_then(|e| e.to_str()).unwrap_or(""),
+        std::process::id()
+    ));
+    {
+        let mut f =
+            fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+        f.write_all(bytes)?;
+        f.sync_all().ok();
+    }
+    fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}
+
+/// The columns of `trace.csv`, with units.
+pub const TRACE_COLUMNS: [&str; 17] = [
+    "t_s",
+    "theta_d_deg",
+    "theta_deg",
+    "e_deg",
+    "u_V",
+    "u_eq_V",
+    "u_sw_V",
+    "sigma_rad_s2",
+    "sigma_delta_rad_s2",
+    "wphi_rad_s3",
+    "uncertainty_rad_s3",
+    "w_norm",
+    "w_1",
+    "w_128",
+    "mu_rad_s2",
+    "norm_E",
+    "b_bar_V_s3",
+];
+
+/// Writes the trace as CSV (one row per kept sample).
+pub fn write_trace_csv(path: &Path, run: &RunResult) -> Result<()> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(TRACE_COLUMNS)?;
+    for s in &run.trace {
+        let o = &s.out;
+        let row = [
+            s.t,
+            s.theta_d_deg(),
+            s.theta_deg(),
+            s.e_deg(),
+            o.u,
+            o.u_eq,
+            o.u_sw,
+            o.sigma,
+            o.sigma_delta,
+            o.wphi,
+            s.uncertainty,
+            s.w_norm,
+            s.w_1,
+            s.w_128,
+            o.mu,
+            o.norm_e,
+            o.b_bar,
+        ];
+        // The loop stops before a non-finite sample is logged; this is the
+        // last line of defence for the "never NaN in a CSV" rule.
+        if row.iter().any(|v| !v.is_finite()) {
+            anyhow::bail!(
+                "internal error: non-finite value in the trace at t = {}",
+                s.t
+            );
+        }
+        w.write_record(row.iter().map(|v| format!("{v}")))?;
+    }
+    let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
+    write_atomic(path, &bytes)
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary<'a> {
+    /// Name and version of the software.
+    pub software: Software,
+    /// The scenario as run (defaults and overrides resolved).
+    pub scenario: &'a Scenario,
+    /// SPEC §9 metrics.
+    pub metrics: Metrics,
+    /// How the run ended early, if it did.
+    pub divergence: Option<DivergenceInfo>,
+    /// Numerical guards that fired.
+    pub faults: Faults,
+    /// Quantities derived from the scenario.
+    pub derived: Derived,
+}
+
+/// A divergence, with a sentence.
+#[derive(Debug, Clone, Serialize)]
+pub struct DivergenceInfo {
+    /// When (s).
+    pub t: f64,
+    /// Machine-readable reason.
+    pub reason: crate::sim::DivergenceReason,
+    /// Human sentence.
+    pub message: String,
+}
+
+impl From<Divergence> for DivergenceInfo {
+    fn from(d: Divergence) -> Self {
+        Self {
+            t: d.t,
+            reason: d.reason,
+            message: format!("unbounded at t = {:.4} s: {}", d.t, d.reason.describe()),
+        }
+    }
+}
+
+/// Counts of guarded numerical faults.
+#[derive(Debug, Clone, Serialize)]
+pub struct Faults {
+    /// Samples where Ps − sgn(u)·Pl < 0 in the law's valve root (clamped).
+    pub valve_root_clamped_samples: u64,
+    /// Samples where ‖E‖ = 0 (σΔ, μ, ξ set to 0).
+    pub zero_error_norm_samples: u64,
+}
+
+/// Derived quantities worth having next to the results.
+#[derive(Debug, Clone, Serialize)]
+pub struct Derived {
+    /// ā1, ā2, ā3.
+    pub a_nominal: [f64; 3],
+    /// b̄ at Pl = 0 (s⁻³V⁻¹).
+    pub b_at_rest: f64,
+    /// p1, p2, p3 of the surface.
+    pub p: [f64; 3],
+    /// Number of steps N.
+    pub steps: u64,
+}
+
+/// Builds the summary of a run.
+pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
+    let servo = s.plant.params.to_servo();
+    let model = ehservo_core::servo::NominalModel::new(servo, s.load_model());
+    Summary {
+        software: SOFTWARE,
+        scenario: s,
+        metrics: run.metrics,
+        divergence: run.outcome.diverged.map(Into::into),
+        faults: Faults {
+            valve_root_clamped_samples: run.outcome.valve_root_clamped,
+            zero_error_norm_samples: run.outcome.zero_error_norm,
+        },
+        derived: Derived {
+            a_nominal: model.coeffs.as_array(),
+            b_at_rest: model.b_at_rest(),
+            p: s.surface().map(|x| x.p()).unwrap_or([f64::NAN; 3]),
+            steps: s.sim_config().steps,
+        },
+    }
+}
+
+/// The main time histories of a run: the paper's Fig. 2 panels.
+pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
+    let t: Vec<f64> = run.trace.iter().map(|x| x.t).collect();
+    let col =
+        |f: &dyn Fn(&crate::sim::Sample) -> f64| run.trace.iter().map(f).collect::<Vec<f64>>();
+    let mut title = format!(
+        "{} — {} on the {} plant, {} h = {} s",
+        s.name,
+        s.controller.kind.as_str(),
+        match s.plant.model {
+            crate::scenario::PlantModel::ThirdOrder => "third-order",
+            crate::scenario::PlantModel::Physical => "physical",
+        },
+        s.simulation.mode.as_str(),
+        s.simulation.step
+    );
+    if let Some(d) = run.outcome.diverged {
+        title.push_str(&format!(" — unbounded at t = {:.3} s", d.t));
+    }
+    let time = "t (s)".to_string();
+    let mut d_series = vec![Series::new(
+        "Σ Δa_i x_i − Δb u_eq + d − ξ",
+        t.clone(),
+        col(&|x| x.uncertainty),
+        1,
+    )
+    .dash(Dash::Dashed)];
+    if run.metrics.w_norm_max.is_some() {
+        d_series.push(Series::new("WᵀΦ", t.clone(), col(&|x| x.out.wphi), 0));
+    }
+    Figure {
+        title,
+        rows: 2,
+        cols: 2,
+        size: (1400, 1000),
+        panels: vec![
+            Panel {
+                title: "(a) θd (dotted) and θ".into(),
+                x_label: time.clone(),
+                y_label: "angle (deg)".into(),
+                series: vec![
+                    Series::new("θd", t.clone(), col(&|x| x.theta_d_deg()), 1).dash(Dash::Dotted),
+                    Series::new("θ", t.clone(), col(&|x| x.theta_deg()), 0),
+                ],
+                log_y: false,
+            },
+            Panel {
+                title: "(b) control input u".into(),
+                x_label: time.clone(),
+                y_label: "u (V)".into(),
+                series: vec![Series::new("", t.clone(), col(&|x| x.out.u), 0)],
+                log_y: false,
+            },
+            Panel {
+                title: "(c) switching function σ".into(),
+                x_label: time.clone(),
+                y_label: "σ (rad/s²)".into(),
+                series: vec![Series::new("", t.clone(), col(&|x| x.out.sigma), 0)],
+                log_y: false,
+            },
+            Panel {
+                title: "(d) lumped uncertainty (19) and its estimate".into(),
+                x_label: time,
+                y_label: "(rad/s³)".into(),
+                series: d_series,
+                log_y: false,
+            },
+        ],
+    }
+}
+
+/// Writes `trace.csv`, `summary.json` and (unless `plot` is false)
+/// `trace.png` into `dir` through a staging directory.
+pub fn write_run(dir: &Path, s: &Scenario, run: &RunResult, plot: bool) -> Result<Vec<PathBuf>> {
+    let stage = Staging::new(dir)?;
+    let mut files = vec!["trace.csv", "summary.json"];
+    write_trace_csv(&stage.path().join("trace.csv"), run)?;
+    let json = serde_json::to_string_pretty(&summary(s, run))?;
+    write_atomic(&stage.path().join("summary.json"), json.as_bytes())?;
+    if plot {
+        trace_figure(s, run).png(&stage.path().join("trace.png"))?;
+        files.push("trace.png");
+    }
+    stage.commit()?;
+    Ok(files.iter().map(|f| dir.join(f)).collect())
+}

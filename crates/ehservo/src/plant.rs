@@ -1,0 +1,339 @@
+//! The "true" plants the controllers are tried on, with the parameter
+//! variations they do not know.
+//!
+//! Two models of the same servo (SPEC §2):
+//! - [`ThirdOrderPlant`], eq. (8)–(9) in x = (θ, θ̇, θ̈):
+//!   `ẋ3 = −Σ(ā_i + Δa_i)·x_i + b·u − d`, `b = (1 + δb)·b(x, sgn u)`;
+//! - [`PhysicalPlant`], eqs. (1)–(6) in (θ, θ̇, Pl), with the same variations
+//!   carried exactly: the valve flow scaled by `1 + δb`, and the `Δa_i` as an
+//!   unmodelled flow term `−(Jt/Dm)·Σ Δa_i·x_i` in `Ṗl`. Differentiating (4)
+//!   once shows that this term adds exactly `−Σ Δa_i·x_i` to `θ⃛`, so the two
+//!   models are the same system under any variation (a test checks it).
+//!
+//! **Variations** ([`UncertaintySignal`]): `Δa_i = |ā_i|·(a_bias + a_random·r_i(t))`
+//! and `Δb = 0.5·b(t)·(b_bias + b_random·r_b(t))`, i.e. fractions of the
+//! paper's reference sizes α_i = |ā_i| and β = 0.5|b̄| (SPEC §2), whatever
+//! bounds the controller is told. `r(t)` is uniform on [−1, 1], drawn once
+//! per `hold` seconds (0.01 s) from a seeded ChaCha8 stream and held: the
+//! same signal whatever the integration step. The paper's Fig. 2 is
+//! `a_bias = 1, b_bias = 0.5` (true a = 2ā, true b = 1.25·b̄); Fig. 8 is
+//! `a_bias = a_random = 0.5` and `b_bias = b_random = 0.25`.
+
+use ehservo_core::math::sgn;
+use ehservo_core::servo::{Load, NominalModel, ServoParams};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// The plant's parameters at one instant, as they differ from the nominal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variation {
+    /// Δa1, Δa2, Δa3.
+    pub da: [f64; 3],
+    /// δb, with true `b = (1 + δb)·b_nominal` (so `Δb = δb·b_nominal`).
+    pub db_rel: f64,
+}
+
+impl Variation {
+    /// No variation.
+    pub const NONE: Variation = Variation {
+        da: [0.0; 3],
+        db_rel: 0.0,
+    };
+}
+
+/// Sizes of the variation, as fractions of the paper's bounds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UncertaintySpec {
+    /// Bias fraction of α_i = |ā_i|.
+    pub a_bias: f64,
+    /// Random fraction of α_i.
+    pub a_random: f64,
+    /// Bias fraction of β = 0.5·|b̄|.
+    pub b_bias: f64,
+    /// Random fraction of β.
+    pub b_random: f64,
+    /// Seed of the random signal.
+    pub seed: u64,
+    /// Hold period of the random signal (s).
+    pub hold: f64,
+}
+
+impl UncertaintySpec {
+    /// No variation at all.
+    pub const NONE: UncertaintySpec = UncertaintySpec {
+        a_bias: 0.0,
+        a_random: 0.0,
+        b_bias: 0.0,
+        b_random: 0.0,
+        seed: 0,
+        hold: 0.01,
+    };
+}
+
+/// The reference size β of the b variation, as a fraction of b̄ (SPEC §2).
+pub const BETA_REFERENCE: f64 = 0.5;
+
+/// A piecewise-constant random variation, held over `hold` seconds.
+#[derive(Debug, Clone)]
+pub struct UncertaintySignal {
+    spec: UncertaintySpec,
+    abar: [f64; 3],
+    rng: ChaCha8Rng,
+    drawn: u64,
+    r: [f64; 4],
+    random: bool,
+}
+
+impl UncertaintySignal {
+    /// A signal for the plant with nominal coefficients `abar`.
+    pub fn new(spec: UncertaintySpec, abar: [f64; 3]) -> Self {
+        Self {
+            spec,
+            abar,
+            rng: ChaCha8Rng::seed_from_u64(spec.seed),
+            drawn: 0,
+            r: [0.0; 4],
+            random: spec.a_random != 0.0 || spec.b_random != 0.0,
+        }
+    }
+
+    /// One uniform draw on [−1, 1): 53 random bits, portable across
+    /// platforms and `rand` versions.
+    fn uniform(&mut self) -> f64 {
+        let bits = self.rng.next_u64() >> 11;
+        (bits as f64) * (2.0 / (1u64 << 53) as f64) - 1.0
+    }
+
+    /// The variation at time `t ≥ 0`. Times must not go backwards across
+    /// hold intervals (the simulator only moves forward).
+    pub fn at(&mut self, t: f64) -> Variation {
+        if self.random {
+            // Interval index; the tiny offset keeps t = k·hold in interval k
+            // despite rounding of k·h.
+            let j = (t / self.spec.hold + 1e-9).floor().max(0.0) as u64;
+            while self.drawn <= j {
+                for i in 0..4 {
+                    self.r[i] = self.uniform();
+                }
+                self.drawn += 1;
+            }
+        }
+        let s = &self.spec;
+        let da = core::array::from_fn(|i| self.abar[i].abs() * (s.a_bias + s.a_random * self.r[i]));
+        Variation {
+            da,
+            db_rel: BETA_REFERENCE * (s.b_bias + s.b_random * self.r[3]),
+        }
+    }
+}
+
+/// A plant as a pure derivative, with a measurement map to x = (θ, θ̇, θ̈).
+pub trait Plant {
+    /// Short name.
+    fn name(&self) -> &'static str;
+    /// The plant state that corresponds to x(0).
+    fn initial_state(&self, x0: [f64; 3]) -> [f64; 3];
+    /// x = (θ, θ̇, θ̈) from the plant state.
+    fn measure(&self, s: &[f64; 3]) -> [f64; 3];
+    /// The state derivative under input `u` and variation `v`.
+    fn deriv(&self, t: f64, s: &[f64; 3], u: f64, v: &Variation, ds: &mut [f64; 3]);
+    /// The nominal model (what a controller is told).
+    fn nominal(&self) -> &NominalModel;
+    /// The lumped uncertainty of (19) without ξ: `Σ Δa_i x_i − Δb·u_eq + d`,
+    /// with `Δb = b_true − b̄` (b_true at the sign of the applied `u`).
+    fn lumped_uncertainty(
+        &self,
+        x: &[f64; 3],
+        u: f64,
+        u_eq: f64,
+        b_bar: f64,
+        v: &Variation,
+    ) -> f64 {
+        let m = self.nominal();
+        let b_true = (1.0 + v.db_rel) * m.b(x, sgn(u)).0;
+        v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2] - (b_true - b_bar) * u_eq + m.d(x)
+    }
+}
+
+/// The third-order model (8)–(9).
+#[derive(Debug, Clone, Copy)]
+pub struct ThirdOrderPlant {
+    model: NominalModel,
+}
+
+impl ThirdOrderPlant {
+    /// From validated physical parameters and load.
+    pub fn new(params: ServoParams, load: Load) -> Self {
+        Self {
+            model: NominalModel::new(params, load),
+        }
+    }
+}
+
+impl Plant for ThirdOrderPlant {
+    fn name(&self) -> &'static str {
+        "third-order"
+    }
+
+    fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {
+        x0
+    }
+
+    #[inline]
+    fn measure(&self, s: &[f64; 3]) -> [f64; 3] {
+        *s
+    }
+
+    #[inline]
+    fn deriv(&self, _t: f64, x: &[f64; 3], u: f64, v: &Variation, dx: &mut [f64; 3]) {
+        let a = &self.model.coeffs;
+        let b = (1.0 + v.db_rel) * self.model.b(x, sgn(u)).0;
+        dx[0] = x[1];
+        dx[1] = x[2];
+        dx[2] = -(a.a1 + v.da[0]) * x[0] - (a.a2 + v.da[1]) * x[1] - (a.a3 + v.da[2]) * x[2]
+            + b * u
+            - self.model.d(x);
+    }
+
+    fn nominal(&self) -> &NominalModel {
+        &self.model
+    }
+}
+
+/// The physical model (1)–(6) in (θ, θ̇, Pl).
+#[derive(Debug, Clone, Copy)]
+pub struct PhysicalPlant {
+    model: NominalModel,
+}
+
+impl PhysicalPlant {
+    /// From validated physical parameters and load.
+    pub fn new(params: ServoParams, load: Load) -> Self {
+        Self {
+            model: NominalModel::new(params, load),
+        }
+    }
+}
+
+impl Plant for PhysicalPlant {
+    fn name(&self) -> &'static str {
+        "physical"
+    }
+
+    /// Pl(0) from the torque balance (4) with θ̈(0) = x0[2].
+    fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {
+        [x0[0], x0[1], self.model.load_pressure(&x0)]
+    }
+
+    /// θ̈ from (4): `(Pl·Dm − Bm·θ̇ − G·θ − Tl)/Jt`.
+    #[inline]
+    fn measure(&self, s: &[f64; 3]) -> [f64; 3] {
+        let p = &self.model.params;
+        let tl = self.model.load.torque(s[0], s[1]);
+        [
+            s[0],
+            s[1],
+            (s[2] * p.dm - p.bm * s[1] - p.g * s[0] - tl) / p.jt,
+        ]
+    }
+
+    #[inline]
+    fn deriv(&self, _t: f64, s: &[f64; 3], u: f64, v: &Variation, ds: &mut [f64; 3]) {
+        let p = &self.model.params;
+        let x = self.measure(s);
+        let (kg, _) = p.flow_gain(s[2], sgn(u));
+        let flow = (1.0 + v.db_rel) * kg * p.kv * u;
+        ds[0] = s[1];
+        ds[1] = x[2];
+        ds[2] = 4.0 * p.beta_e / p.vt * (flow - p.dm * s[1] - p.kce * s[2])
+            - p.jt / p.dm * (v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2]);
+    }
+
+    fn nominal(&self) -> &NominalModel {
+        &self.model
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bias_only_is_constant_and_matches_fig2() {
+        let abar = ServoParams::paper().coefficients().as_array();
+        let mut s = UncertaintySignal::new(
+            UncertaintySpec {
+                a_bias: 1.0,
+                b_bias: 0.5,
+                ..UncertaintySpec::NONE
+            },
+            abar,
+        );
+        let v = s.at(3.7);
+        // Fig. 2: Δa_i = α_i = |ā_i|, Δb = 0.5β = 0.25·b̄ → true b = 1.25·b̄.
+        assert_eq!(v.da, abar);
+        assert!((v.db_rel - 0.25).abs() < 1e-15);
+    }
+
+    /// The random part is held over each 0.01 s and independent of how
+    /// often it is asked for.
+    #[test]
+    fn random_signal_is_held_and_step_independent() {
+        let abar = [1.0, 1.0, 1.0];
+        let spec = UncertaintySpec {
+            a_random: 1.0,
+            b_random: 1.0,
+            seed: 7,
+            ..UncertaintySpec::NONE
+        };
+        let mut coarse = UncertaintySignal::new(spec, abar);
+        let mut fine = UncertaintySignal::new(spec, abar);
+        for k in 0..100 {
+            let t = k as f64 * 0.01;
+            let vc = coarse.at(t);
+            for j in 0..10 {
+                let vf = fine.at(t + j as f64 * 0.001);
+                assert_eq!(vc, vf, "t = {t}, j = {j}");
+            }
+        }
+        // Within [−1, 1] and not constant.
+        let mut s = UncertaintySignal::new(spec, abar);
+        let vals: Vec<f64> = (0..200).map(|k| s.at(k as f64 * 0.01).da[0]).collect();
+        assert!(vals.iter().all(|v| (-1.0..=1.0).contains(v)));
+        let mean = vals.iter().sum::<f64>() / 200.0;
+        assert!(mean.abs() < 0.15, "mean {mean}");
+        assert!(vals.windows(2).any(|w| w[0] != w[1]));
+    }
+
+    /// The physical model's measured θ̈ and the third-order model's x3 have
+    /// the same derivative at a state (the two models are one system).
+    #[test]
+    fn models_have_the_same_jerk() {
+        let p = ServoParams::paper();
+        let third = ThirdOrderPlant::new(p, Load::paper());
+        let phys = PhysicalPlant::new(p, Load::paper());
+        let x = [0.03, -0.2, 1.5];
+        let v = Variation {
+            da: [0.4, 13000.0, 170.0],
+            db_rel: 0.25,
+        };
+        for &u in &[0.3, -0.2] {
+            let mut d3 = [0.0; 3];
+            third.deriv(0.0, &x, u, &v, &mut d3);
+            // d/dt of the physical θ̈ = (Ṗl·Dm − Bm·θ̈ − G·θ̇ − Ṫl)/Jt.
+            let s = phys.initial_state(x);
+            assert!((phys.measure(&s)[2] - x[2]).abs() < 1e-9);
+            let mut ds = [0.0; 3];
+            phys.deriv(0.0, &s, u, &v, &mut ds);
+            let l = Load::paper();
+            let jerk =
+                (ds[2] * p.dm - p.bm * x[2] - p.g * x[1] - l.torque_rate(x[0], x[1], x[2])) / p.jt;
+            assert!(
+                (jerk - d3[2]).abs() < 1e-6 * d3[2].abs().max(1.0),
+                "{jerk} vs {}",
+                d3[2]
+            );
+        }
+    }
+}

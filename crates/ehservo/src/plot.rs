@@ -1,0 +1,291 @@
+//! Figures: a grid of panels of line series, rendered to PNG or SVG with
+//! plotters and an embedded font (DejaVu Sans), so that a fresh machine needs
+//! no system fonts.
+//!
+//! Non-finite points are never drawn: a series is split where its values stop
+//! being finite.
+
+use anyhow::{anyhow, Context, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use std::path::Path;
+use std::sync::Once;
+
+const FONT: &[u8] = include_bytes!("../../../assets/DejaVuSans.ttf");
+const FAMILY: &str = "sans-serif";
+
+fn ensure_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The font is part of the source tree: failure here is a build defect.
+        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
+    });
+}
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dash {
+    /// Solid line (the paper's "—").
+    Solid,
+    /// Dashed ("---").
+    Dashed,
+    /// Dotted ("···").
+    Dotted,
+    /// Dash-dot ("-·-").
+    DashDot,
+}
+
+/// One line.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Legend text (empty: no legend entry).
+    pub label: String,
+    /// Abscissae.
+    pub x: Vec<f64>,
+    /// Ordinates.
+    pub y: Vec<f64>,
+    /// Colour index into the palette.
+    pub color: usize,
+    /// Line style.
+    pub dash: Dash,
+}
+
+impl Series {
+    /// A solid series in palette colour `color`.
+    pub fn new(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>, color: usize) -> Self {
+        Self {
+            label: label.into(),
+            x,
+            y,
+            color,
+            dash: Dash::Solid,
+        }
+    }
+
+    /// The same series with another line style.
+    pub fn dash(mut self, dash: Dash) -> Self {
+        self.dash = dash;
+        self
+    }
+}
+
+/// One panel: axes, labels and series.
+#[derive(Debug, Clone, Default)]
+pub struct Panel {
+    /// Caption above the panel.
+    pub title: String,
+    /// x axis label (with unit).
+    pub x_label: String,
+    /// y axis label (with unit).
+    pub y_label: String,
+    /// The lines.
+    pub series: Vec<Series>,
+    /// Logarithmic y axis.
+    pub log_y: bool,
+}
+
+/// A figure: a title and a grid of panels.
+#[derive(Debug, Clone)]
+pub struct Figure {
+    /// Title across the top.
+    pub title: String,
+    /// Grid rows.
+    pub rows: usize,
+    /// Grid columns.
+    pub cols: usize,
+    /// Panels, row-major.
+    pub panels: Vec<Panel>,
+    /// Size in pixels.
+    pub size: (u32, u32),
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+
+/// Palette colour `i` (wraps).
+pub fn color(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// Contiguous runs of finite points.
+type Runs = Vec<Vec<(f64, f64)>>;
+
+fn finite_runs(x: &[f64], y: &[f64], log_y: bool) -> Runs {
+    let mut runs = Vec::new();
+    let mut cur = Vec::new();
+    for (&a, &b) in x.iter().zip(y.iter()) {
+        let ok = a.is_finite() && b.is_finite() && (!log_y || b > 0.0);
+        if ok {
+            cur.push((a, b));
+        } else if !cur.is_empty() {
+            runs.push(std::mem::take(&mut cur));
+        }
+    }
+    if !cur.is_empty() {
+        runs.push(cur);
+    }
+    runs
+}
+
+fn range(vals: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for v in vals {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo.is_finite() && hi.is_finite() {
+        Some((lo, hi))
+    } else {
+        None
+    }
+}
+
+fn pad(lo: f64, hi: f64) -> (f64, f64) {
+    if hi > lo {
+        let m = 0.05 * (hi - lo);
+        (lo - m, hi + m)
+    } else {
+        let m = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
+        (lo - m, hi + m)
+    }
+}
+
+fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let runs: Vec<(usize, Runs)> = p
+        .series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (i, finite_runs(&s.x, &s.y, p.log_y)))
+        .collect();
+    let pts = || runs.iter().flat_map(|(_, r)| r.iter().flatten());
+    let (x0, x1) = range(pts().map(|p| p.0)).unwrap_or((0.0, 1.0));
+    let (y0, y1) = range(pts().map(|p| p.1)).unwrap_or((0.0, 1.0));
+    let (x0, x1) = if x1 > x0 { (x0, x1) } else { pad(x0, x1) };
+    let font = |s: u32| (FAMILY, s).into_font();
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(&p.title, font(18))
+        .margin(8)
+        .x_label_area_size(40)
+        .y_label_area_size(70);
+    macro_rules! finish {
+        ($chart:expr) => {{
+            let mut chart = $chart;
+            chart
+                .configure_mesh()
+                .x_desc(&p.x_label)
+                .y_desc(&p.y_label)
+                .label_style(font(13))
+                .axis_desc_style(font(14))
+                .light_line_style(RGBColor(235, 235, 235))
+                .draw()
+                .map_err(|e| anyhow!("drawing axes: {e}"))?;
+            let mut any_label = false;
+            for (i, r) in &runs {
+                let s = &p.series[*i];
+                let c = color(s.color);
+                let style =
+                    ShapeStyle::from(&c).stroke_width(if s.dash == Dash::Solid { 2 } else { 2 });
+                let mut first = true;
+                for run in r {
+                    let anno = match s.dash {
+                        Dash::Solid => chart
+                            .draw_series(LineSeries::new(run.iter().copied(), style))
+                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                        Dash::Dashed => chart
+                            .draw_series(DashedLineSeries::new(run.iter().copied(), 10, 6, style))
+                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                        Dash::Dotted => chart
+                            .draw_series(DashedLineSeries::new(run.iter().copied(), 2, 4, style))
+                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                        Dash::DashDot => chart
+                            .draw_series(DashedLineSeries::new(run.iter().copied(), 12, 4, style))
+                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                    };
+                    if first && !s.label.is_empty() {
+                        any_label = true;
+                        anno.label(s.label.clone()).legend(move |(x, y)| {
+                            PathElement::new(
+                                vec![(x, y), (x + 20, y)],
+                                ShapeStyle::from(&c).stroke_width(2),
+                            )
+                        });
+                    }
+                    first = false;
+                }
+            }
+            if any_label {
+                chart
+                    .configure_series_labels()
+                    .label_font(font(13))
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()
+                    .map_err(|e| anyhow!("drawing the legend: {e}"))?;
+            }
+        }};
+    }
+    if p.log_y {
+        let (y0, y1) = (y0.max(1e-300), y1.max(1e-300));
+        let (y0, y1) = if y1 > y0 {
+            (y0, y1)
+        } else {
+            (y0 / 10.0, y1 * 10.0)
+        };
+        finish!(builder
+            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+            .map_err(|e| anyhow!("building a chart: {e}"))?);
+    } else {
+        let (y0, y1) = pad(y0, y1);
+        finish!(builder
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| anyhow!("building a chart: {e}"))?);
+    }
+    Ok(())
+}
+
+fn draw_figure<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, f: &Figure) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    ensure_font();
+    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+    let body = if f.title.is_empty() {
+        root.clone()
+    } else {
+        root.titled(&f.title, (FAMILY, 22).into_font())
+            .map_err(|e| anyhow!("{e}"))?
+    };
+    let areas = body.split_evenly((f.rows.max(1), f.cols.max(1)));
+    for (area, panel) in areas.iter().zip(f.panels.iter()) {
+        draw_panel(area, panel)?;
+    }
+    root.present().map_err(|e| anyhow!("{e}"))?;
+    Ok(())
+}
+
+impl Figure {
+    /// Renders to a PNG file.
+    pub fn png(&self, path: &Path) -> Result<()> {
+        let root = BitMapBackend::new(path, self.size).into_drawing_area();
+        draw_figure(root, self).with_context(|| format!("rendering {}", path.display()))
+    }
+
+    /// Renders to an SVG file.
+    pub fn svg(&self, path: &Path) -> Result<()> {
+        let root = SVGBackend::new(path, self.size).into_drawing_area();
+        draw_figure(root, self).with_context(|| format!("rendering {}", path.display()))
+    }
+}
