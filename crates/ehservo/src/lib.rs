@@ -14,6 +14,7 @@
 //! | [`run`] | scenario → plant + controller → result |
 //! | [`output`], [`plot`] | CSV, JSON and PNG/SVG outputs, written atomically |
 
+pub mod analysis;
 pub mod metrics;
 pub mod output;
 pub mod plant;

@@ -14,7 +14,7 @@
 //! | `chattering` | c[u] = sqrt(Σ Δu_k²)/sqrt(Σ u_k²) over t_k ≥ t_s, Δu_k = u_k − u_{k−1} |
 //! | `u_tv_per_s` | Σ \|Δu_k\| over t_k ≥ t_s, divided by T − t_s, V/s |
 //! | `w_norm_max`, `w_norm_final` | max and last ‖W‖ over the run |
-//! | `dead_zone_fraction` | share of samples with σΔ = 0 (NNBVSC only) |
+//! | `dead_zone_fraction` | share of samples with σΔ = 0 over t_k ≥ t_s (NNBVSC only) |
 //! | `diverged`, `diverged_at_s` | the run ended early, and when |
 //!
 //! A value that is undefined (no sample after t_s, a run with u ≡ 0) is
@@ -45,7 +45,7 @@ pub struct Metrics {
     pub w_norm_max: Option<f64>,
     /// Last ‖W‖.
     pub w_norm_final: Option<f64>,
-    /// Share of samples inside the dead zone (σΔ = 0); NNBVSC only.
+    /// Share of samples after the transient inside the dead zone (σΔ = 0); NNBVSC only.
     pub dead_zone_fraction: Option<f64>,
     /// The run ended early.
     pub diverged: bool,
@@ -119,10 +119,10 @@ impl MetricsAccumulator {
         self.u_max = self.u_max.max(u.abs());
         self.w_max = self.w_max.max(s.w_norm);
         self.w_last = s.w_norm;
-        if s.out.sigma_delta == 0.0 {
-            self.dead += 1;
-        }
         if s.t >= self.settle {
+            if s.out.sigma_delta == 0.0 {
+                self.dead += 1;
+            }
             if self.t_first_after.is_none() {
                 self.t_first_after = Some(s.t);
             }
@@ -159,8 +159,8 @@ impl MetricsAccumulator {
             w_norm_max: some_if(self.has_network && self.n > 0, self.w_max),
             w_norm_final: some_if(self.has_network && self.n > 0, self.w_last),
             dead_zone_fraction: some_if(
-                self.has_network && self.n > 0,
-                self.dead as f64 / self.n.max(1) as f64,
+                self.has_network && after,
+                self.dead as f64 / self.n_after.max(1) as f64,
             ),
             diverged: diverged.is_some(),
             diverged_at_s: diverged.map(|d| d.t),
@@ -197,7 +197,7 @@ mod tests {
     /// u: k=5..9 → −1, +1, −1, +1, −1 (u_k = (−1)^k); Δu over k = 5..9 is
     /// ±2 each (k = 5 has u_4 = +1 before it): Σ Δu² = 5·4 = 20; Σu² = 5;
     /// c = sqrt(20/5) = 2. TV = 5·2 = 10 over 9 − 5 = 4 s → 2.5 V/s.
-    /// Dead zone: σΔ = 0 at even k: 5 of 10.
+    /// Dead zone: σΔ = 0 at even k; after t_s (k = 5..9) that is k = 6, 8: 2 of 5.
     #[test]
     fn metrics_by_hand() {
         let mut m = MetricsAccumulator::new(9.0, 5.0, 2.0, true);
@@ -215,7 +215,7 @@ mod tests {
         close(r.u_tv_per_s, 2.5);
         close(r.w_norm_max, 9.0);
         close(r.w_norm_final, 9.0);
-        close(r.dead_zone_fraction, 0.5);
+        close(r.dead_zone_fraction, 0.4);
         assert!(!r.diverged);
         assert_eq!(r.samples, 10);
     }

@@ -1,0 +1,231 @@
+//! The command line as a user meets it: outputs, exit codes, bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn ehservo() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ehservo"))
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn run_writes_trace_summary_and_plot() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("fig2");
+    let o = ehservo()
+        .args(["run"])
+        .arg(repo().join("scenarios/paper/fig2.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("e_max"), "{stdout}");
+
+    let csv = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    for col in [
+        "t_s",
+        "theta_d_deg",
+        "theta_deg",
+        "e_deg",
+        "u_V",
+        "u_eq_V",
+        "u_sw_V",
+        "sigma_rad_s2",
+        "sigma_delta_rad_s2",
+        "wphi_rad_s3",
+        "uncertainty_rad_s3",
+        "w_norm",
+        "w_1",
+        "w_128",
+    ] {
+        assert!(
+            header.split(',').any(|h| h == col),
+            "missing column {col} in {header}"
+        );
+    }
+    // 10 s at 0.01 s: samples k = 0..=1000.
+    assert_eq!(lines.clone().count(), 1001);
+    assert!(!csv.contains("NaN") && !csv.contains("inf"));
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let m = &json["metrics"];
+    for key in [
+        "e_max_deg",
+        "e_final_deg",
+        "e_rms_deg",
+        "u_max",
+        "chattering",
+        "w_norm_max",
+        "w_norm_final",
+        "diverged",
+        "diverged_at_s",
+    ] {
+        assert!(m.get(key).is_some(), "metrics.{key} missing");
+    }
+    assert_eq!(m["diverged"], false);
+    assert!(json["software"]["version"].is_string());
+    assert_eq!(json["scenario"]["name"], "fig2");
+    let png = std::fs::read(out.join("trace.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    // No staging directory left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+#[test]
+fn set_overrides_reach_the_summary() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("g200");
+    let o = ehservo()
+        .arg("run")
+        .arg(repo().join("scenarios/paper/fig2.toml"))
+        .args([
+            "--set",
+            "controller.gamma1=200",
+            "--no-plot",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0));
+    assert!(o.stdout.is_empty());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["scenario"]["controller"]["gamma1"], 200.0);
+    assert!(!out.join("trace.png").exists());
+}
+
+#[test]
+fn a_diverged_run_is_a_result_with_exit_code_0() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = write(
+        tmp.path(),
+        "vsc.toml",
+        "name = \"vsc-fig2\"\n[controller]\nkind = \"vsc\"\n",
+    );
+    let out = tmp.path().join("vsc");
+    let o = ehservo()
+        .arg("run")
+        .arg(&sc)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("UNBOUNDED at t ="));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["metrics"]["diverged"], true);
+    assert!(json["metrics"]["diverged_at_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(json["metrics"]["e_max_deg"], serde_json::Value::Null);
+    let csv = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    assert!(!csv.to_lowercase().contains("nan") && !csv.contains("inf"));
+}
+
+#[test]
+fn bad_input_exits_2_names_the_key_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases = [
+        ("[plant.params]\nJt = -0.05\n", "plant.params.Jt"),
+        ("[plant.params]\nPs = 0.0\n", "plant.params.Ps"),
+        ("[simulation]\nstep = 0.0\n", "simulation.step"),
+        ("[simulation]\nhorizon = 10.003\n", "simulation.horizon"),
+        ("[surface]\npoles = [-20.0, 30.0, -40.0]\n", "surface.poles"),
+        ("[controller]\nkind = \"pid\"\n", "controller.kind"),
+        ("[controller]\ngamma = 3\n", "controller.gamma"),
+        ("[simulation]\nstep = \"small\"\n", "simulation.step"),
+        ("[simulation\n", "syntax"),
+        ("[controller]\nbound_b = 1.5\n", "controller.bound_b"),
+    ];
+    for (i, (text, needle)) in cases.iter().enumerate() {
+        let sc = write(tmp.path(), &format!("bad{i}.toml"), text);
+        let out = tmp.path().join(format!("out{i}"));
+        let o = ehservo()
+            .arg("run")
+            .arg(&sc)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "case {i}: {err}");
+        assert!(
+            err.contains(needle),
+            "case {i}: expected {needle:?} in {err}"
+        );
+        assert!(
+            err.contains(&format!("bad{i}.toml")),
+            "case {i}: the file is named: {err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!out.exists(), "case {i}: output written for bad input");
+    }
+    // A missing file and a bad --set are bad input too.
+    let o = ehservo()
+        .args(["run", "/nonexistent/x.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let o = ehservo()
+        .arg("run")
+        .arg(repo().join("scenarios/paper/fig2.toml"))
+        .args(["--set", "controller.gamma1"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn a_rerun_replaces_the_outputs_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("o");
+    for g in ["100", "200"] {
+        let o = ehservo()
+            .arg("run")
+            .arg(repo().join("scenarios/paper/fig2.toml"))
+            .args([
+                "--no-plot",
+                "-q",
+                "--set",
+                &format!("controller.gamma1={g}"),
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0));
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["scenario"]["controller"]["gamma1"], 200.0);
+}

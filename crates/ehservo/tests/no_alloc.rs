@@ -1,0 +1,105 @@
+//! No heap allocation in a control step, nor in a simulation step.
+//!
+//! A counting global allocator wraps the system one; the counter is read
+//! around the calls under test. (This file is its own test binary, so the
+//! allocator is installed only here.)
+
+// The one unsafe block of the project: a global allocator must be an
+// `unsafe impl`. It only counts, then delegates to the system allocator.
+#![allow(unsafe_code)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+
+static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        System.alloc(l)
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        System.dealloc(p, l)
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        System.realloc(p, l, n)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+use ehservo::plant::{ThirdOrderPlant, UncertaintySignal, UncertaintySpec};
+use ehservo::sim::{simulate, Mode, SimConfig};
+use ehservo_core::prelude::*;
+
+#[test]
+fn control_and_simulation_steps_do_not_allocate() {
+    let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+    let model = NominalModel::new(ServoParams::paper(), Load::paper());
+    let nn = NnVsc::try_new(
+        model,
+        SwitchingSurface::paper(),
+        NnVscParams::paper(),
+        Rbf::paper(),
+    )
+    .unwrap();
+    let vsc = Vsc::try_new(model, SwitchingSurface::paper(), VscParams::paper()).unwrap();
+    let reference = Sine::paper();
+    let mut ctl = SampledController::new(nn, 1e-3).unwrap();
+
+    let before = ALLOCS.load(Ordering::SeqCst);
+    let mut acc = 0.0;
+    for k in 0..1000 {
+        let t = k as f64 * 1e-3;
+        let o = ctl.step(t, [0.01 * t, 0.0, 0.0], reference.z(t));
+        acc += o.u;
+        let o = vsc.law(
+            &Measurement {
+                t,
+                x: [0.0; 3],
+                z: reference.z(t),
+            },
+            &[0.0],
+            &mut [0.0],
+        );
+        acc += o.u;
+    }
+    assert!(acc.is_finite());
+    assert_eq!(
+        ALLOCS.load(Ordering::SeqCst) - before,
+        0,
+        "a control step allocated"
+    );
+
+    // The whole closed loop, both modes, with a non-allocating observer.
+    for mode in [Mode::Sampled, Mode::Continuous] {
+        let cfg = SimConfig {
+            steps: 2000,
+            step: 1e-3,
+            mode,
+            substeps: 2,
+            theta_limit: 1.0,
+            x0: [0.0; 3],
+        };
+        let mut unc = UncertaintySignal::new(
+            UncertaintySpec {
+                a_random: 0.5,
+                b_random: 0.25,
+                ..UncertaintySpec::NONE
+            },
+            model.coeffs.as_array(),
+        );
+        let mut sum = 0.0;
+        let before = ALLOCS.load(Ordering::SeqCst);
+        let out = simulate(&plant, &nn, &reference, &mut unc, &cfg, &mut |s| {
+            sum += s.out.u
+        });
+        let n = ALLOCS.load(Ordering::SeqCst) - before;
+        assert!(out.diverged.is_none() && sum.is_finite());
+        assert_eq!(n, 0, "{mode:?}: {n} allocations in 2000 simulation steps");
+    }
+}
