@@ -13,12 +13,14 @@
 //! | [`scenario`] | TOML scenario files with the paper's defaults and clear errors |
 //! | [`run`] | scenario → plant + controller → result |
 //! | [`output`], [`plot`] | CSV, JSON and PNG/SVG outputs, written atomically |
+//! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
 
 pub mod analysis;
 pub mod metrics;
 pub mod output;
 pub mod plant;
 pub mod plot;
+pub mod reproduce;
 pub mod run;
 pub mod scenario;
 pub mod sim;

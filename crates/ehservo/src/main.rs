@@ -44,6 +44,18 @@ enum Command {
         #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
         set: Vec<String>,
     },
+    /// Re-run the paper's Section IV: every case, every claim scored, figures and a report.
+    Reproduce {
+        /// Output directory.
+        #[arg(long, default_value = "out/reproduce")]
+        out: PathBuf,
+        /// Directory with manifest.toml and the case files.
+        #[arg(long, default_value = "scenarios/paper")]
+        paper_dir: PathBuf,
+        /// No progress bar, no summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Print the default scenario (the paper's Fig. 2 case) as TOML.
     Defaults,
 }
@@ -114,6 +126,43 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 scenario.display(),
                 s.sim_config().steps
             );
+            Ok(())
+        }
+        Command::Reproduce {
+            out,
+            paper_dir,
+            quiet,
+        } => {
+            use std::io::IsTerminal;
+            let manifest = paper_dir.join("manifest.toml");
+            if !manifest.is_file() {
+                return Err(Failure::BadInput(BadInput(format!(
+                    "{}: not found (run from the repository root, or pass --paper-dir)",
+                    manifest.display()
+                ))));
+            }
+            let opts = ehservo::reproduce::Options {
+                paper_dir,
+                out: out.clone(),
+                progress: !quiet && std::io::stderr().is_terminal(),
+                skip_boundaries: false,
+                skip_figures: false,
+            };
+            let start = Instant::now();
+            let rep = ehservo::reproduce::reproduce(&opts)?;
+            if !quiet {
+                println!(
+                    "reproduced {} claims under {} readings in {:.1} s; figures use `{}`:",
+                    rep.claims.len(),
+                    rep.agreements.len(),
+                    start.elapsed().as_secs_f64(),
+                    rep.primary_reading
+                );
+                for (r, n) in &rep.agreements {
+                    println!("  {r:<18} {n:>2} / {} claims agree", rep.claims.len());
+                }
+                println!("wrote {}/report.md, report.html, figures/", out.display());
+            }
             Ok(())
         }
         Command::Defaults => {

@@ -1,0 +1,159 @@
+//! `scenarios/paper/manifest.toml`: readings, cases and claims as data.
+
+use anyhow::{bail, Context, Result};
+use serde::Deserialize;
+use std::collections::HashSet;
+use std::path::Path;
+
+/// One reading of the paper's simulation set-up: overrides applied to every case.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Reading {
+    /// Short id.
+    pub id: String,
+    /// Human label.
+    pub label: String,
+    /// `key.path=value` overrides.
+    pub set: Vec<String>,
+}
+
+/// One case: a scenario file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// Short id.
+    pub id: String,
+    /// Scenario file, relative to the manifest.
+    pub file: String,
+}
+
+/// How a claim is scored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClaimKind {
+    /// |m − value| ≤ tol·|value|.
+    Approx,
+    /// The run stays bounded.
+    Bounded,
+    /// The run diverges.
+    Unbounded,
+    /// m(case) < m(other).
+    Less,
+    /// m(case) > m(other).
+    Greater,
+    /// |m(case)/m(other) − value| ≤ tol·value.
+    Ratio,
+    /// |m(case)/m(other) − 1| ≤ tol.
+    Similar,
+    /// m ≥ value.
+    AtLeast,
+    /// m ≤ value.
+    AtMost,
+}
+
+/// A claim of the paper about one case (or a pair).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Claim {
+    /// Short id.
+    pub id: String,
+    /// Where in the paper.
+    pub source: String,
+    /// The claim in words.
+    pub text: String,
+    /// How it is scored.
+    pub kind: ClaimKind,
+    /// The case.
+    pub case: String,
+    /// The other case, for comparisons.
+    #[serde(default)]
+    pub other: Option<String>,
+    /// The metric.
+    #[serde(default)]
+    pub metric: Option<String>,
+    /// Target value.
+    #[serde(default)]
+    pub value: Option<f64>,
+    /// Relative tolerance.
+    #[serde(default)]
+    pub tol: Option<f64>,
+    /// Explanation for the report.
+    #[serde(default)]
+    pub note: String,
+}
+
+/// The whole manifest.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    /// Readings, in order.
+    pub reading: Vec<Reading>,
+    /// Cases, in order.
+    pub case: Vec<Case>,
+    /// Claims, in order.
+    pub claim: Vec<Claim>,
+}
+
+impl Manifest {
+    /// Reads and checks a manifest.
+    pub fn load(path: &Path) -> Result<Manifest> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let m: Manifest =
+            toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        m.check()
+            .with_context(|| format!("checking {}", path.display()))?;
+        Ok(m)
+    }
+
+    fn check(&self) -> Result<()> {
+        let cases: HashSet<&str> = self.case.iter().map(|c| c.id.as_str()).collect();
+        if cases.len() != self.case.len() {
+            bail!("duplicate case id");
+        }
+        if self.reading.is_empty() {
+            bail!("no [[reading]]");
+        }
+        for c in &self.claim {
+            if !cases.contains(c.case.as_str()) {
+                bail!("claim `{}`: unknown case `{}`", c.id, c.case);
+            }
+            if let Some(o) = &c.other {
+                if !cases.contains(o.as_str()) {
+                    bail!("claim `{}`: unknown other case `{o}`", c.id);
+                }
+            }
+            let needs_metric = !matches!(c.kind, ClaimKind::Bounded | ClaimKind::Unbounded);
+            if needs_metric && c.metric.is_none() {
+                bail!("claim `{}`: kind needs `metric`", c.id);
+            }
+            if let Some(m) = &c.metric {
+                if !super::derived::is_metric(m) {
+                    bail!("claim `{}`: unknown metric `{m}`", c.id);
+                }
+            }
+            let needs_other = matches!(
+                c.kind,
+                ClaimKind::Less | ClaimKind::Greater | ClaimKind::Ratio | ClaimKind::Similar
+            );
+            if needs_other && c.other.is_none() {
+                bail!("claim `{}`: kind needs `other`", c.id);
+            }
+            let needs_value = matches!(
+                c.kind,
+                ClaimKind::Approx | ClaimKind::Ratio | ClaimKind::AtLeast | ClaimKind::AtMost
+            );
+            if needs_value && c.value.is_none() {
+                bail!("claim `{}`: kind needs `value`", c.id);
+            }
+            if matches!(
+                c.kind,
+                ClaimKind::Approx | ClaimKind::Ratio | ClaimKind::Similar
+            ) && c.tol.is_none()
+            {
+                bail!("claim `{}`: kind needs `tol`", c.id);
+            }
+        }
+        Ok(())
+    }
+}
