@@ -50,7 +50,7 @@ pub mod surface;
 
 /// The names most users need, in one import.
 pub mod prelude {
-    pub use crate::control::nnvsc::{NnState, NnVsc, NnVscParams};
+    pub use crate::control::nnvsc::{MuRule, NnState, NnVsc, NnVscParams};
     pub use crate::control::vsc::{Switching, Vsc, VscParams};
     pub use crate::control::{ControlOutput, Controller, Measurement};
     pub use crate::error::ParamError;

@@ -11,9 +11,11 @@
 //!   models are the same system under any variation (a test checks it).
 //!
 //! **Variations** ([`UncertaintySignal`]): `Δa_i = |ā_i|·(a_bias + a_random·r_i(t))`
-//! and `Δb = 0.5·b(t)·(b_bias + b_random·r_b(t))`, i.e. fractions of the
-//! paper's reference sizes α_i = |ā_i| and β = 0.5|b̄| (SPEC §2), whatever
-//! bounds the controller is told. `r(t)` is uniform on [−1, 1], drawn once
+//! and `Δb = b_ref·b(t)·(b_bias + b_random·r_b(t))`, i.e. fractions of the
+//! paper's reference sizes α_i = |ā_i| and β = b_ref·|b̄| with b_ref = 0.5
+//! (SPEC §2: β = 0.5|b̄|), whatever bounds the controller is told. `b_ref = 1`
+//! reads "x % bias of b" as a fraction of b̄ itself (the Fig. 2 caption's
+//! reading; docs/paper-notes.md N11). `r(t)` is uniform on [−1, 1], drawn once
 //! per `hold` seconds (0.01 s) from a seeded ChaCha8 stream and held: the
 //! same signal whatever the integration step. The paper's Fig. 2 is
 //! `a_bias = 1, b_bias = 0.5` (true a = 2ā, true b = 1.25·b̄); Fig. 8 is
@@ -52,6 +54,8 @@ pub struct UncertaintySpec {
     pub b_bias: f64,
     /// Random fraction of β.
     pub b_random: f64,
+    /// The size the b fractions refer to, as a multiple of b̄ (0.5: β).
+    pub b_reference: f64,
     /// Seed of the random signal.
     pub seed: u64,
     /// Hold period of the random signal (s).
@@ -65,13 +69,11 @@ impl UncertaintySpec {
         a_random: 0.0,
         b_bias: 0.0,
         b_random: 0.0,
+        b_reference: 0.5,
         seed: 0,
         hold: 0.01,
     };
 }
-
-/// The reference size β of the b variation, as a fraction of b̄ (SPEC §2).
-pub const BETA_REFERENCE: f64 = 0.5;
 
 /// A piecewise-constant random variation, held over `hold` seconds.
 #[derive(Debug, Clone)]
@@ -122,7 +124,7 @@ impl UncertaintySignal {
         let da = core::array::from_fn(|i| self.abar[i].abs() * (s.a_bias + s.a_random * self.r[i]));
         Variation {
             da,
-            db_rel: BETA_REFERENCE * (s.b_bias + s.b_random * self.r[3]),
+            db_rel: s.b_reference * (s.b_bias + s.b_random * self.r[3]),
         }
     }
 }

@@ -14,7 +14,7 @@
 
 use crate::plant::UncertaintySpec;
 use crate::sim::{Mode, SimConfig};
-use ehservo_core::control::nnvsc::NnVscParams;
+use ehservo_core::control::nnvsc::{MuRule, NnVscParams};
 use ehservo_core::control::vsc::{Switching, VscParams};
 use ehservo_core::error::ParamError;
 use ehservo_core::rbf::Rbf;
@@ -288,7 +288,7 @@ impl Default for FrictionCfg {
 }
 
 /// `[uncertainty]`: Δa_i = |ā_i|·(a_bias + a_random·r_i),
-/// Δb = 0.5·b̄·(b_bias + b_random·r_b), r uniform on [−1, 1] held over `hold`.
+/// Δb = b_reference·b̄·(b_bias + b_random·r_b), r uniform on [−1, 1] held over `hold`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct UncertaintyCfg {
@@ -300,6 +300,10 @@ pub struct UncertaintyCfg {
     pub b_bias: f64,
     /// Default 0.
     pub b_random: f64,
+    /// What the b fractions are fractions of, as a multiple of b̄:
+    /// 0.5 (β = 0.5|b̄|, the text's "Δb = 0.5β", SPEC) or 1 (b̄ itself, the
+    /// Fig. 2 caption's "50 % bias of parameter b"). Default 0.5.
+    pub b_reference: f64,
     /// Seed of the random part. Default 0.
     pub seed: u64,
     /// Hold period of the random part (s). Default 0.01.
@@ -313,6 +317,7 @@ impl Default for UncertaintyCfg {
             a_random: 0.0,
             b_bias: 0.5,
             b_random: 0.0,
+            b_reference: 0.5,
             seed: 0,
             hold: 0.01,
         }
@@ -348,6 +353,19 @@ pub struct SurfaceCfg {
     pub p: Option<[f64; 3]>,
 }
 
+/// `controller.mu_rule`: how the NNBVSC's boundary layer μ(t) is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MuRuleCfg {
+    /// SPEC §5 (Remark 7): μ = (α − ᾱ)‖E‖ε2/c. The default.
+    Remark7,
+    /// The printed (33), negative; for measuring the erratum only.
+    #[serde(rename = "literal-33")]
+    Literal33,
+    /// μ = 0.
+    Zero,
+}
+
 /// `[controller]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -378,6 +396,9 @@ pub struct ControllerCfg {
     pub h: f64,
     /// Boundary-layer width of `vsc-sat` (rad/s²). Default 1.
     pub mu: f64,
+    /// NNBVSC boundary-layer rule: `"remark7"` (default, SPEC §5),
+    /// `"literal-33"` (the printed, negative (33)) or `"zero"`.
+    pub mu_rule: MuRuleCfg,
     /// `[controller.rbf]`.
     pub rbf: RbfCfg,
 }
@@ -399,6 +420,7 @@ impl Default for ControllerCfg {
             eps2: p.eps2,
             h: p.h,
             mu: 1.0,
+            mu_rule: MuRuleCfg::Remark7,
             rbf: RbfCfg::default(),
         }
     }
@@ -669,11 +691,17 @@ impl Scenario {
                 format!("must be finite and > 0 (got {})", u.hold),
             );
         }
-        // The true b must stay positive: 1 + 0.5·(b_bias ± b_random) > 0.
-        if 1.0 + 0.5 * (u.b_bias - u.b_random.abs()) <= 0.0 {
+        if !(u.b_reference.is_finite() && u.b_reference > 0.0) {
+            return bad(
+                "uncertainty.b_reference",
+                format!("must be finite and > 0 (got {})", u.b_reference),
+            );
+        }
+        // The true b must stay positive: 1 + b_ref·(b_bias ± b_random) > 0.
+        if 1.0 + u.b_reference * (u.b_bias - u.b_random.abs()) <= 0.0 {
             return bad(
                 "uncertainty.b_bias",
-                "the true b = b̄·(1 + 0.5·(b_bias + b_random·r)) must stay > 0 (Assumption A1)"
+                "the true b = b̄·(1 + b_reference·(b_bias + b_random·r)) must stay > 0 (Assumption A1)"
                     .into(),
             );
         }
@@ -797,6 +825,11 @@ impl Scenario {
             eps2: c.eps2,
             h: c.h,
             bound_b: c.bound_b,
+            mu_rule: match c.mu_rule {
+                MuRuleCfg::Remark7 => MuRule::Remark7,
+                MuRuleCfg::Literal33 => MuRule::Literal33,
+                MuRuleCfg::Zero => MuRule::Zero,
+            },
         }
     }
 
@@ -821,6 +854,7 @@ impl Scenario {
             a_random: u.a_random,
             b_bias: u.b_bias,
             b_random: u.b_random,
+            b_reference: u.b_reference,
             seed: u.seed,
             hold: u.hold,
         }

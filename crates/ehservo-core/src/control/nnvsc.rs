@@ -33,6 +33,20 @@ use crate::rk4::OdeState;
 use crate::servo::NominalModel;
 use crate::surface::SwitchingSurface;
 
+/// How the boundary layer μ(t) of (25) is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MuRule {
+    /// SPEC §5: μ = (α − ᾱ)‖E‖·ε2/c, the value Remark 7 back-solves from
+    /// (29)–(30); it sits exactly on the bound (32). The default.
+    Remark7,
+    /// The printed (33) read literally: μ = (α − ᾱ)‖E‖·{(γ2 − c)/c − 1},
+    /// which is negative (γ2 − c = ε2 ≪ c). Kept only to measure what the
+    /// erratum would do; |σΔ| + μ can then vanish or change sign.
+    Literal33,
+    /// μ = 0: the γ2 term becomes γ2·sgn(σΔ) (a discontinuous switching).
+    Zero,
+}
+
 /// Gains of the NNBVSC.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NnVscParams {
@@ -56,6 +70,8 @@ pub struct NnVscParams {
     pub h: f64,
     /// β = bound_b·b̄, 0 ≤ bound_b < 1.
     pub bound_b: f64,
+    /// The boundary-layer rule (SPEC §5 by default).
+    pub mu_rule: MuRule,
 }
 
 impl NnVscParams {
@@ -72,6 +88,7 @@ impl NnVscParams {
             eps2: 0.01,
             h: 1.0,
             bound_b: 0.5,
+            mu_rule: MuRule::Remark7,
         }
     }
 
@@ -229,7 +246,11 @@ impl Controller for NnVsc {
             } else {
                 0.0
             };
-            let mu = (p.alpha - p.alpha_bar) * st.norm_e * p.eps2 / c;
+            let mu = match p.mu_rule {
+                MuRule::Remark7 => (p.alpha - p.alpha_bar) * st.norm_e * p.eps2 / c,
+                MuRule::Literal33 => (p.alpha - p.alpha_bar) * st.norm_e * ((gamma2 - c) / c - 1.0),
+                MuRule::Zero => 0.0,
+            };
             let e = st.e_vec();
             let ed = st.e_vec_dot();
             let ete = e[0] * ed[0] + e[1] * ed[1] + e[2] * ed[2];
@@ -241,7 +262,13 @@ impl Controller for NnVsc {
         };
 
         let denom = sd.abs() + mu;
-        let frac = if denom > 0.0 { sd / denom } else { 0.0 };
+        // |σΔ| + μ ≥ 0 under the default rule, and 0 only when σΔ = 0.
+        // (Under the literal (33) it can be negative: computed as printed.)
+        let frac = if denom != 0.0 && sd != 0.0 {
+            sd / denom
+        } else {
+            0.0
+        };
         // (b̄ − β)·u_sw = γ1σΔ + γ2σΔ/(|σΔ| + μ), and b̄ − β = b̄(1 − bound_b).
         let sw_num = p.gamma1 * sd + gamma2 * frac;
         let n = self
@@ -374,6 +401,31 @@ mod tests {
         assert_eq!(o.u_sw, 0.0);
         assert_eq!(o.u, o.u_eq);
         assert!(ds.w.iter().all(|&d| d == 0.0));
+    }
+
+    /// The literal (33) is negative: for the first Fig. 2 sample (see above)
+    /// μ = 245·0.54831136·(0.01/3.2723834 − 1) = −133.93, against the
+    /// default 0.4105151.
+    #[test]
+    fn literal_33_is_negative() {
+        let p = NnVscParams {
+            mu_rule: MuRule::Literal33,
+            ..NnVscParams::paper()
+        };
+        let c = NnVsc::try_new(
+            NominalModel::new(ServoParams::paper(), Load::paper()),
+            SwitchingSurface::paper(),
+            p,
+            Rbf::paper(),
+        )
+        .unwrap();
+        let m = Measurement {
+            t: 0.0,
+            x: [0.0; 3],
+            z: Sine::paper().z(0.0),
+        };
+        let o = c.law(&m, &NnState::zero(), &mut NnState::zero());
+        assert!((o.mu + 133.93).abs() < 0.01, "{}", o.mu);
     }
 
     /// ‖E‖ = 0: no division, σΔ = μ = ξ = 0, flag raised, u finite.

@@ -5,6 +5,7 @@
 //!   "x % bias" (SPEC §2): R1 keeps the controller's bounds of Fig. 2
 //!   (α_i = |ā_i|, β = 0.5|b̄|) with the true Δa_i = x·|ā_i|, Δb = x·0.5·b̄;
 //!   R2 tells the controller the true size (α_i = x·|ā_i|, β = x·0.5·b̄).
+//!   (With `b_reference = 1`, 0.5·b̄ becomes b̄ throughout.)
 //!   The paper: "bounded at 40 %, unbounded above 45 %".
 //! - **The NNBVSC's margin**: the largest a_i bias (b bias kept at Fig. 2's
 //!   0.5) at which it still tracks: bounded with e_max_deg < 0.5°.
@@ -133,30 +134,31 @@ pub fn search(
     })
 }
 
-/// The overrides of the traditional VSC at bias x under reading `r`.
-pub fn vsc_sets(reading_set: &[String], r: BiasReading, x: f64) -> Vec<String> {
-    let mut v = reading_set.to_vec();
-    v.push(format!("uncertainty.a_bias={x}"));
-    v.push(format!("uncertainty.b_bias={x}"));
-    v.push("uncertainty.a_random=0".into());
-    v.push("uncertainty.b_random=0".into());
-    v.push("controller.kind=vsc".into());
+/// The overrides of the traditional VSC at bias x under reading `r`;
+/// `b_ref` is the scenario's `uncertainty.b_reference` (β = b_ref·b̄).
+pub fn vsc_sets(r: BiasReading, b_ref: f64, x: f64) -> Vec<String> {
+    let mut v = vec![
+        format!("uncertainty.a_bias={x}"),
+        format!("uncertainty.b_bias={x}"),
+        "uncertainty.a_random=0".into(),
+        "uncertainty.b_random=0".into(),
+        "controller.kind=vsc".into(),
+    ];
     match r {
         BiasReading::R1 => {
+            // The bounds printed in Section IV: α_i = |ā_i|, β = 0.5|b̄|.
             v.push("controller.bound_a=1".into());
             v.push("controller.bound_b=0.5".into());
         }
         BiasReading::R2 => {
             v.push(format!("controller.bound_a={x}"));
-            v.push(format!("controller.bound_b={}", 0.5 * x));
+            v.push(format!("controller.bound_b={}", b_ref * x));
         }
     }
     v
 }
 
 /// The overrides of the NNBVSC margin at a_i bias x.
-pub fn nn_sets(reading_set: &[String], x: f64) -> Vec<String> {
-    let mut v = reading_set.to_vec();
-    v.push(format!("uncertainty.a_bias={x}"));
-    v
+pub fn nn_sets(x: f64) -> Vec<String> {
+    vec![format!("uncertainty.a_bias={x}")]
 }

@@ -82,6 +82,23 @@ pub struct Claim {
     pub note: String,
 }
 
+/// A variation applied to some cases to measure how much an ambiguity matters.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sensitivity {
+    /// Short id.
+    pub id: String,
+    /// The question, in words.
+    pub question: String,
+    /// Overrides on top of the chosen reading.
+    pub set: Vec<String>,
+    /// Cases it applies to.
+    pub cases: Vec<String>,
+    /// Run seeds 0..n−1 and report the spread.
+    #[serde(default)]
+    pub seeds: Option<u32>,
+}
+
 /// The whole manifest.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -92,6 +109,9 @@ pub struct Manifest {
     pub case: Vec<Case>,
     /// Claims, in order.
     pub claim: Vec<Claim>,
+    /// Sensitivity studies, in order.
+    #[serde(default)]
+    pub sensitivity: Vec<Sensitivity>,
 }
 
 impl Manifest {
@@ -152,6 +172,13 @@ impl Manifest {
             ) && c.tol.is_none()
             {
                 bail!("claim `{}`: kind needs `tol`", c.id);
+            }
+        }
+        for s in &self.sensitivity {
+            for c in &s.cases {
+                if !cases.contains(c.as_str()) {
+                    bail!("sensitivity `{}`: unknown case `{c}`", s.id);
+                }
             }
         }
         Ok(())

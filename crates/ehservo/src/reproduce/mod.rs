@@ -69,6 +69,21 @@ pub struct ClaimRow {
     pub verdicts: BTreeMap<String, Verdict>,
 }
 
+/// One case under one sensitivity variation.
+#[derive(Debug, Clone, Serialize)]
+pub struct SensitivityRow {
+    /// Sensitivity id.
+    pub id: String,
+    /// Case id.
+    pub case: String,
+    /// The case under the chosen reading.
+    pub baseline: CaseMetrics,
+    /// The case with the variation (one run), or the run of seed 0.
+    pub variant: CaseMetrics,
+    /// With seeds: e_max_deg of every seed (None where undefined).
+    pub seeds_e_max_deg: Vec<Option<f64>>,
+}
+
 /// Everything a reproduction measured.
 #[derive(Debug, Clone, Serialize)]
 pub struct Reproduction {
@@ -86,6 +101,8 @@ pub struct Reproduction {
     pub vsc_breaking: Vec<Boundary>,
     /// The NNBVSC's margins.
     pub nn_margin: Vec<Boundary>,
+    /// How much each ambiguity moves the results.
+    pub sensitivity: Vec<SensitivityRow>,
 }
 
 fn bar(progress: bool, len: u64, msg: &str) -> ProgressBar {
@@ -197,7 +214,21 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         .map(|r| r.id.clone())
         .unwrap_or_default();
 
-    // 3. Boundaries.
+    // 3. Sensitivity of the results to the remaining ambiguities.
+    let primary_idx = manifest
+        .reading
+        .iter()
+        .position(|r| r.id == primary)
+        .unwrap_or(0);
+    let sensitivity = sensitivity(
+        &manifest,
+        &opts.paper_dir,
+        primary_idx,
+        &by_reading[&primary],
+        opts.progress,
+    )?;
+
+    // 4. Boundaries.
     let (vsc_breaking, nn_margin) = if opts.skip_boundaries {
         (Vec::new(), Vec::new())
     } else {
@@ -212,9 +243,10 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         claims,
         vsc_breaking,
         nn_margin,
+        sensitivity,
     };
 
-    // 4. Outputs.
+    // 5. Outputs.
     let stage = Staging::new(&opts.out)?;
     let dir = stage.path().to_path_buf();
     let mut figs: Vec<(String, String)> = Vec::new();
@@ -296,42 +328,97 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
     Ok(rep)
 }
 
+fn sensitivity(
+    m: &Manifest,
+    dir: &Path,
+    reading: usize,
+    base: &BTreeMap<String, CaseMetrics>,
+    progress: bool,
+) -> Result<Vec<SensitivityRow>> {
+    // (sensitivity, case, seed) jobs, each a scenario loaded up front.
+    let mut jobs: Vec<(usize, usize, Option<u32>, Scenario)> = Vec::new();
+    for (si, sv) in m.sensitivity.iter().enumerate() {
+        for (ci, case) in sv.cases.iter().enumerate() {
+            let file = &m.case.iter().find(|c| &c.id == case).expect("checked").file;
+            let seeds: Vec<Option<u32>> = match sv.seeds {
+                Some(n) => (0..n.max(1)).map(Some).collect(),
+                None => vec![None],
+            };
+            for seed in seeds {
+                let mut set = m.reading[reading].set.clone();
+                set.extend(sv.set.iter().cloned());
+                if let Some(k) = seed {
+                    set.push(format!("uncertainty.seed={k}"));
+                }
+                let s =
+                    Scenario::load(&dir.join(file), &set).map_err(|e| anyhow::anyhow!("{e}"))?;
+                jobs.push((si, ci, seed, s));
+            }
+        }
+    }
+    let pb = bar(progress, jobs.len() as u64, "sensitivity");
+    let results: Vec<CaseMetrics> = jobs
+        .par_iter()
+        .map(|(_, _, _, s)| {
+            let r = measure(s, false).map(|x| x.0);
+            pb.inc(1);
+            r
+        })
+        .collect::<Result<_>>()?;
+    pb.finish_and_clear();
+    let mut rows: Vec<SensitivityRow> = Vec::new();
+    for ((si, ci, seed, _), cm) in jobs.iter().zip(results) {
+        let sv = &m.sensitivity[*si];
+        let case = &sv.cases[*ci];
+        match rows.iter_mut().find(|r| r.id == sv.id && &r.case == case) {
+            Some(row) => row.seeds_e_max_deg.push(cm.base.e_max_deg),
+            None => rows.push(SensitivityRow {
+                id: sv.id.clone(),
+                case: case.clone(),
+                baseline: base[case],
+                variant: cm,
+                seeds_e_max_deg: if seed.is_some() {
+                    vec![cm.base.e_max_deg]
+                } else {
+                    Vec::new()
+                },
+            }),
+        }
+    }
+    Ok(rows)
+}
+
 fn boundaries(m: &Manifest, dir: &Path, progress: bool) -> Result<(Vec<Boundary>, Vec<Boundary>)> {
-    let vsc_base =
-        Scenario::load(&dir.join("fig3.toml"), &[]).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let nn_base =
-        Scenario::load(&dir.join("fig2.toml"), &[]).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let load = |file: &str, set: &[String]| {
+        Scenario::load(&dir.join(file), set).map_err(|e| anyhow::anyhow!("{e}"))
+    };
     let vsc_grid: Vec<f64> = (0..=30).map(|i| i as f64 * 0.05).collect();
     let nn_grid: Vec<f64> = (0..=40).map(|i| i as f64 * 0.25).collect();
-    let mut tasks: Vec<(String, Option<BiasReading>, Vec<String>)> = Vec::new();
+    // (reading id, bias reading, base scenario with the reading applied)
+    let mut tasks: Vec<(String, Option<BiasReading>, Scenario)> = Vec::new();
     for r in &m.reading {
+        let vsc_base = load("fig3.toml", &r.set)?;
         for br in [BiasReading::R1, BiasReading::R2] {
-            tasks.push((r.id.clone(), Some(br), r.set.clone()));
+            tasks.push((r.id.clone(), Some(br), vsc_base.clone()));
         }
-        tasks.push((r.id.clone(), None, r.set.clone()));
+        tasks.push((r.id.clone(), None, load("fig2.toml", &r.set)?));
     }
     let pb = bar(progress, tasks.len() as u64, "boundaries");
     let results: Vec<Boundary> = tasks
         .par_iter()
-        .map(|(rid, br, set)| {
+        .map(|(rid, br, base)| {
             let found = match br {
                 Some(b) => {
-                    let b = *b;
-                    breaking::search(
-                        &vsc_base,
-                        &vsc_grid,
-                        &|x| breaking::vsc_sets(set, b, x),
-                        None,
-                        10,
-                    )?
+                    let (b, b_ref) = (*b, base.uncertainty.b_reference);
+                    // R2 tells the controller β = b_ref·x·b̄, which must stay < b̄.
+                    let grid: Vec<f64> = vsc_grid
+                        .iter()
+                        .copied()
+                        .filter(|&x| b == BiasReading::R1 || b_ref * x < 1.0)
+                        .collect();
+                    breaking::search(base, &grid, &|x| breaking::vsc_sets(b, b_ref, x), None, 10)?
                 }
-                None => breaking::search(
-                    &nn_base,
-                    &nn_grid,
-                    &|x| breaking::nn_sets(set, x),
-                    Some(0.5),
-                    10,
-                )?,
+                None => breaking::search(base, &nn_grid, &breaking::nn_sets, Some(0.5), 10)?,
             };
             pb.inc(1);
             Ok(Boundary {
@@ -408,6 +495,8 @@ measured effect: `docs/paper-notes.md`.",
         rep.agreements[primary],
         m.claim.len()
     )));
+
+    findings(&mut d, m, rep);
 
     d.push(Block::Heading(
         2,
@@ -514,6 +603,8 @@ measured effect: `docs/paper-notes.md`.",
         .collect();
     d.push(Block::Table(head, rows));
 
+    sensitivity_section(&mut d, m, rep);
+
     if !rep.vsc_breaking.is_empty() {
         d.push(Block::Heading(
             2,
@@ -603,4 +694,167 @@ with max |e| after 2 s below 0.5°; scanned over 0, 0.25, …, 10 and bisected."
         }
     }
     d
+}
+
+fn e_max_text(c: &CaseMetrics) -> String {
+    match (c.base.e_max_deg, c.base.diverged_at_s) {
+        (_, Some(t)) => format!("unbounded at {t:.2} s"),
+        (Some(e), None) => format!("{e:.4}°"),
+        (None, None) => "—".into(),
+    }
+}
+
+fn sensitivity_section(d: &mut Doc, m: &Manifest, rep: &Reproduction) {
+    if rep.sensitivity.is_empty() {
+        return;
+    }
+    d.push(Block::Heading(
+        2,
+        "How much each ambiguity moves the results".into(),
+    ));
+    d.push(Block::Para(format!(
+        "Each variation is applied on top of the chosen reading (`{}`); e_max is max |e| after the transient \
+window. The discussion is in `docs/paper-notes.md`.",
+        rep.primary_reading
+    )));
+    let rel = |a: Option<f64>, b: f64| match a {
+        Some(a) if a > 0.0 => format!("{:+.1} %", 100.0 * (b / a - 1.0)),
+        _ => "—".into(),
+    };
+    let rows = rep
+        .sensitivity
+        .iter()
+        .map(|r| {
+            let q = m
+                .sensitivity
+                .iter()
+                .find(|s| s.id == r.id)
+                .map(|s| s.question.clone())
+                .unwrap_or_default();
+            let base = r.baseline.base.e_max_deg;
+            let (variant, change) = if r.seeds_e_max_deg.is_empty() {
+                let change = match r.variant.base.e_max_deg {
+                    Some(b) if !r.variant.base.diverged => rel(base, b),
+                    _ => "—".into(),
+                };
+                (e_max_text(&r.variant), change)
+            } else {
+                let mut v: Vec<f64> = r.seeds_e_max_deg.iter().flatten().copied().collect();
+                v.sort_by(f64::total_cmp);
+                let unbounded = r.seeds_e_max_deg.len() - v.len();
+                if v.is_empty() {
+                    ("all unbounded".into(), "—".into())
+                } else {
+                    let (lo, hi) = (v[0], v[v.len() - 1]);
+                    let med = v[v.len() / 2];
+                    let extra = if unbounded > 0 {
+                        format!(", {unbounded} unbounded")
+                    } else {
+                        String::new()
+                    };
+                    (
+                        format!(
+                            "{} seeds: min {lo:.4}°, median {med:.4}°, max {hi:.4}°{extra}",
+                            r.seeds_e_max_deg.len()
+                        ),
+                        format!("{} … {}", rel(base, lo), rel(base, hi)),
+                    )
+                }
+            };
+            vec![
+                format!("`{}`: {q}", r.id),
+                format!("`{}`", r.case),
+                e_max_text(&r.baseline),
+                variant,
+                change,
+            ]
+        })
+        .collect();
+    d.push(Block::Table(
+        vec![
+            "variation".into(),
+            "case".into(),
+            "baseline e_max".into(),
+            "with the variation".into(),
+            "change".into(),
+        ],
+        rows,
+    ));
+}
+
+/// Which claims hold in which readings, in a few lines. Readings in which
+/// the NNBVSC of Fig. 2 itself diverges ("unstable") are set apart.
+fn findings(d: &mut Doc, m: &Manifest, rep: &Reproduction) {
+    let stable: Vec<&str> = m
+        .reading
+        .iter()
+        .filter(|r| {
+            !rep.runs
+                .iter()
+                .any(|c| c.reading == r.id && c.case == "fig2" && c.metrics.base.diverged)
+        })
+        .map(|r| r.id.as_str())
+        .collect();
+    let unstable: Vec<String> = m
+        .reading
+        .iter()
+        .filter(|r| !stable.contains(&r.id.as_str()))
+        .map(|r| format!("`{}`", r.id))
+        .collect();
+    let (mut all, mut none, mut some) = (Vec::new(), Vec::new(), Vec::new());
+    for (c, row) in m.claim.iter().zip(&rep.claims) {
+        let agreeing: Vec<&str> = stable
+            .iter()
+            .copied()
+            .filter(|r| row.verdicts[*r].status == Status::Agree)
+            .collect();
+        let line = format!("`{}` — {}", c.id, c.text);
+        if agreeing.is_empty() {
+            none.push(line);
+        } else if agreeing.len() == stable.len() {
+            all.push(line);
+        } else {
+            some.push(format!("{line} (agrees under: {})", agreeing.join(", ")));
+        }
+    }
+    d.push(Block::Heading(2, "Findings".into()));
+    let primary = &rep.primary_reading;
+    let differ: Vec<String> = m
+        .claim
+        .iter()
+        .zip(&rep.claims)
+        .filter(|(_, row)| row.verdicts[primary].status != Status::Agree)
+        .map(|(c, row)| format!("`{}` ({})", c.id, row.verdicts[primary].status.word()))
+        .collect();
+    d.push(Block::Para(format!(
+        "Under the chosen reading `{primary}`, {} of {} claims agree; the others are {}.",
+        rep.agreements[primary],
+        m.claim.len(),
+        if differ.is_empty() {
+            "none".into()
+        } else {
+            differ.join(", ")
+        }
+    )));
+    if !unstable.is_empty() {
+        d.push(Block::Para(format!(
+            "The NNBVSC of Fig. 2 diverges under {}: {} left out of the lists below.",
+            unstable.join(", "),
+            if unstable.len() == 1 {
+                "that reading is"
+            } else {
+                "those readings are"
+            }
+        )));
+    }
+    for (title, list) in [
+        ("Claims reproduced under **every** stable reading:", all),
+        ("Claims that depend on the reading:", some),
+        ("Claims that **no** reading reproduces:", none),
+    ] {
+        if !list.is_empty() {
+            d.push(Block::Para(title.into()));
+            d.push(Block::List(list));
+        }
+    }
 }
