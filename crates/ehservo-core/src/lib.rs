@@ -57,7 +57,7 @@ pub mod prelude {
     pub use crate::rbf::{Rbf, N_KERNELS, N_PHI};
     pub use crate::reference::{Reference, Sine};
     pub use crate::rk4::{rk4_step, OdeState};
-    pub use crate::sampled::SampledController;
+    pub use crate::sampled::{FaultPolicy, Limits, SafeCommand, SampledController};
     pub use crate::servo::{Coefficients, Friction, Load, NominalModel, ServoParams};
     pub use crate::surface::{SurfaceState, SwitchingSurface};
 }

@@ -7,47 +7,175 @@
 //! `ξ(k+1) = ξ(k) + dt·ξ̇(k)`. This is the `sampled` reading of the paper's
 //! simulation (SPEC §7), and exactly what the simulator does in that mode.
 //!
+//! **Faults.** A sensor can return NaN, ±∞ or a value no servo can reach.
+//! Before the law runs, every measurement is checked (finite, and
+//! |x_i| ≤ `limits.x[i]`, z finite); a bad one raises
+//! [`flags::MEASUREMENT_FAULT`] and the step returns the safe command of
+//! the [`FaultPolicy`] (hold the last good command, or zero) **without
+//! touching ∫e or W**, so one bad sample cannot poison the weights. The same
+//! happens if the law itself produces a non-finite u or ξ̇
+//! ([`flags::NON_FINITE_CONTROL`]). A good command is clamped to
+//! `±limits.u` (the valve's range) and the clamp raises [`flags::SATURATED`].
+//!
 //! No allocation: the state lives inside the struct (about 1 kB for the
 //! NNBVSC).
 
-use crate::control::{ControlOutput, Controller, Measurement};
+use crate::control::{flags, ControlOutput, Controller, Measurement};
 use crate::error::{positive, ParamError};
 use crate::rk4::OdeState;
 
-/// A controller with its state and a fixed sample period.
+/// What to command when a step cannot be trusted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SafeCommand {
+    /// Hold the last command that came from a good step (0 before any).
+    HoldLast,
+    /// Command zero (valve centred).
+    Zero,
+}
+
+/// Plausibility limits and the valve's range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// |θ|, |θ̇|, |θ̈| beyond these are sensor faults (rad, rad/s, rad/s²).
+    pub x: [f64; 3],
+    /// The valve's command range ±u (V).
+    pub u: f64,
+}
+
+impl Limits {
+    /// No limits at all (the simulator's default).
+    pub const NONE: Limits = Limits {
+        x: [f64::INFINITY; 3],
+        u: f64::INFINITY,
+    };
+}
+
+/// How [`SampledController::step`] treats faults.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaultPolicy {
+    /// The command on a bad step.
+    pub safe: SafeCommand,
+    /// Plausibility limits and valve range.
+    pub limits: Limits,
+}
+
+impl Default for FaultPolicy {
+    fn default() -> Self {
+        Self {
+            safe: SafeCommand::HoldLast,
+            limits: Limits::NONE,
+        }
+    }
+}
+
+impl FaultPolicy {
+    /// Checks the limits (positive; infinity allowed).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        for &l in &self.limits.x {
+            if l.is_nan() || l <= 0.0 {
+                return Err(ParamError::new("limits.x", "must be > 0 (or infinite)", l));
+            }
+        }
+        if self.limits.u.is_nan() || self.limits.u <= 0.0 {
+            return Err(ParamError::new(
+                "limits.u",
+                "must be > 0 (or infinite)",
+                self.limits.u,
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A controller with its state, a fixed sample period and a fault policy.
 #[derive(Debug, Clone)]
 pub struct SampledController<C: Controller> {
     ctrl: C,
     state: C::State,
     dt: f64,
+    policy: FaultPolicy,
+    last_u: f64,
+    faults: u64,
+    saturations: u64,
 }
 
 impl<C: Controller> SampledController<C> {
-    /// Wraps `ctrl` with its initial state and sample period `dt` (s).
+    /// Wraps `ctrl` with its initial state, sample period `dt` (s) and the
+    /// default policy (hold the last command, no limits).
     pub fn new(ctrl: C, dt: f64) -> Result<Self, ParamError> {
+        Self::with_policy(ctrl, dt, FaultPolicy::default())
+    }
+
+    /// As [`SampledController::new`] with a fault policy.
+    pub fn with_policy(ctrl: C, dt: f64, policy: FaultPolicy) -> Result<Self, ParamError> {
         positive("dt", dt)?;
+        policy.validate()?;
         Ok(Self {
             state: ctrl.initial_state(),
             ctrl,
             dt,
+            policy,
+            last_u: 0.0,
+            faults: 0,
+            saturations: 0,
         })
     }
 
+    fn safe_output(&mut self, fault: u8) -> ControlOutput {
+        self.faults += 1;
+        let u = match self.policy.safe {
+            SafeCommand::HoldLast => self.last_u,
+            SafeCommand::Zero => 0.0,
+        };
+        ControlOutput {
+            u,
+            flags: fault,
+            ..ControlOutput::default()
+        }
+    }
+
     /// One tick at time `t` with measurement `x` and reference `z`: returns
-    /// the law's parts and advances the state.
+    /// the law's parts (or the safe command, flagged) and advances the state
+    /// only after a good step. Always returns a finite `u` within the valve
+    /// range.
     #[inline]
     pub fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> ControlOutput {
+        let lim = &self.policy.limits;
+        let bad_x = x
+            .iter()
+            .zip(lim.x.iter())
+            .any(|(v, l)| !v.is_finite() || v.abs() > *l);
+        if bad_x || !t.is_finite() || z.iter().any(|v| !v.is_finite()) {
+            return self.safe_output(flags::MEASUREMENT_FAULT);
+        }
         let mut ds = C::State::zero();
-        let out = self
+        let mut out = self
             .ctrl
             .law(&Measurement { t, x, z }, &self.state, &mut ds);
-        self.state.axpy(self.dt, &ds);
+        if !out.u.is_finite() || !ds.all_finite() {
+            return self.safe_output(flags::NON_FINITE_CONTROL);
+        }
+        let mut next = self.state;
+        next.axpy(self.dt, &ds);
+        if !next.all_finite() {
+            return self.safe_output(flags::NON_FINITE_CONTROL);
+        }
+        self.state = next;
+        if out.u.abs() > lim.u {
+            out.u = out.u.clamp(-lim.u, lim.u);
+            out.flags |= flags::SATURATED;
+            self.saturations += 1;
+        }
+        self.last_u = out.u;
         out
     }
 
-    /// Back to the initial state (∫e = 0, W = 0).
+    /// Back to the initial state (∫e = 0, W = 0), last command 0, counters 0.
     pub fn reset(&mut self) {
         self.state = self.ctrl.initial_state();
+        self.last_u = 0.0;
+        self.faults = 0;
+        self.saturations = 0;
     }
 
     /// The controller state.
@@ -63,5 +191,113 @@ impl<C: Controller> SampledController<C> {
     /// The sample period (s).
     pub fn dt(&self) -> f64 {
         self.dt
+    }
+
+    /// The fault policy.
+    pub fn policy(&self) -> &FaultPolicy {
+        &self.policy
+    }
+
+    /// Steps that returned the safe command.
+    pub fn fault_count(&self) -> u64 {
+        self.faults
+    }
+
+    /// Steps whose command was clamped to the valve range.
+    pub fn saturation_count(&self) -> u64 {
+        self.saturations
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
+mod tests {
+    use super::*;
+    use crate::control::nnvsc::{NnState, NnVsc, NnVscParams};
+    use crate::rbf::Rbf;
+    use crate::reference::{Reference, Sine};
+    use crate::servo::{Load, NominalModel, ServoParams};
+    use crate::surface::SwitchingSurface;
+
+    fn nn() -> NnVsc {
+        NnVsc::try_new(
+            NominalModel::new(ServoParams::paper(), Load::paper()),
+            SwitchingSurface::paper(),
+            NnVscParams::paper(),
+            Rbf::paper(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn bad_measurements_hold_the_last_command_and_spare_the_weights() {
+        let mut c = SampledController::new(nn(), 0.01).unwrap();
+        let r = Sine::paper();
+        let good = c.step(0.0, [0.0; 3], r.z(0.0));
+        assert_eq!(good.flags & flags::MEASUREMENT_FAULT, 0);
+        let state: NnState = *c.state();
+        for bad in [
+            [f64::NAN, 0.0, 0.0],
+            [0.0, f64::INFINITY, 0.0],
+            [0.0, 0.0, f64::NEG_INFINITY],
+        ] {
+            let o = c.step(0.01, bad, r.z(0.01));
+            assert_eq!(o.u, good.u, "held");
+            assert_ne!(o.flags & flags::MEASUREMENT_FAULT, 0);
+            assert_eq!(*c.state(), state, "weights untouched");
+        }
+        assert_eq!(c.fault_count(), 3);
+        // Zero policy.
+        let mut z = SampledController::with_policy(
+            nn(),
+            0.01,
+            FaultPolicy {
+                safe: SafeCommand::Zero,
+                limits: Limits::NONE,
+            },
+        )
+        .unwrap();
+        z.step(0.0, [0.0; 3], r.z(0.0));
+        assert_eq!(z.step(0.01, [f64::NAN; 3], r.z(0.01)).u, 0.0);
+    }
+
+    #[test]
+    fn out_of_range_measurements_are_faults_and_commands_are_clamped() {
+        let policy = FaultPolicy {
+            safe: SafeCommand::HoldLast,
+            limits: Limits {
+                x: [1.0, 10.0, 1000.0],
+                u: 0.25,
+            },
+        };
+        let mut c = SampledController::with_policy(nn(), 0.01, policy).unwrap();
+        let r = Sine::paper();
+        // The first Fig. 2 command is 0.599 V (see nnvsc tests): clamped to 0.25.
+        let o = c.step(0.0, [0.0; 3], r.z(0.0));
+        assert_eq!(o.u, 0.25);
+        assert_ne!(o.flags & flags::SATURATED, 0);
+        assert_eq!(c.saturation_count(), 1);
+        // |θ| = 2 rad > 1 rad: a sensor fault, the held (clamped) command.
+        let f = c.step(0.01, [2.0, 0.0, 0.0], r.z(0.01));
+        assert_ne!(f.flags & flags::MEASUREMENT_FAULT, 0);
+        assert_eq!(f.u, 0.25);
+    }
+
+    #[test]
+    fn invalid_policies_are_rejected() {
+        let bad = FaultPolicy {
+            safe: SafeCommand::Zero,
+            limits: Limits {
+                x: [1.0, -1.0, 1.0],
+                u: 1.0,
+            },
+        };
+        assert_eq!(
+            SampledController::with_policy(nn(), 0.01, bad)
+                .unwrap_err()
+                .name,
+            "limits.x"
+        );
+        assert_eq!(SampledController::new(nn(), 0.0).unwrap_err().name, "dt");
     }
 }

@@ -39,6 +39,15 @@ pub mod flags {
     pub const VALVE_ROOT_CLAMPED: u8 = 1;
     /// ‖E‖ = 0: σΔ, μ and ξ were set to 0 (no division by ‖E‖).
     pub const ZERO_ERROR_NORM: u8 = 2;
+    /// A measurement was non-finite or out of its plausible range: the safe
+    /// command was returned and the state left alone
+    /// ([`crate::sampled::SampledController`]).
+    pub const MEASUREMENT_FAULT: u8 = 4;
+    /// The law produced a non-finite u or state derivative: the safe command
+    /// was returned and the state left alone.
+    pub const NON_FINITE_CONTROL: u8 = 8;
+    /// u was clamped to the valve range.
+    pub const SATURATED: u8 = 16;
 }
 
 /// The parts of a control law at one instant (like a PID's p, i, d terms).
