@@ -14,6 +14,7 @@
 //! | [`run`] | scenario → plant + controller → result |
 //! | [`output`], [`plot`] | CSV, JSON and PNG/SVG outputs, written atomically |
 //! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
+//! | [`study`] | sweeps and Monte Carlo, sharded across machines |
 
 pub mod analysis;
 pub mod metrics;
@@ -24,5 +25,6 @@ pub mod reproduce;
 pub mod run;
 pub mod scenario;
 pub mod sim;
+pub mod study;
 
 pub use ehservo_core as core;

@@ -56,6 +56,35 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Run a study (grid sweep and/or Monte Carlo) in parallel: results.csv, study.json, plots.
+    Sweep {
+        /// The study file (TOML).
+        study: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Run only the K-th of N contiguous slices (K from 0), e.g. --shard 0/4.
+        #[arg(long, value_name = "K/N")]
+        shard: Option<String>,
+        /// Worker threads (default: every core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar, no summary.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Do not draw plots.
+        #[arg(long)]
+        no_plot: bool,
+    },
+    /// Join the outputs of sharded sweeps into one results.csv.
+    Merge {
+        /// Shard output directories.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Print the default scenario (the paper's Fig. 2 case) as TOML.
     Defaults,
 }
@@ -163,6 +192,71 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 }
                 println!("wrote {}/report.md, report.html, figures/", out.display());
             }
+            Ok(())
+        }
+        Command::Sweep {
+            study,
+            out,
+            shard,
+            threads,
+            quiet,
+            no_plot,
+        } => {
+            use std::io::IsTerminal;
+            let plan = ehservo::study::Plan::load(&study)
+                .map_err(|e| Failure::BadInput(BadInput(e.to_string())))?;
+            let shard = match shard {
+                Some(s) => Some(
+                    ehservo::study::parse_shard(&s)
+                        .map_err(|e| Failure::BadInput(BadInput(format!("--shard: {e}"))))?,
+                ),
+                None => None,
+            };
+            if threads == Some(0) {
+                return Err(Failure::BadInput(BadInput("--threads: must be ≥ 1".into())));
+            }
+            let opts = ehservo::study::SweepOptions {
+                out: out.clone(),
+                shard,
+                threads,
+                progress: !quiet && std::io::stderr().is_terminal(),
+                plots: !no_plot,
+            };
+            let start = Instant::now();
+            let rows = ehservo::study::sweep(&plan, &opts)?;
+            if !quiet {
+                let unbounded = rows
+                    .iter()
+                    .filter(|r| r.metrics.is_some_and(|m| m.diverged))
+                    .count();
+                let invalid = rows.iter().filter(|r| r.error.is_some()).count();
+                println!(
+                    "{}: {} runs{} in {:.2} s ({} unbounded{}); wrote {}/results.csv",
+                    plan.study.name,
+                    rows.len(),
+                    match shard {
+                        Some((k, n)) => format!(" (shard {k}/{n} of {})", plan.runs),
+                        None => String::new(),
+                    },
+                    start.elapsed().as_secs_f64(),
+                    unbounded,
+                    if invalid > 0 {
+                        format!(", {invalid} invalid draws")
+                    } else {
+                        String::new()
+                    },
+                    out.display()
+                );
+            }
+            Ok(())
+        }
+        Command::Merge { dirs, out } => {
+            let n = ehservo::study::merge(&dirs, &out)?;
+            println!(
+                "merged {} shard(s), {n} runs, into {}/results.csv",
+                dirs.len(),
+                out.display()
+            );
             Ok(())
         }
         Command::Defaults => {

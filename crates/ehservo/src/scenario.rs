@@ -902,24 +902,30 @@ fn clean_path(p: &str) -> String {
     }
 }
 
-/// Applies one `key.path=value` to a TOML document. The value is read as a
-/// TOML value (`200`, `1e-3`, `true`, `[1, 2, 3]`, `"text"`); a bare word
-/// that is not TOML (`vsc`, `continuous`) is taken as a string.
-pub fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), (String, String)> {
-    let (path, raw) = spec
-        .split_once('=')
-        .ok_or_else(|| (spec.to_string(), "expected key.path=value".to_string()))?;
-    let path = path.trim();
-    if path.is_empty() || path.split('.').any(|p| p.trim().is_empty()) {
-        return Err((path.to_string(), "empty key in key.path=value".into()));
-    }
+/// Reads the value of a `key.path=value` override as a TOML value (`200`,
+/// `1e-3`, `true`, `[1, 2, 3]`, `"text"`); a bare word that is not TOML
+/// (`vsc`, `continuous`) is taken as a string.
+pub fn parse_value(raw: &str) -> toml::Value {
     let raw = raw.trim();
-    let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
+    match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
         Ok(mut t) => t
             .remove("v")
             .unwrap_or(toml::Value::String(raw.to_string())),
         Err(_) => toml::Value::String(raw.to_string()),
-    };
+    }
+}
+
+/// Sets `path` (dotted) to `value` in a TOML document, creating tables on
+/// the way. Errors name the path and the reason.
+pub fn set_path(
+    table: &mut toml::Table,
+    path: &str,
+    value: toml::Value,
+) -> Result<(), (String, String)> {
+    let path = path.trim();
+    if path.is_empty() || path.split('.').any(|p| p.trim().is_empty()) {
+        return Err((path.to_string(), "empty key in key.path=value".into()));
+    }
     let parts: Vec<&str> = path.split('.').map(str::trim).collect();
     let mut cur = table;
     for (i, part) in parts.iter().enumerate() {
@@ -941,6 +947,42 @@ pub fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), (String
         };
     }
     Ok(())
+}
+
+/// Applies one `key.path=value` to a TOML document.
+pub fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), (String, String)> {
+    let (path, raw) = spec
+        .split_once('=')
+        .ok_or_else(|| (spec.to_string(), "expected key.path=value".to_string()))?;
+    set_path(table, path, parse_value(raw))
+}
+
+impl Scenario {
+    /// This scenario with some keys set to new values (each a dotted path
+    /// and a TOML value), validated. Cheaper than re-parsing text: used by
+    /// sweeps for every run.
+    pub fn with_values(&self, values: &[(String, toml::Value)]) -> Result<Scenario, ScenarioError> {
+        let fail = |key: String, reason: String| ScenarioError {
+            file: self.name.clone(),
+            key,
+            line_col: None,
+            reason,
+        };
+        let mut table =
+            toml::Table::try_from(self).map_err(|e| fail(String::new(), e.to_string()))?;
+        for (k, v) in values {
+            set_path(&mut table, k, v.clone()).map_err(|(k, r)| fail(k, r))?;
+        }
+        let s: Scenario =
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                fail(
+                    clean_path(&e.path().to_string()),
+                    first_line(&e.into_inner().to_string()),
+                )
+            })?;
+        s.validate().map_err(|(k, r)| fail(k, r))?;
+        Ok(s)
+    }
 }
 
 #[cfg(test)]
