@@ -35,9 +35,19 @@ fn every_bad_file_is_rejected_clearly() {
         let name = p.file_name().unwrap().to_string_lossy();
         assert_eq!(o.status.code(), Some(2), "{name}: {err}");
         assert!(err.contains(expect), "{name}: expected {expect:?} in {err}");
-        assert!(err.contains(&*name), "{name}: the message names the file: {err}");
-        assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "{name}: {err}");
-        assert_eq!(err.trim().lines().count(), 1, "{name}: one clear line: {err}");
+        assert!(
+            err.contains(&*name),
+            "{name}: the message names the file: {err}"
+        );
+        assert!(
+            !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
+            "{name}: {err}"
+        );
+        assert_eq!(
+            err.trim().lines().count(),
+            1,
+            "{name}: one clear line: {err}"
+        );
         assert!(!out.exists(), "{name}: output written for bad input");
         n += 1;
     }

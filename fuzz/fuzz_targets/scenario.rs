@@ -1,0 +1,23 @@
+//! Scenario text → parse, validate, and (when small enough) run: never a
+//! panic, never a NaN in the metrics.
+#![no_main]
+
+use ehservo::run::{run, Keep};
+use ehservo::scenario::Scenario;
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let text = String::from_utf8_lossy(data);
+    if let Ok(s) = Scenario::parse_with(&text, "fuzz.toml", &[]) {
+        if s.sim_config().steps * s.simulation.substeps as u64 <= 2000 {
+            let r = run(&s, Keep::Every(1)).expect("a validated scenario runs");
+            let m = r.metrics;
+            for v in [m.e_max_deg, m.e_final_deg, m.e_rms_deg, m.u_max, m.u_rms, m.chattering, m.w_norm_max] {
+                assert!(v.is_none_or(f64::is_finite), "non-finite metric");
+            }
+            for smp in &r.trace {
+                assert!(smp.out.u.is_finite() && smp.x.iter().all(|v| v.is_finite()));
+            }
+        }
+    }
+});
