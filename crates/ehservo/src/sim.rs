@@ -106,7 +106,8 @@ pub enum DivergenceReason {
     NonFiniteState,
     /// |θ| exceeded the limit.
     ThetaLimit,
-    /// The law returned a non-finite u.
+    /// The law returned a non-finite u, or a non-finite part of its law
+    /// (σ, ‖E‖, WᵀΦ, …) that would have been logged.
     NonFiniteControl,
 }
 
@@ -116,7 +117,9 @@ impl DivergenceReason {
         match self {
             DivergenceReason::NonFiniteState => "the state became non-finite",
             DivergenceReason::ThetaLimit => "|θ| exceeded the divergence limit",
-            DivergenceReason::NonFiniteControl => "the control law returned a non-finite u",
+            DivergenceReason::NonFiniteControl => {
+                "the control law returned a non-finite value (u or one of its parts)"
+            }
         }
     }
 }
@@ -167,6 +170,33 @@ impl<S: OdeState> OdeState for Augmented<S> {
     fn all_finite(&self) -> bool {
         self.x.all_finite() && self.xi.all_finite()
     }
+}
+
+fn sample_is_finite(s: &Sample) -> bool {
+    let o = &s.out;
+    [
+        o.u,
+        o.u_eq,
+        o.u_sw,
+        o.e,
+        o.sigma,
+        o.sigma_delta,
+        o.wphi,
+        o.phi_norm,
+        o.xi,
+        o.b_bar,
+        o.gain,
+        o.mu,
+        o.norm_e,
+        s.uncertainty,
+        s.w_norm,
+        s.w_1,
+        s.w_128,
+    ]
+    .iter()
+    .chain(s.x.iter())
+    .chain(s.z.iter())
+    .all(|v| v.is_finite())
 }
 
 /// Runs the closed loop from t = 0 to `steps·step`, calling `observe` once
@@ -223,6 +253,15 @@ where
             w_1: w.get(1).copied().unwrap_or(0.0),
             w_128: w.get(128).copied().unwrap_or(0.0),
         };
+        // Every logged signal must be finite (a finite u can still come with
+        // an overflowing ‖E‖ or σ): otherwise the run ends here, as a result.
+        if !sample_is_finite(&sample) {
+            outcome.diverged = Some(Divergence {
+                t,
+                reason: DivergenceReason::NonFiniteControl,
+            });
+            break;
+        }
         observe(&sample);
         outcome.samples += 1;
         if k == cfg.steps {
