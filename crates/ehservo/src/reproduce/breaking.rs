@@ -15,7 +15,7 @@
 //! transition of the scan.
 
 use crate::run::{run, Keep};
-use crate::scenario::Scenario;
+use crate::scenario::{parse_value, Scenario};
 use anyhow::Result;
 use serde::Serialize;
 
@@ -73,9 +73,13 @@ pub struct Search {
 }
 
 fn point(base: &Scenario, set: &[String], x: f64) -> Result<ScanPoint> {
-    let mut text_set: Vec<String> = set.to_vec();
-    text_set.retain(|s| !s.is_empty());
-    let s = Scenario::parse_with(&base.to_toml(), &base.name, &text_set)
+    let values: Vec<(String, toml::Value)> = set
+        .iter()
+        .filter_map(|s| s.split_once('='))
+        .map(|(k, v)| (k.trim().to_string(), parse_value(v)))
+        .collect();
+    let s = base
+        .with_values(&values)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let m = run(&s, Keep::Nothing)?.metrics;
     Ok(ScanPoint {
