@@ -36,6 +36,20 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// What the theory says about a scenario: poles, K1/K2 and Theorem 2's bound, Remark 6, the σ-loop and the integrator.
+    Analyze {
+        /// The scenario file (TOML).
+        scenario: PathBuf,
+        /// Override a key (repeatable).
+        #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+        set: Vec<String>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Also run the scenario and report condition 4) of Theorem 3 and the dead zone along the run.
+        #[arg(long)]
+        run: bool,
+    },
     /// Parse and validate a scenario and print it with every default filled in.
     Check {
         /// The scenario file (TOML).
@@ -144,6 +158,51 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                     .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
                     .collect();
                 println!("wrote {}/{{{}}}", dir.display(), names.join(", "));
+            }
+            Ok(())
+        }
+        Command::Analyze {
+            scenario,
+            set,
+            json,
+            run: with_run,
+        } => {
+            let s = load(&scenario, &set)?;
+            let a = ehservo::analysis::analyze(&s);
+            let diag = if with_run {
+                let r = run(&s, Keep::Every(1))?;
+                Some((
+                    ehservo::analysis::diagnostics(&s, &r.trace),
+                    r.outcome.diverged,
+                ))
+            } else {
+                None
+            };
+            if json {
+                let v = serde_json::json!({
+                    "scenario": s.name,
+                    "analysis": a,
+                    "diagnostics": diag.as_ref().and_then(|d| d.0.clone()),
+                    "diverged_at_s": diag.as_ref().and_then(|d| d.1.map(|x| x.t)),
+                });
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&v).map_err(anyhow::Error::from)?
+                );
+            } else {
+                println!("{} ({})\n", s.name, scenario.display());
+                print!("{}", a.to_text());
+                match diag {
+                    Some((Some(d), div)) => {
+                        println!();
+                        print!("{}", d.to_text());
+                        if let Some(dv) = div {
+                            println!("  (the run was unbounded at t = {:.4} s)", dv.t);
+                        }
+                    }
+                    Some((None, _)) => println!("\n(--run: condition 4) concerns the NNBVSC only)"),
+                    None => {}
+                }
             }
             Ok(())
         }

@@ -193,6 +193,11 @@ pub struct Summary<'a> {
     pub faults: Faults,
     /// Quantities derived from the scenario.
     pub derived: Derived,
+    /// What the theory says about the scenario (`ehservo analyze`).
+    pub analysis: crate::analysis::Analysis,
+    /// Condition 4) of Theorem 3 and the dead zone along this run (NNBVSC,
+    /// when the trace was kept).
+    pub diagnostics: Option<crate::analysis::RunDiagnostics>,
 }
 
 /// A divergence, with a sentence.
@@ -257,6 +262,8 @@ pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
             p: s.surface().map(|x| x.p()).unwrap_or([f64::NAN; 3]),
             steps: s.sim_config().steps,
         },
+        analysis: crate::analysis::analyze(s),
+        diagnostics: crate::analysis::diagnostics(s, &run.trace),
     }
 }
 
