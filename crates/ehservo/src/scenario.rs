@@ -473,7 +473,8 @@ impl Default for OutputCfg {
 /// row per step; a guard against a mistyped step, not a physical limit).
 pub const MAX_STEPS: u64 = 100_000_000;
 
-fn line_col(text: &str, offset: usize) -> (usize, usize) {
+/// 1-based line and column of a byte offset in `text`.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let before = &text[..offset.min(text.len())];
     let line = before.matches('\n').count() + 1;
     let col = before

@@ -46,7 +46,10 @@ use std::path::{Path, PathBuf};
 
 /// The values of an axis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "expected a list of values, { from, to, step } or { from, to, n, scale = \"linear\" | \"log\" }"
+)]
 pub enum AxisValues {
     /// An explicit list (numbers, strings or booleans).
     List(Vec<toml::Value>),
@@ -343,24 +346,39 @@ impl Plan {
     /// Reads and checks a study file (and its base scenario).
     pub fn load(path: &Path) -> Result<Plan, StudyError> {
         let file = path.display().to_string();
-        let bad = |key: &str, reason: String| {
+        let bad = |key: &str, lc: Option<(usize, usize)>, reason: String| {
+            let at = lc.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
             StudyError(if key.is_empty() {
-                format!("{file}: {reason}")
+                format!("{file}{at}: {reason}")
             } else {
-                format!("{file}: `{key}`: {reason}")
+                format!("{file}{at}: `{key}`: {reason}")
             })
         };
         let text = std::fs::read_to_string(path)
-            .map_err(|e| bad("", format!("cannot read the study file: {e}")))?;
-        let study: Study = serde_path_to_error::deserialize(
-            toml::Deserializer::parse(&text)
-                .map_err(|e| bad("", format!("TOML syntax error: {}", e.message())))?,
-        )
-        .map_err(|e| {
+            .map_err(|e| bad("", None, format!("cannot read the study file: {e}")))?;
+        let de = toml::Deserializer::parse(&text).map_err(|e| {
+            let lc = e
+                .span()
+                .map(|sp| crate::scenario::line_col(&text, sp.start));
+            bad(
+                "",
+                lc,
+                format!(
+                    "TOML syntax error: {}",
+                    e.message().lines().next().unwrap_or("")
+                ),
+            )
+        })?;
+        let study: Study = serde_path_to_error::deserialize(de).map_err(|e| {
             let key = e.path().to_string();
+            let inner = e.into_inner();
+            let lc = inner
+                .span()
+                .map(|sp| crate::scenario::line_col(&text, sp.start));
             bad(
                 if key == "." { "" } else { &key },
-                e.into_inner().message().to_string(),
+                lc,
+                inner.message().lines().next().unwrap_or("").to_string(),
             )
         })?;
         let base_path = path.parent().unwrap_or(Path::new(".")).join(&study.base);
