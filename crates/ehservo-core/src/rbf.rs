@@ -14,7 +14,10 @@
 //! Because the centres form a grid, each Gaussian factors into one term per
 //! axis: `φ(i1,i2,i3) = g1[i1]·g2[i2]·g3[i3]` with `gk[i] = exp(−(x̃k − L[i])²/δ²)`.
 //! The network therefore costs 15 exponentials and 150 products, not 125
-//! exponentials; [`Rbf::phi_direct`] keeps the textbook form for tests.
+//! exponentials. With equally spaced levels (the paper's) it costs four:
+//! each axis is expanded about its nearest level (see `Spacing`), so only
+//! `q = exp(2Δd/δ²)` per axis and the nearest kernel itself are
+//! exponentials. [`Rbf::phi_direct`] keeps the textbook form for tests.
 
 use crate::error::{positive, ParamError};
 use crate::math::{exp, DR};
@@ -34,7 +37,35 @@ pub struct Rbf {
     scale: [f64; 3],
     inv_scale: [f64; 3],
     inv_width_sq: f64,
+    spacing: Option<Spacing>,
 }
+
+/// Equally spaced, increasing levels `L[i] = L[0] + i·Δ`. Expand each
+/// axis about its nearest level `L[m]`: with `d = x̃ − L[m]` (|d| ≤ Δ/2 on
+/// the grid), `(d − jΔ)² = d² − 2jΔd + j²Δ²`, so
+/// `g[m + j] = exp(−d²/δ²)·q^j·C_|j|` with `q = exp(2Δd/δ²)` and the
+/// constants `C_j = exp(−j²Δ²/δ²)`: two exponentials per axis instead of
+/// five (six for Φ instead of fifteen), and the largest factor, `g[m]`, is
+/// the direct one to the bit. Expanding about the nearest level keeps the
+/// exponents of `exp(−d²/δ²)` and `q` small, so their rounding stays at a
+/// few ulp of the factors near 1 (the centre of the grid would cost ~4 ulp
+/// more at the outer levels).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Spacing {
+    first: f64,
+    inv_step: f64,
+    q_coef: f64,
+    /// `C_|j|` for j = −4..=4.
+    c: [f64; 2 * N_LEVELS - 1],
+}
+
+/// The two-exponential form is used only while every factor it multiplies
+/// lies in [e^−300, e^300] (`d²/δ² ≤ 300`, `4·2|Δd|/δ² ≤ 300` for q⁴,
+/// `16Δ²/δ² ≤ 300` for C_4): nothing overflows, so no `0·∞ = NaN`; results
+/// below e^−708 underflow to (sub)normals or 0 as the direct form's do.
+/// Outside, and for NaN or infinite inputs, the five direct exponentials
+/// are taken.
+const SPACED_MAX: f64 = 300.0;
 
 impl Rbf {
     /// The paper's network: levels {−1, −0.5, 0, 0.5, 1}, δ = 0.5,
@@ -64,12 +95,45 @@ impl Rbf {
         for &s in &scale {
             positive("rbf.scale", s)?;
         }
+        let inv_width_sq = 1.0 / (width * width);
         Ok(Self {
             levels,
             width,
             scale,
             inv_scale: [1.0 / scale[0], 1.0 / scale[1], 1.0 / scale[2]],
-            inv_width_sq: 1.0 / (width * width),
+            inv_width_sq,
+            spacing: Self::spacing(&levels, inv_width_sq),
+        })
+    }
+
+    /// The equal-spacing constants, if the levels are increasing and
+    /// equally spaced (to the last bit) and the constants are in the range
+    /// of [`SPACED_MAX`].
+    #[allow(clippy::float_cmp)] // equal spacing to the last bit is the point
+    fn spacing(levels: &[f64; N_LEVELS], k: f64) -> Option<Spacing> {
+        let first = levels[0];
+        let step = levels[1] - levels[0];
+        let equal = levels
+            .iter()
+            .enumerate()
+            .all(|(i, &l)| l == first + i as f64 * step);
+        let q_coef = 2.0 * step * k;
+        let a1 = step * step * k;
+        // (k and the levels are finite, so a1 is finite or +∞.)
+        if !equal || step <= 0.0 || !k.is_finite() || !q_coef.is_finite() || 16.0 * a1 > SPACED_MAX
+        {
+            return None;
+        }
+        let mut c = [1.0; 2 * N_LEVELS - 1];
+        for (i, ci) in c.iter_mut().enumerate() {
+            let j = i.abs_diff(N_LEVELS - 1);
+            *ci = exp(-((j * j) as f64) * a1);
+        }
+        Some(Spacing {
+            first,
+            inv_step: 1.0 / step,
+            q_coef,
+            c,
         })
     }
 
@@ -98,36 +162,114 @@ impl Rbf {
         ]
     }
 
-    /// Fills `out` with Φ(x, z) and returns ‖Φ‖.
+    /// The per-axis factors `g[k][i] = exp(−(x̃k − L[i])²/δ²)`: the kernel
+    /// `j = 25·i1 + 5·i2 + i3` is `g[0][i1]·g[1][i2]·g[2][i3]`.
     #[inline]
-    pub fn phi(&self, x: &[f64; 3], z: &[f64; 4], out: &mut [f64; N_PHI]) -> f64 {
+    pub(crate) fn gaussians(&self, x: &[f64; 3]) -> [[f64; N_LEVELS]; 3] {
+        let xt = [
+            x[0] * self.inv_scale[0],
+            x[1] * self.inv_scale[1],
+            x[2] * self.inv_scale[2],
+        ];
+        if let Some(sp) = &self.spacing {
+            if let Some(g) = self.gaussians_spaced(sp, &xt) {
+                return g;
+            }
+        }
         let mut g = [[0.0; N_LEVELS]; 3];
-        for (k, gk) in g.iter_mut().enumerate() {
-            let xt = x[k] * self.inv_scale[k];
-            for (i, gi) in gk.iter_mut().enumerate() {
-                let d = xt - self.levels[i];
+        for (gk, &xk) in g.iter_mut().zip(&xt) {
+            for (gi, &l) in gk.iter_mut().zip(&self.levels) {
+                let d = xk - l;
                 *gi = exp(-d * d * self.inv_width_sq);
             }
         }
-        out[0] = 1.0;
-        let mut sum_sq = 1.0;
-        let mut j = 1;
-        for &g1 in &g[0] {
-            for &g2 in &g[1] {
-                let g12 = g1 * g2;
-                for &g3 in &g[2] {
-                    let v = g12 * g3;
-                    out[j] = v;
-                    sum_sq += v * v;
-                    j += 1;
-                }
+        g
+    }
+
+    /// The factors by [`Spacing`], or `None` when an axis is outside the
+    /// range of [`SPACED_MAX`] (or NaN). Four exponentials: the nearest
+    /// kernel `G = exp(−‖x̃ − c_m‖²/δ²)` (computed as [`Rbf::phi_direct`]
+    /// does, so it is that kernel to the bit) and one `q` per axis; the
+    /// factors are `G·h1[i]`, `h2[i]`, `h3[i]` with `h[m + j] = C_|j|·q^j`,
+    /// the ratio of each level's factor to the nearest one's (≤ 1).
+    #[inline]
+    fn gaussians_spaced(&self, sp: &Spacing, xt: &[f64; 3]) -> Option<[[f64; N_LEVELS]; 3]> {
+        const TOP: usize = N_LEVELS - 1;
+        let mut m = [0; 3];
+        let mut dist2 = 0.0;
+        let mut arg_q = [0.0; 3];
+        for k in 0..3 {
+            // Nearest level: the number of midpoints at or below x̃ (NaN → 0;
+            // the range check below then fails).
+            let r = (xt[k] - sp.first) * sp.inv_step + 0.5;
+            m[k] = (1..N_LEVELS).map(|i| usize::from(r >= i as f64)).sum();
+            let d = xt[k] - self.levels[m[k]];
+            arg_q[k] = sp.q_coef * d;
+            let in_range =
+                d * d * self.inv_width_sq <= SPACED_MAX && arg_q[k].abs() <= 0.25 * SPACED_MAX;
+            if !in_range {
+                return None; // (also for NaN)
+            }
+            dist2 += d * d;
+        }
+        // The four exponentials back to back: independent, so they overlap.
+        let big_g = exp(-dist2 * self.inv_width_sq);
+        let q = [exp(arg_q[0]), exp(arg_q[1]), exp(arg_q[2])];
+        let mut g = [[0.0; N_LEVELS]; 3];
+        for k in 0..3 {
+            let (q, qi) = (q[k], 1.0 / q[k]);
+            let (q2, qi2) = (q * q, qi * qi);
+            // q^j for j = −4..=4; the window j = i − m, i = 0..5.
+            let p = [qi2 * qi2, qi2 * qi, qi2, qi, 1.0, q, q2, q2 * q, q2 * q2];
+            let w = TOP - m[k];
+            let (c, p) = (&sp.c[w..w + N_LEVELS], &p[w..w + N_LEVELS]);
+            for ((gi, &ci), &pi) in g[k].iter_mut().zip(c).zip(p) {
+                *gi = ci * pi;
             }
         }
-        for (i, &zi) in z.iter().enumerate() {
-            out[1 + N_KERNELS + i] = zi;
+        for g1 in g[0].iter_mut() {
+            *g1 *= big_g;
+        }
+        Some(g)
+    }
+
+    /// ‖Φ‖ from the per-axis factors and z, without forming Φ: the kernels'
+    /// sum of squares factors as `Π_k Σ_i g[k][i]²` (it is a sum over the
+    /// 5³ products `g1·g2·g3`), so it costs 15 squares, not 125.
+    #[inline]
+    pub(crate) fn norm_from(g: &[[f64; N_LEVELS]; 3], z: &[f64; 4]) -> f64 {
+        let sq = |gk: &[f64; N_LEVELS]| {
+            (gk[0] * gk[0] + gk[1] * gk[1]) + (gk[2] * gk[2] + gk[3] * gk[3]) + gk[4] * gk[4]
+        };
+        let mut sum_sq = 1.0 + sq(&g[0]) * sq(&g[1]) * sq(&g[2]);
+        for zi in z {
             sum_sq += zi * zi;
         }
         crate::math::sqrt(sum_sq)
+    }
+
+    /// Fills `out` with Φ(x, z) and returns ‖Φ‖.
+    #[inline]
+    pub fn phi(&self, x: &[f64; 3], z: &[f64; 4], out: &mut [f64; N_PHI]) -> f64 {
+        let g = self.gaussians(x);
+        Self::fill_phi(&g, z, out);
+        Self::norm_from(&g, z)
+    }
+
+    /// Φ from the per-axis factors and z.
+    #[inline]
+    fn fill_phi(g: &[[f64; N_LEVELS]; 3], z: &[f64; 4], out: &mut [f64; N_PHI]) {
+        out[0] = 1.0;
+        for (i1, &g1) in g[0].iter().enumerate() {
+            for (i2, &g2) in g[1].iter().enumerate() {
+                let g12 = g1 * g2;
+                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                for (o, &g3) in out[j..j + N_LEVELS].iter_mut().zip(&g[2]) {
+                    *o = g12 * g3;
+                }
+            }
+        }
+        out[1 + N_KERNELS..].copy_from_slice(z);
     }
 
     /// Φ by the textbook formula `exp(−‖x̃ − cj‖²/δ²)`, one exponential per
@@ -185,6 +327,68 @@ mod tests {
                 assert!((a[i] - b[i]).abs() <= 1e-15 * (1.0 + b[i].abs()), "i={i}");
             }
         }
+    }
+
+    /// The equal-spacing form (four exponentials) against the textbook one,
+    /// on and off the grid, on both sides of its range guard, and with
+    /// levels that are not equally spaced (the direct form is then used).
+    #[test]
+    fn spaced_form_equals_direct_everywhere() {
+        let s = Rbf::paper_scale();
+        let uneven = Rbf::try_new([-1.0, -0.4, 0.0, 0.5, 1.0], 0.5, s).unwrap();
+        let wide = Rbf::try_new([-3.0, -1.5, 0.0, 1.5, 3.0], 0.7, s).unwrap();
+        assert!(Rbf::paper().spacing.is_some() && wide.spacing.is_some());
+        assert!(uneven.spacing.is_none());
+        let z = [0.05, -0.3, 2.0, -20.0];
+        // x̃ from −9 to 9 in steps of 0.37 on each axis (|d| up to 8: the
+        // guard d²/δ² ≤ 300 switches at |d| = 8.66 for δ = 0.5).
+        let mut n = 0;
+        for rbf in [Rbf::paper(), uneven, wide] {
+            for i in 0..49 {
+                for j in [0, 7, 24, 41, 48] {
+                    let xt = [-9.0 + 0.37 * i as f64, -9.0 + 0.37 * j as f64, 0.31];
+                    let x = [xt[0] * s[0], xt[1] * s[1], xt[2] * s[2]];
+                    let (mut a, mut b) = ([0.0; N_PHI], [0.0; N_PHI]);
+                    rbf.phi(&x, &z, &mut a);
+                    rbf.phi_direct(&x, &z, &mut b);
+                    for k in 0..N_PHI {
+                        assert!(
+                            (a[k] - b[k]).abs() <= 1e-15 * (1.0 + b[k].abs()),
+                            "{x:?} {k}"
+                        );
+                    }
+                    n += 1;
+                }
+            }
+        }
+        assert_eq!(n, 3 * 49 * 5);
+    }
+
+    /// Far, infinite and NaN states never give NaN where the direct form
+    /// does not: far away every kernel is 0 (or subnormal) and ‖Φ‖ finite.
+    #[test]
+    fn spaced_form_has_no_nan_far_away() {
+        let rbf = Rbf::paper();
+        let z = [0.0, 0.5, 0.0, -20.0];
+        for v in [8.0, 9.0, 40.0, 1e3, 1e10, 1e300, f64::MAX, f64::INFINITY] {
+            for x in [[v, 0.0, 0.0], [0.0, -v, 0.0], [v, v, -v]] {
+                let (mut a, mut b) = ([0.0; N_PHI], [0.0; N_PHI]);
+                let norm = rbf.phi(&x, &z, &mut a);
+                rbf.phi_direct(&x, &z, &mut b);
+                assert!(norm.is_finite(), "{x:?}");
+                for k in 0..N_PHI {
+                    assert!(!a[k].is_nan(), "{x:?} {k}");
+                    assert!(
+                        (a[k] - b[k]).abs() <= 1e-15 * (1.0 + b[k].abs()),
+                        "{x:?} {k}"
+                    );
+                }
+            }
+        }
+        // A NaN measurement gives NaN kernels, as the direct form does.
+        let mut a = [0.0; N_PHI];
+        rbf.phi(&[f64::NAN, 0.0, 0.0], &z, &mut a);
+        assert!(a[1..=N_KERNELS].iter().all(|v| v.is_nan()));
     }
 
     /// The paper's x1 scale is 6.25° = 0.109083 rad; x2: 12.5π° = 0.685389 rad/s;

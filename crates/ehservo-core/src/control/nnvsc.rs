@@ -28,7 +28,7 @@
 use super::{flags, ControlOutput, Controller, Measurement};
 use crate::error::{non_negative, positive, ParamError};
 use crate::math::sgn;
-use crate::rbf::{Rbf, N_PHI};
+use crate::rbf::{Rbf, N_KERNELS, N_LEVELS, N_PHI};
 use crate::rk4::OdeState;
 use crate::servo::NominalModel;
 use crate::surface::SwitchingSurface;
@@ -155,7 +155,24 @@ impl OdeState for NnState {
     }
     #[inline]
     fn all_finite(&self) -> bool {
-        self.int_e.is_finite() && self.w.all_finite()
+        // 0·v is ±0 for a finite v and NaN for ±∞ or NaN, so the sum is NaN
+        // exactly when some entry is not finite. Branch-free, in eight lanes
+        // (four SIMD pairs, short addition chains); 130 tests with a branch
+        // each cost as much as the rest of the hardware step's bookkeeping.
+        let mut lane = [0.0; 8];
+        for chunk in self.w.chunks_exact(8) {
+            for (l, v) in lane.iter_mut().zip(chunk) {
+                *l += 0.0 * v;
+            }
+        }
+        let mut sum = 0.0 * self.int_e;
+        for v in &self.w[N_PHI - N_PHI % 8..] {
+            sum += 0.0 * v;
+        }
+        for l in lane {
+            sum += l;
+        }
+        sum.is_finite()
     }
 }
 
@@ -227,12 +244,10 @@ impl Controller for NnVsc {
         let x = &m.x;
         let st = self.surface.evaluate(x, &m.z, s.int_e);
 
-        let mut phi = [0.0; N_PHI];
-        let phi_norm = self.rbf.phi(x, &m.z, &mut phi);
-        let mut wphi = 0.0;
-        for (w, f) in s.w.iter().zip(phi.iter()) {
-            wphi += w * f;
-        }
+        // Φ is never stored: its 125 kernels are the products of 15 per-axis
+        // factors, formed once in the single pass over W below.
+        let g = self.rbf.gaussians(x);
+        let phi_norm = Rbf::norm_from(&g, &m.z);
 
         // c = ηW²max/4 + ε0‖Φ‖ + ε1; γ2 = c + ε2 (34).
         let c = self.c_fixed + p.eps0 * phi_norm;
@@ -271,6 +286,39 @@ impl Controller for NnVsc {
         };
         // (b̄ − β)·u_sw = γ1σΔ + γ2σΔ/(|σΔ| + μ), and b̄ − β = b̄(1 − bound_b).
         let sw_num = p.gamma1 * sd + gamma2 * frac;
+        // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
+        // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
+        // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
+        let inv_h = 1.0 / p.h;
+        let a = sd * inv_h;
+        let bw = p.eta * sd.abs() * inv_h;
+        let (w, dw) = (&s.w, &mut ds.w);
+        let g3 = &g[2];
+        let mut wphi_k = 0.0;
+        for (i1, &g1) in g[0].iter().enumerate() {
+            let mut u = 0.0;
+            for (i2, &g2) in g[1].iter().enumerate() {
+                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
+                let t = ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3]))
+                    + wr[4] * g3[4];
+                u += g2 * t;
+                let ag = a * (g1 * g2);
+                for ((d, &wi), &gi) in dr.iter_mut().zip(wr).zip(g3) {
+                    *d = ag * gi - bw * wi;
+                }
+            }
+            wphi_k += g1 * u;
+        }
+        dw[0] = a - bw * w[0]; // Φ_0 = 1
+        let mut wphi = w[0] + wphi_k;
+        for (i, &zi) in m.z.iter().enumerate() {
+            let k = 1 + N_KERNELS + i;
+            wphi += w[k] * zi;
+            dw[k] = a * zi - bw * w[k];
+        }
+        ds.int_e = st.e; // ∫e' = e
+
         let n = self
             .surface
             .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
@@ -284,15 +332,6 @@ impl Controller for NnVsc {
         };
         let u_eq = (n + wphi) / b_bar;
         let u_sw = sw_num / (b_bar * (1.0 - p.bound_b));
-
-        // Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26); ∫e' = e.
-        ds.int_e = st.e;
-        let inv_h = 1.0 / p.h;
-        let a = sd * inv_h;
-        let bw = p.eta * sd.abs() * inv_h;
-        for ((dw, f), w) in ds.w.iter_mut().zip(phi.iter()).zip(s.w.iter()) {
-            *dw = a * f - bw * w;
-        }
 
         ControlOutput {
             u: u_eq + u_sw,
@@ -465,6 +504,27 @@ mod tests {
         // σΔ does not depend on W, so the difference is −0.25·|σΔ|·2.
         let expect = -0.25 * o.sigma_delta.abs() * 2.0;
         assert!((d1.w[5] - d0.w[5] - expect).abs() < 1e-9);
+    }
+
+    /// The branch-free finiteness test agrees with the entry-by-entry one.
+    #[test]
+    fn state_finiteness() {
+        let mut s = NnState::zero();
+        assert!(s.all_finite());
+        s.w = [1e300; N_PHI];
+        assert!(s.all_finite());
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for k in [0, 1, 63, 127, 128, 129] {
+                let mut t = NnState::zero();
+                t.w[k] = bad;
+                assert!(!t.all_finite(), "{bad} at {k}");
+            }
+            let t = NnState {
+                int_e: bad,
+                w: [0.0; N_PHI],
+            };
+            assert!(!t.all_finite());
+        }
     }
 
     #[test]
