@@ -21,6 +21,45 @@ pub trait OdeState: Copy {
     fn axpy(&mut self, a: f64, other: &Self);
     /// Every component is finite.
     fn all_finite(&self) -> bool;
+    /// `self ← self + a·other` only if every component of the result is
+    /// finite; returns whether it was applied (self is untouched if not).
+    /// The default copies the state; implementations may check first and
+    /// write second instead.
+    #[inline]
+    fn axpy_finite(&mut self, a: f64, other: &Self) -> bool {
+        let mut next = *self;
+        next.axpy(a, other);
+        if next.all_finite() {
+            *self = next;
+            true
+        } else {
+            false
+        }
+    }
+}
+
+/// Whether every `s[i] + a·o[i]` is finite, without writing: 0·v is ±0 for
+/// a finite v and NaN otherwise, so the lane sums are NaN exactly when some
+/// result is not finite (branch-free, eight lanes).
+#[inline]
+pub fn axpy_results_finite(s: &[f64], a: f64, o: &[f64]) -> bool {
+    let mut lane = [0.0; 8];
+    let n = s.len().min(o.len());
+    let (sc, oc) = (s[..n].chunks_exact(8), o[..n].chunks_exact(8));
+    let (sr, or) = (sc.remainder(), oc.remainder());
+    for (cs, co) in sc.zip(oc) {
+        for ((l, x), y) in lane.iter_mut().zip(cs).zip(co) {
+            *l += 0.0 * (x + a * y);
+        }
+    }
+    let mut sum = 0.0;
+    for (x, y) in sr.iter().zip(or) {
+        sum += 0.0 * (x + a * y);
+    }
+    for l in lane {
+        sum += l;
+    }
+    sum == 0.0
 }
 
 impl<const N: usize> OdeState for [f64; N] {
@@ -37,6 +76,15 @@ impl<const N: usize> OdeState for [f64; N] {
     #[inline]
     fn all_finite(&self) -> bool {
         self.iter().all(|v| v.is_finite())
+    }
+    #[inline]
+    fn axpy_finite(&mut self, a: f64, other: &Self) -> bool {
+        if axpy_results_finite(self, a, other) {
+            self.axpy(a, other);
+            true
+        } else {
+            false
+        }
     }
 }
 
@@ -121,6 +169,23 @@ mod tests {
         };
         let ratio = err(50) / err(100);
         assert!((ratio - 16.0).abs() < 1.0, "ratio {ratio}");
+    }
+
+    /// axpy_finite applies a finite update and refuses one that overflows
+    /// or carries a NaN, leaving the state as it was.
+    #[test]
+    fn axpy_finite_refuses_non_finite_results() {
+        let mut s = [1.0; 11];
+        assert!(s.axpy_finite(0.5, &[2.0; 11]));
+        assert_eq!(s, [2.0; 11]);
+        let mut bad = [0.0; 11];
+        bad[10] = f64::NAN;
+        assert!(!s.axpy_finite(0.5, &bad));
+        assert_eq!(s, [2.0; 11]);
+        let mut big = [0.0; 11];
+        big[3] = f64::MAX;
+        assert!(!s.axpy_finite(2.0, &big), "overflow to +inf is refused");
+        assert_eq!(s, [2.0; 11]);
     }
 
     /// The time argument of each stage: f = t integrates to t²/2 exactly.

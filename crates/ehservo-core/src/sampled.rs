@@ -152,15 +152,11 @@ impl<C: Controller> SampledController<C> {
         let mut out = self
             .ctrl
             .law(&Measurement { t, x, z }, &self.state, &mut ds);
-        if !out.u.is_finite() || !ds.all_finite() {
+        // A non-finite ξ̇ makes ξ + dt·ξ̇ non-finite: one check (without a
+        // copy of the state) covers both, and refuses an overflow too.
+        if !out.u.is_finite() || !self.state.axpy_finite(self.dt, &ds) {
             return self.safe_output(flags::NON_FINITE_CONTROL);
         }
-        let mut next = self.state;
-        next.axpy(self.dt, &ds);
-        if !next.all_finite() {
-            return self.safe_output(flags::NON_FINITE_CONTROL);
-        }
-        self.state = next;
         if out.u.abs() > lim.u {
             out.u = out.u.clamp(-lim.u, lim.u);
             out.flags |= flags::SATURATED;

@@ -174,6 +174,17 @@ impl OdeState for NnState {
         }
         sum.is_finite()
     }
+    #[inline]
+    fn axpy_finite(&mut self, a: f64, o: &Self) -> bool {
+        let v = self.int_e + a * o.int_e;
+        if v.is_finite() && crate::rk4::axpy_results_finite(&self.w, a, &o.w) {
+            self.int_e = v;
+            self.w.axpy(a, &o.w);
+            true
+        } else {
+            false
+        }
+    }
 }
 
 /// The NNBVSC of Theorem 3.
