@@ -55,6 +55,56 @@ pub struct Metrics {
     pub samples: u64,
 }
 
+impl Metrics {
+    /// The names of the metrics, in the order of tables and CSV columns.
+    pub const NAMES: [&'static str; 13] = [
+        "e_max_deg",
+        "e_final_deg",
+        "e_rms_deg",
+        "u_max",
+        "u_rms",
+        "chattering",
+        "u_tv_per_s",
+        "w_norm_max",
+        "w_norm_final",
+        "dead_zone_fraction",
+        "diverged",
+        "diverged_at_s",
+        "samples",
+    ];
+
+    /// A metric by name, as a number (`diverged` is 1 or 0).
+    pub fn get(&self, name: &str) -> Option<f64> {
+        match name {
+            "e_max_deg" => self.e_max_deg,
+            "e_final_deg" => self.e_final_deg,
+            "e_rms_deg" => self.e_rms_deg,
+            "u_max" => self.u_max,
+            "u_rms" => self.u_rms,
+            "chattering" => self.chattering,
+            "u_tv_per_s" => self.u_tv_per_s,
+            "w_norm_max" => self.w_norm_max,
+            "w_norm_final" => self.w_norm_final,
+            "dead_zone_fraction" => self.dead_zone_fraction,
+            "diverged" => Some(if self.diverged { 1.0 } else { 0.0 }),
+            "diverged_at_s" => self.diverged_at_s,
+            "samples" => Some(self.samples as f64),
+            _ => None,
+        }
+    }
+
+    /// A metric by name as a CSV cell: shortest round-trip decimal, empty
+    /// when undefined, `true`/`false` for `diverged`, an integer for
+    /// `samples`.
+    pub fn cell(&self, name: &str) -> String {
+        match name {
+            "diverged" => self.diverged.to_string(),
+            "samples" => self.samples.to_string(),
+            _ => self.get(name).map(|v| format!("{v}")).unwrap_or_default(),
+        }
+    }
+}
+
 /// Accumulates [`Metrics`] sample by sample.
 #[derive(Debug, Clone)]
 pub struct MetricsAccumulator {

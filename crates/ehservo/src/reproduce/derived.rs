@@ -37,31 +37,19 @@ pub struct CaseMetrics {
     pub e_hf_share: Option<f64>,
 }
 
-const NAMES: [&str; 19] = [
-    "e_max_deg",
-    "e_final_deg",
-    "e_rms_deg",
-    "u_max",
-    "u_rms",
-    "chattering",
-    "u_tv_per_s",
-    "w_norm_max",
-    "w_norm_final",
-    "dead_zone_fraction",
-    "diverged_at_s",
+/// The derived metrics' names (the base ones are [`Metrics::NAMES`]).
+const DERIVED: [&str; 6] = [
     "sigma_rms",
     "capture_corr",
     "capture_gain",
     "w_drift",
     "w128_pp",
     "e_hf_share",
-    "samples",
-    "diverged",
 ];
 
 /// Whether `name` is a metric [`CaseMetrics::get`] knows.
 pub fn is_metric(name: &str) -> bool {
-    NAMES.contains(&name)
+    Metrics::NAMES.contains(&name) || DERIVED.contains(&name)
 }
 
 /// Units and digits for display.
@@ -85,28 +73,14 @@ pub fn format_metric(name: &str, v: f64) -> String {
 impl CaseMetrics {
     /// A metric by name.
     pub fn get(&self, name: &str) -> Option<f64> {
-        let b = &self.base;
         match name {
-            "e_max_deg" => b.e_max_deg,
-            "e_final_deg" => b.e_final_deg,
-            "e_rms_deg" => b.e_rms_deg,
-            "u_max" => b.u_max,
-            "u_rms" => b.u_rms,
-            "chattering" => b.chattering,
-            "u_tv_per_s" => b.u_tv_per_s,
-            "w_norm_max" => b.w_norm_max,
-            "w_norm_final" => b.w_norm_final,
-            "dead_zone_fraction" => b.dead_zone_fraction,
-            "diverged_at_s" => b.diverged_at_s,
-            "samples" => Some(b.samples as f64),
-            "diverged" => Some(if b.diverged { 1.0 } else { 0.0 }),
             "sigma_rms" => self.sigma_rms,
             "capture_corr" => self.capture_corr,
             "capture_gain" => self.capture_gain,
             "w_drift" => self.w_drift,
             "w128_pp" => self.w128_pp,
             "e_hf_share" => self.e_hf_share,
-            _ => None,
+            _ => self.base.get(name),
         }
     }
 
@@ -296,7 +270,7 @@ mod tests {
 
     #[test]
     fn names_are_known() {
-        for n in NAMES {
+        for n in Metrics::NAMES.iter().chain(DERIVED.iter()) {
             assert!(is_metric(n));
         }
         assert!(!is_metric("e_max"));

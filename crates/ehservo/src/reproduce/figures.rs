@@ -71,6 +71,24 @@ fn panel(title: &str, y_label: &str, series: Vec<Series>) -> Panel {
     }
 }
 
+/// A panel of u(t) (V).
+fn u_panel(title: &str, t: &[Sample]) -> Panel {
+    panel(
+        title,
+        "u (V)",
+        vec![series("", t, |s| s.out.u, 0, Dash::Solid)],
+    )
+}
+
+/// A panel of σ(t) (rad/s²).
+fn sigma_panel(title: &str, t: &[Sample]) -> Panel {
+    panel(
+        title,
+        "σ (rad/s²)",
+        vec![series("", t, |s| s.out.sigma, 0, Dash::Solid)],
+    )
+}
+
 fn status(r: &RunResult) -> String {
     match r.outcome.diverged {
         Some(d) => format!(" — unbounded at t = {:.2} s", d.t),
@@ -123,16 +141,8 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
                             series("θ", t, |s| s.theta_deg(), 0, Dash::Solid),
                         ],
                     ),
-                    panel(
-                        "(b) u(t)",
-                        "u (V)",
-                        vec![series("", t, |s| s.out.u, 0, Dash::Solid)],
-                    ),
-                    panel(
-                        "(c) σ(t)",
-                        "σ (rad/s²)",
-                        vec![series("", t, |s| s.out.sigma, 0, Dash::Solid)],
-                    ),
+                    u_panel("(b) u(t)", t),
+                    sigma_panel("(c) σ(t)", t),
                     panel(
                         "(d) Σ Δa_i x_i − Δb u_eq + d − ξ (---) and WᵀΦ (—)",
                         "(rad/s³)",
@@ -168,16 +178,8 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
                         "e (deg)",
                         vec![series("", t, e_deg, 0, Dash::Solid)],
                     ),
-                    panel(
-                        "(b) u(t)",
-                        "u (V)",
-                        vec![series("", t, |s| s.out.u, 0, Dash::Solid)],
-                    ),
-                    panel(
-                        "(c) σ(t)",
-                        "σ (rad/s²)",
-                        vec![series("", t, |s| s.out.sigma, 0, Dash::Solid)],
-                    ),
+                    u_panel("(b) u(t)", t),
+                    sigma_panel("(c) σ(t)", t),
                 ],
             },
         });

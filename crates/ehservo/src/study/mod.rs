@@ -585,21 +585,7 @@ pub fn execute(
 }
 
 /// The metric columns of results.csv, in order.
-pub const METRIC_COLUMNS: [&str; 13] = [
-    "e_max_deg",
-    "e_final_deg",
-    "e_rms_deg",
-    "u_max",
-    "u_rms",
-    "chattering",
-    "u_tv_per_s",
-    "w_norm_max",
-    "w_norm_final",
-    "dead_zone_fraction",
-    "diverged",
-    "diverged_at_s",
-    "samples",
-];
+pub const METRIC_COLUMNS: [&str; 13] = Metrics::NAMES;
 
 fn cell(v: &toml::Value) -> String {
     match v {
@@ -607,10 +593,6 @@ fn cell(v: &toml::Value) -> String {
         toml::Value::Float(f) => format!("{f}"),
         other => other.to_string(),
     }
-}
-
-fn opt(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
 }
 
 /// results.csv (header + rows in run order).
@@ -627,23 +609,7 @@ pub fn results_csv(plan: &Plan, rows: &[RunRow]) -> Result<Vec<u8>> {
         rec.extend(r.values.iter().map(cell));
         rec.push(r.seed.to_string());
         match &r.metrics {
-            Some(m) => {
-                rec.extend([
-                    opt(m.e_max_deg),
-                    opt(m.e_final_deg),
-                    opt(m.e_rms_deg),
-                    opt(m.u_max),
-                    opt(m.u_rms),
-                    opt(m.chattering),
-                    opt(m.u_tv_per_s),
-                    opt(m.w_norm_max),
-                    opt(m.w_norm_final),
-                    opt(m.dead_zone_fraction),
-                    m.diverged.to_string(),
-                    opt(m.diverged_at_s),
-                    m.samples.to_string(),
-                ]);
-            }
+            Some(m) => rec.extend(METRIC_COLUMNS.iter().map(|k| m.cell(k))),
             None => rec.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len())),
         }
         rec.push(r.error.clone().unwrap_or_default());
