@@ -148,9 +148,15 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             let s = load(&scenario, &set)?;
             let dir = out.unwrap_or_else(|| PathBuf::from("out").join(&s.name));
             let start = Instant::now();
-            let r = run(&s, Keep::Every(s.output.decimate))?;
+            let rows = s.sim_config().steps / s.output.decimate.max(1) as u64 + 1;
+            if rows > 2_000_000 && !quiet {
+                eprintln!(
+                    "note: trace.csv will have {rows} rows (about {} MB); set output.decimate to thin it",
+                    rows * 300 / 1_000_000
+                );
+            }
+            let (r, files) = output::run_to_dir(&dir, &s, s.output.plot && !no_plot)?;
             let elapsed = start.elapsed();
-            let files = output::write_run(&dir, &s, &r, s.output.plot && !no_plot)?;
             if !quiet {
                 print_summary(&s, &r, elapsed.as_secs_f64());
                 let names: Vec<String> = files

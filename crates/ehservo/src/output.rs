@@ -139,40 +139,50 @@ pub const TRACE_COLUMNS: [&str; 17] = [
     "b_bar_V_s3",
 ];
 
+/// One trace row, in the order of [`TRACE_COLUMNS`].
+fn trace_row(s: &crate::sim::Sample) -> [f64; 17] {
+    let o = &s.out;
+    [
+        s.t,
+        s.theta_d_deg(),
+        s.theta_deg(),
+        s.e_deg(),
+        o.u,
+        o.u_eq,
+        o.u_sw,
+        o.sigma,
+        o.sigma_delta,
+        o.wphi,
+        s.uncertainty,
+        s.w_norm,
+        s.w_1,
+        s.w_128,
+        o.mu,
+        o.norm_e,
+        o.b_bar,
+    ]
+}
+
+fn write_row<W: std::io::Write>(w: &mut csv::Writer<W>, s: &crate::sim::Sample) -> Result<()> {
+    let row = trace_row(s);
+    // The loop stops before a non-finite sample is logged; this is the
+    // last line of defence for the "never NaN in a CSV" rule.
+    if row.iter().any(|v| !v.is_finite()) {
+        anyhow::bail!(
+            "internal error: non-finite value in the trace at t = {}",
+            s.t
+        );
+    }
+    w.write_record(row.iter().map(|v| format!("{v}")))?;
+    Ok(())
+}
+
 /// Writes the trace as CSV (one row per kept sample).
 pub fn write_trace_csv(path: &Path, run: &RunResult) -> Result<()> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(TRACE_COLUMNS)?;
     for s in &run.trace {
-        let o = &s.out;
-        let row = [
-            s.t,
-            s.theta_d_deg(),
-            s.theta_deg(),
-            s.e_deg(),
-            o.u,
-            o.u_eq,
-            o.u_sw,
-            o.sigma,
-            o.sigma_delta,
-            o.wphi,
-            s.uncertainty,
-            s.w_norm,
-            s.w_1,
-            s.w_128,
-            o.mu,
-            o.norm_e,
-            o.b_bar,
-        ];
-        // The loop stops before a non-finite sample is logged; this is the
-        // last line of defence for the "never NaN in a CSV" rule.
-        if row.iter().any(|v| !v.is_finite()) {
-            anyhow::bail!(
-                "internal error: non-finite value in the trace at t = {}",
-                s.t
-            );
-        }
-        w.write_record(row.iter().map(|v| format!("{v}")))?;
+        write_row(&mut w, s)?;
     }
     let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
     write_atomic(path, &bytes)
@@ -339,7 +349,7 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
 }
 
 /// Writes `trace.csv`, `summary.json` and (unless `plot` is false)
-/// `trace.png` into `dir` through a staging directory.
+/// `trace.png` into `dir` through a staging directory, from a finished run.
 pub fn write_run(dir: &Path, s: &Scenario, run: &RunResult, plot: bool) -> Result<Vec<PathBuf>> {
     let stage = Staging::new(dir)?;
     let mut files = vec!["trace.csv", "summary.json"];
@@ -352,4 +362,66 @@ pub fn write_run(dir: &Path, s: &Scenario, run: &RunResult, plot: bool) -> Resul
     }
     stage.commit()?;
     Ok(files.iter().map(|f| dir.join(f)).collect())
+}
+
+/// Most samples kept in memory by [`run_to_dir`] (for the plot and the
+/// run diagnostics); the CSV gets every `output.decimate`-th sample however
+/// long the run.
+pub const MAX_KEPT: u64 = 200_000;
+
+/// Runs a scenario and writes its outputs into `dir` as it goes: the trace
+/// is streamed to `trace.csv` (so a run of millions of steps needs no
+/// memory for it), a bounded subsample is kept for `trace.png` and the
+/// diagnostics. Returns the result (with the kept subsample) and the files.
+pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Vec<PathBuf>)> {
+    let stage = Staging::new(dir)?;
+    let csv_path = stage.path().join("trace.csv");
+    let file =
+        fs::File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
+    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
+    w.write_record(TRACE_COLUMNS)?;
+    let decimate = s.output.decimate.max(1) as u64;
+    let steps = s.sim_config().steps;
+    let keep_every = decimate.max((steps + 1).div_ceil(MAX_KEPT));
+    let mut kept = Vec::with_capacity(((steps + 1) / keep_every + 2) as usize);
+    let mut last = None;
+    let mut failure: Option<anyhow::Error> = None;
+    let (outcome, metrics) = crate::run::run_observed(s, &mut |smp| {
+        if failure.is_none() && smp.k % decimate == 0 {
+            if let Err(e) = write_row(&mut w, smp) {
+                failure = Some(e);
+            }
+        }
+        if smp.k % keep_every == 0 {
+            kept.push(*smp);
+        } else {
+            last = Some(*smp);
+        }
+    })?;
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    if let Some(l) = last {
+        if kept.last().is_none_or(|t: &crate::sim::Sample| t.k < l.k) {
+            kept.push(l);
+        }
+    }
+    let mut inner = w
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("writing trace.csv: {e}"))?;
+    inner.flush()?;
+    let run = RunResult {
+        outcome,
+        metrics,
+        trace: kept,
+    };
+    let mut files = vec!["trace.csv", "summary.json"];
+    let json = serde_json::to_string_pretty(&summary(s, &run))?;
+    write_atomic(&stage.path().join("summary.json"), json.as_bytes())?;
+    if plot {
+        trace_figure(s, &run).png(&stage.path().join("trace.png"))?;
+        files.push("trace.png");
+    }
+    stage.commit()?;
+    Ok((run, files.iter().map(|f| dir.join(f)).collect()))
 }

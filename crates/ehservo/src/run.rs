@@ -33,15 +33,53 @@ pub enum Keep {
 
 /// Runs a scenario (which must have passed [`Scenario::validate`]).
 pub fn run(s: &Scenario, keep: Keep) -> Result<RunResult> {
+    let every = match keep {
+        Keep::Nothing => 0,
+        Keep::Every(n) => n.max(1) as u64,
+    };
+    let mut trace = Vec::new();
+    if let Some(n) = s.sim_config().steps.checked_div(every) {
+        trace.reserve((n + 2) as usize);
+    }
+    let mut last: Option<Sample> = None;
+    let (outcome, metrics) = run_observed(s, &mut |smp: &Sample| {
+        if every > 0 {
+            if smp.k % every == 0 {
+                trace.push(*smp);
+            } else {
+                last = Some(*smp);
+            }
+        }
+    })?;
+    // Always keep the last sample.
+    if let Some(l) = last {
+        if trace.last().is_none_or(|t| t.k < l.k) {
+            trace.push(l);
+        }
+    }
+    Ok(RunResult {
+        outcome,
+        metrics,
+        trace,
+    })
+}
+
+/// Runs a scenario, handing every sample to `observe` (which may stream it
+/// to a file) and keeping only the metrics.
+pub fn run_observed(s: &Scenario, observe: &mut dyn FnMut(&Sample)) -> Result<(Outcome, Metrics)> {
     let params = s.plant.params.to_servo();
     let load = s.load_model();
     match s.plant.model {
-        PlantModel::ThirdOrder => with_controller(&ThirdOrderPlant::new(params, load), s, keep),
-        PlantModel::Physical => with_controller(&PhysicalPlant::new(params, load), s, keep),
+        PlantModel::ThirdOrder => with_controller(&ThirdOrderPlant::new(params, load), s, observe),
+        PlantModel::Physical => with_controller(&PhysicalPlant::new(params, load), s, observe),
     }
 }
 
-fn with_controller<P: Plant>(plant: &P, s: &Scenario, keep: Keep) -> Result<RunResult> {
+fn with_controller<P: Plant>(
+    plant: &P,
+    s: &Scenario,
+    observe: &mut dyn FnMut(&Sample),
+) -> Result<(Outcome, Metrics)> {
     let surface = s.surface().map_err(|(k, r)| anyhow!("{k}: {r}"))?;
     let model = *plant.nominal();
     match s.controller.kind {
@@ -49,12 +87,12 @@ fn with_controller<P: Plant>(plant: &P, s: &Scenario, keep: Keep) -> Result<RunR
             let rbf = s.rbf().map_err(|e| anyhow!("controller.{e}"))?;
             let c = NnVsc::try_new(model, surface, s.nnvsc_params(), rbf)
                 .map_err(|e| anyhow!("controller.{e}"))?;
-            Ok(execute(plant, &c, s, keep, true))
+            Ok(execute(plant, &c, s, observe, true))
         }
         ControllerKind::Vsc | ControllerKind::VscSat => {
             let c = Vsc::try_new(model, surface, s.vsc_params())
                 .map_err(|e| anyhow!("controller.{e}"))?;
-            Ok(execute(plant, &c, s, keep, false))
+            Ok(execute(plant, &c, s, observe, false))
         }
     }
 }
@@ -63,9 +101,9 @@ fn execute<P: Plant, C: Controller>(
     plant: &P,
     ctrl: &C,
     s: &Scenario,
-    keep: Keep,
+    observe: &mut dyn FnMut(&Sample),
     network: bool,
-) -> RunResult {
+) -> (Outcome, Metrics) {
     let cfg = s.sim_config();
     let reference = s.reference();
     let mut unc = UncertaintySignal::new(s.uncertainty_spec(), plant.nominal().coeffs.as_array());
@@ -75,15 +113,6 @@ fn execute<P: Plant, C: Controller>(
         1.0 / s.reference.frequency_hz,
         network,
     );
-    let mut trace = Vec::new();
-    let every = match keep {
-        Keep::Nothing => 0,
-        Keep::Every(n) => n.max(1) as u64,
-    };
-    if let Some(n) = cfg.steps.checked_div(every) {
-        trace.reserve((n + 2) as usize);
-    }
-    let mut last: Option<Sample> = None;
     let outcome = simulate(
         plant,
         ctrl,
@@ -92,23 +121,8 @@ fn execute<P: Plant, C: Controller>(
         &cfg,
         &mut |smp: &Sample| {
             acc.push(smp);
-            if every > 0 {
-                if smp.k % every == 0 {
-                    trace.push(*smp);
-                } else {
-                    last = Some(*smp);
-                }
-            }
+            observe(smp);
         },
     );
-    if let Some(l) = last {
-        if trace.last().map(|t| t.k) != Some(l.k) && l.k > trace.last().map(|t| t.k).unwrap_or(0) {
-            trace.push(l);
-        }
-    }
-    RunResult {
-        metrics: acc.finish(outcome.diverged),
-        outcome,
-        trace,
-    }
+    (outcome, acc.finish(outcome.diverged))
 }

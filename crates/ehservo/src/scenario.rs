@@ -469,9 +469,10 @@ impl Default for OutputCfg {
     }
 }
 
-/// Largest number of steps a scenario may ask for (≈ 10 GB of trace at one
-/// row per step; a guard against a mistyped step, not a physical limit).
-pub const MAX_STEPS: u64 = 100_000_000;
+/// Largest number of steps a scenario may ask for: 2·10⁷ (200 s at 10 µs;
+/// about 6 GB of trace.csv without `output.decimate`). A guard against a
+/// mistyped step, not a physical limit.
+pub const MAX_STEPS: u64 = 20_000_000;
 
 /// 1-based line and column of a byte offset in `text`.
 pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
