@@ -176,7 +176,9 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             let s = load(&scenario, &set)?;
             let a = ehservo::analysis::analyze(&s);
             let diag = if with_run {
-                let r = run(&s, Keep::Every(1))?;
+                // Diagnostics over at most MAX_KEPT samples (every one for runs up to that).
+                let stride = (s.sim_config().steps + 1).div_ceil(output::MAX_KEPT).max(1);
+                let r = run(&s, Keep::Every(stride as u32))?;
                 Some((
                     ehservo::analysis::diagnostics(&s, &r.trace),
                     r.outcome.diverged,

@@ -180,7 +180,7 @@ pub struct Study {
 }
 
 /// Largest number of runs a study may ask for.
-pub const MAX_RUNS: u64 = 10_000_000;
+pub const MAX_RUNS: u64 = 2_000_000;
 
 /// SplitMix64: the seed of run `i` of a study with seed `seed`.
 pub fn derive_seed(seed: u64, i: u64) -> u64 {
