@@ -1,0 +1,170 @@
+//! Running the cases: progress bars, loading every case under every
+//! reading, measuring a run, the sensitivity runs and the boundary searches.
+
+use super::breaking::{self, BiasReading, Boundary};
+use super::derived::CaseMetrics;
+use super::manifest::Manifest;
+use super::SensitivityRow;
+use crate::run::{run, Keep, RunResult};
+use crate::scenario::Scenario;
+use anyhow::Result;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+pub(super) fn bar(progress: bool, len: u64, msg: &str) -> ProgressBar {
+    let pb = ProgressBar::with_draw_target(
+        Some(len),
+        if progress {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    pb.set_style(
+        ProgressStyle::with_template("{msg:>14} [{bar:40}] {pos}/{len} ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    pb.set_message(msg.to_string());
+    pb
+}
+
+/// Loads every case under every reading (bad input is reported before any
+/// run starts).
+pub fn load_cases(m: &Manifest, dir: &Path) -> Result<Vec<(usize, usize, Scenario)>> {
+    let mut v = Vec::new();
+    for (ri, r) in m.reading.iter().enumerate() {
+        for (ci, c) in m.case.iter().enumerate() {
+            let s =
+                Scenario::load(&dir.join(&c.file), &r.set).map_err(|e| anyhow::anyhow!("{e}"))?;
+            v.push((ri, ci, s));
+        }
+    }
+    Ok(v)
+}
+
+pub(super) fn measure(s: &Scenario, keep_trace: bool) -> Result<(CaseMetrics, Option<RunResult>)> {
+    let r = run(s, Keep::Every(1))?;
+    let network = r.metrics.w_norm_max.is_some();
+    let cm = CaseMetrics::from_trace(
+        r.metrics,
+        &r.trace,
+        s.simulation.settle,
+        s.simulation.horizon,
+        s.reference.frequency_hz,
+        network,
+    );
+    Ok((cm, if keep_trace { Some(r) } else { None }))
+}
+
+pub(super) fn sensitivity(
+    m: &Manifest,
+    dir: &Path,
+    reading: usize,
+    base: &BTreeMap<String, CaseMetrics>,
+    progress: bool,
+) -> Result<Vec<SensitivityRow>> {
+    // (sensitivity, case, seed) jobs, each a scenario loaded up front.
+    let mut jobs: Vec<(usize, usize, Option<u32>, Scenario)> = Vec::new();
+    for (si, sv) in m.sensitivity.iter().enumerate() {
+        for (ci, case) in sv.cases.iter().enumerate() {
+            let file = &m.case.iter().find(|c| &c.id == case).expect("checked").file;
+            let seeds: Vec<Option<u32>> = match sv.seeds {
+                Some(n) => (0..n.max(1)).map(Some).collect(),
+                None => vec![None],
+            };
+            for seed in seeds {
+                let mut set = m.reading[reading].set.clone();
+                set.extend(sv.set.iter().cloned());
+                if let Some(k) = seed {
+                    set.push(format!("uncertainty.seed={k}"));
+                }
+                let s =
+                    Scenario::load(&dir.join(file), &set).map_err(|e| anyhow::anyhow!("{e}"))?;
+                jobs.push((si, ci, seed, s));
+            }
+        }
+    }
+    let pb = bar(progress, jobs.len() as u64, "sensitivity");
+    let results: Vec<CaseMetrics> = jobs
+        .par_iter()
+        .map(|(_, _, _, s)| {
+            let r = measure(s, false).map(|x| x.0);
+            pb.inc(1);
+            r
+        })
+        .collect::<Result<_>>()?;
+    pb.finish_and_clear();
+    let mut rows: Vec<SensitivityRow> = Vec::new();
+    for ((si, ci, seed, _), cm) in jobs.iter().zip(results) {
+        let sv = &m.sensitivity[*si];
+        let case = &sv.cases[*ci];
+        match rows.iter_mut().find(|r| r.id == sv.id && &r.case == case) {
+            Some(row) => row.seeds_e_max_deg.push(cm.base.e_max_deg),
+            None => rows.push(SensitivityRow {
+                id: sv.id.clone(),
+                case: case.clone(),
+                baseline: base[case],
+                variant: cm,
+                seeds_e_max_deg: if seed.is_some() {
+                    vec![cm.base.e_max_deg]
+                } else {
+                    Vec::new()
+                },
+            }),
+        }
+    }
+    Ok(rows)
+}
+
+pub(super) fn boundaries(
+    m: &Manifest,
+    dir: &Path,
+    progress: bool,
+) -> Result<(Vec<Boundary>, Vec<Boundary>)> {
+    let load = |file: &str, set: &[String]| {
+        Scenario::load(&dir.join(file), set).map_err(|e| anyhow::anyhow!("{e}"))
+    };
+    let vsc_grid: Vec<f64> = (0..=30).map(|i| i as f64 * 0.05).collect();
+    let nn_grid: Vec<f64> = (0..=40).map(|i| i as f64 * 0.25).collect();
+    // (reading id, bias reading, base scenario with the reading applied)
+    let mut tasks: Vec<(String, Option<BiasReading>, Scenario)> = Vec::new();
+    for r in &m.reading {
+        let vsc_base = load("fig3.toml", &r.set)?;
+        for br in [BiasReading::R1, BiasReading::R2] {
+            tasks.push((r.id.clone(), Some(br), vsc_base.clone()));
+        }
+        tasks.push((r.id.clone(), None, load("fig2.toml", &r.set)?));
+    }
+    let pb = bar(progress, tasks.len() as u64, "boundaries");
+    let results: Vec<Boundary> = tasks
+        .par_iter()
+        .map(|(rid, br, base)| {
+            let found = match br {
+                Some(b) => {
+                    let (b, b_ref) = (*b, base.uncertainty.b_reference);
+                    // R2 tells the controller β = b_ref·x·b̄, which must stay < b̄.
+                    let grid: Vec<f64> = vsc_grid
+                        .iter()
+                        .copied()
+                        .filter(|&x| b == BiasReading::R1 || b_ref * x < 1.0)
+                        .collect();
+                    breaking::search(base, &grid, &|x| breaking::vsc_sets(b, b_ref, x), None, 10)?
+                }
+                None => breaking::search(base, &nn_grid, &breaking::nn_sets, Some(0.5), 10)?,
+            };
+            pb.inc(1);
+            Ok(Boundary {
+                reading: rid.clone(),
+                bias_reading: *br,
+                found,
+            })
+        })
+        .collect::<Result<_>>()?;
+    pb.finish_and_clear();
+    let (vsc, nn): (Vec<Boundary>, Vec<Boundary>) =
+        results.into_iter().partition(|b| b.bias_reading.is_some());
+    Ok((vsc, nn))
+}

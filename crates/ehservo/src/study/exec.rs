@@ -1,0 +1,145 @@
+//! Running a study: its runs in parallel with a progress bar, and the
+//! sweep that writes their outputs.
+
+use super::{plots, results_csv, Plan, StudyRecord};
+use crate::metrics::Metrics;
+use crate::output::{write_atomic, Staging, SOFTWARE};
+use crate::run::{run, Keep};
+use anyhow::{Context, Result};
+use std::path::PathBuf;
+
+/// One finished run.
+#[derive(Debug, Clone)]
+pub struct RunRow {
+    /// Run index.
+    pub index: u64,
+    /// Values of the varied columns.
+    pub values: Vec<toml::Value>,
+    /// Seed.
+    pub seed: u64,
+    /// Metrics (None if the drawn scenario was invalid).
+    pub metrics: Option<Metrics>,
+    /// Why the run could not be made (invalid drawn values).
+    pub error: Option<String>,
+}
+
+/// Runs `range` of the plan in parallel (optionally on `threads` threads).
+pub fn execute(
+    plan: &Plan,
+    range: std::ops::Range<u64>,
+    threads: Option<usize>,
+    progress: &indicatif::ProgressBar,
+) -> Result<Vec<RunRow>> {
+    use rayon::prelude::*;
+    let work = || -> Vec<RunRow> {
+        range
+            .clone()
+            .into_par_iter()
+            .map(|i| {
+                let (values, sets, seed) = plan.run_values(i);
+                let row = match plan.base.with_values(&sets) {
+                    Ok(s) => match run(&s, Keep::Nothing) {
+                        Ok(r) => RunRow {
+                            index: i,
+                            values,
+                            seed,
+                            metrics: Some(r.metrics),
+                            error: None,
+                        },
+                        Err(e) => RunRow {
+                            index: i,
+                            values,
+                            seed,
+                            metrics: None,
+                            error: Some(e.to_string()),
+                        },
+                    },
+                    Err(e) => RunRow {
+                        index: i,
+                        values,
+                        seed,
+                        metrics: None,
+                        error: Some(format!("`{}`: {}", e.key, e.reason)),
+                    },
+                };
+                progress.inc(1);
+                row
+            })
+            .collect()
+    };
+    match threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .context("building the thread pool")?;
+            Ok(pool.install(work))
+        }
+        None => Ok(work()),
+    }
+}
+
+/// Options of a sweep.
+#[derive(Debug, Clone)]
+pub struct SweepOptions {
+    /// Output directory.
+    pub out: PathBuf,
+    /// `(k, n)`: run only the k-th of n slices.
+    pub shard: Option<(u64, u64)>,
+    /// Thread count (default: all cores).
+    pub threads: Option<usize>,
+    /// Show a progress bar.
+    pub progress: bool,
+    /// Draw plots.
+    pub plots: bool,
+}
+
+/// Runs a study and writes results.csv, study.json and plots.
+pub fn sweep(plan: &Plan, opts: &SweepOptions) -> Result<Vec<RunRow>> {
+    let range = match opts.shard {
+        Some((k, n)) => plan.shard_range(k, n),
+        None => 0..plan.runs,
+    };
+    let pb = indicatif::ProgressBar::with_draw_target(
+        Some(range.end - range.start),
+        if opts.progress {
+            indicatif::ProgressDrawTarget::stderr()
+        } else {
+            indicatif::ProgressDrawTarget::hidden()
+        },
+    );
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:40}] {pos}/{len} runs, {per_sec}, ETA {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    pb.set_message(plan.study.name.clone());
+    let rows = execute(plan, range.clone(), opts.threads, &pb)?;
+    pb.finish_and_clear();
+
+    let stage = Staging::new(&opts.out)?;
+    write_atomic(
+        &stage.path().join("results.csv"),
+        &results_csv(plan, &rows)?,
+    )?;
+    let record = StudyRecord {
+        software: SOFTWARE.name.into(),
+        version: SOFTWARE.version.into(),
+        study: plan.study.clone(),
+        base: serde_json::to_value(&plan.base)?,
+        runs: plan.runs,
+        shard: opts.shard.map(|(k, n)| [k, n]),
+        range: [range.start, range.end],
+    };
+    write_atomic(
+        &stage.path().join("study.json"),
+        serde_json::to_string_pretty(&record)?.as_bytes(),
+    )?;
+    if opts.plots && opts.shard.is_none() {
+        plots::study_plots(plan, &rows, stage.path())?;
+    }
+    stage.commit()?;
+    Ok(rows)
+}
