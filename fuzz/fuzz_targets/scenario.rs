@@ -16,7 +16,7 @@ fuzz_target!(|data: &[u8]| {
                 assert!(v.is_none_or(f64::is_finite), "non-finite metric");
             }
             for smp in &r.trace {
-                assert!(smp.out.u.is_finite() && smp.x.iter().all(|v| v.is_finite()));
+                assert!(smp.u.is_finite() && smp.x.iter().all(|v| v.is_finite()));
             }
         }
     }

@@ -51,8 +51,13 @@ pub mod surface;
 /// The names most users need, in one import.
 pub mod prelude {
     pub use crate::control::nnvsc::{MuRule, NnState, NnVsc, NnVscParams};
+    pub use crate::control::sliding::{
+        NnVscConfig, SlidingConfig, SlidingParts, VscConfig, VscSatConfig,
+    };
     pub use crate::control::vsc::{Switching, Vsc, VscParams};
-    pub use crate::control::{ControlOutput, Controller, Measurement};
+    pub use crate::control::{
+        Config, Controller, Design, Measurement, Output, Signal, Signals, Truth,
+    };
     pub use crate::error::ParamError;
     pub use crate::rbf::{Rbf, N_KERNELS, N_PHI};
     pub use crate::reference::{Reference, Sine};

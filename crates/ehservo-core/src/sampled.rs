@@ -14,13 +14,13 @@
 //! the [`FaultPolicy`] (hold the last good command, or zero) **without
 //! touching ∫e or W**, so one bad sample cannot poison the weights. The same
 //! happens if the law itself produces a non-finite u or ξ̇
-//! ([`flags::NON_FINITE_CONTROL`]). A good command is clamped to
+//! ([`flags::NON_FINITE_CONTROL`], [`flags::NON_FINITE_STATE`]). A good command is clamped to
 //! `±limits.u` (the valve's range) and the clamp raises [`flags::SATURATED`].
 //!
 //! No allocation: the state lives inside the struct (about 1 kB for the
 //! NNBVSC).
 
-use crate::control::{flags, ControlOutput, Controller, Measurement};
+use crate::control::{flags, Controller, Measurement, Output};
 use crate::error::{positive, ParamError};
 use crate::rk4::OdeState;
 
@@ -121,16 +121,16 @@ impl<C: Controller> SampledController<C> {
         })
     }
 
-    fn safe_output(&mut self, fault: u8) -> ControlOutput {
+    fn safe_output(&mut self, fault: u8) -> Output<C::Parts> {
         self.faults += 1;
         let u = match self.policy.safe {
             SafeCommand::HoldLast => self.last_u,
             SafeCommand::Zero => 0.0,
         };
-        ControlOutput {
+        Output {
             u,
             flags: fault,
-            ..ControlOutput::default()
+            parts: C::Parts::default(),
         }
     }
 
@@ -139,7 +139,22 @@ impl<C: Controller> SampledController<C> {
     /// only after a good step. Always returns a finite `u` within the valve
     /// range.
     #[inline]
-    pub fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> ControlOutput {
+    pub fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> Output<C::Parts> {
+        self.step_with(t, x, z, |_, _, _| {})
+    }
+
+    /// As [`SampledController::step`], calling `inspect` with the state the
+    /// law saw and the (clamped) output before the state advances, on good
+    /// steps only: the simulator fills its logged diagnostics there
+    /// ([`Controller::annotate`]) without copying the state.
+    #[inline]
+    pub fn step_with(
+        &mut self,
+        t: f64,
+        x: [f64; 3],
+        z: [f64; 4],
+        inspect: impl FnOnce(&C, &C::State, &mut Output<C::Parts>),
+    ) -> Output<C::Parts> {
         let lim = &self.policy.limits;
         let bad_x = x
             .iter()
@@ -152,14 +167,20 @@ impl<C: Controller> SampledController<C> {
         let mut out = self
             .ctrl
             .law(&Measurement { t, x, z }, &self.state, &mut ds);
-        // A non-finite ξ̇ makes ξ + dt·ξ̇ non-finite: one check (without a
-        // copy of the state) covers both, and refuses an overflow too.
-        if !out.u.is_finite() || !self.state.axpy_finite(self.dt, &ds) {
+        if !out.u.is_finite() {
             return self.safe_output(flags::NON_FINITE_CONTROL);
         }
         if out.u.abs() > lim.u {
             out.u = out.u.clamp(-lim.u, lim.u);
             out.flags |= flags::SATURATED;
+        }
+        inspect(&self.ctrl, &self.state, &mut out);
+        // A non-finite ξ̇ makes ξ + dt·ξ̇ non-finite: one check (without a
+        // copy of the state) covers both, and refuses an overflow too.
+        if !self.state.axpy_finite(self.dt, &ds) {
+            return self.safe_output(flags::NON_FINITE_STATE);
+        }
+        if out.flags & flags::SATURATED != 0 {
             self.saturations += 1;
         }
         self.last_u = out.u;

@@ -320,6 +320,20 @@ impl NominalModel {
         (self.b_per_kg * kg, clamped)
     }
 
+    /// The nominal gain b̄ a law divides by when its `b̄·u` is `v` (the
+    /// module doc of [`crate::control`]): `b(x, sgn v)`, floored at `floor`
+    /// when the valve root was clamped or b fell below the floor. Returns
+    /// `(b̄, floored)`.
+    #[inline]
+    pub fn gain_for(&self, x: &[f64; 3], v: f64, floor: f64) -> (f64, bool) {
+        let (b, clamped) = self.b(x, sgn(v));
+        if clamped || b < floor {
+            (b.max(floor), true)
+        } else {
+            (b, false)
+        }
+    }
+
     /// `b` at zero load pressure: `4βe·Dm·Kv·Cd·Ag·sqrt(Ps/ρ)/(Vt·Jt)`.
     pub fn b_at_rest(&self) -> f64 {
         self.b_per_kg * self.params.flow_gain(0.0, 0.0).0

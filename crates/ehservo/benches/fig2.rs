@@ -3,7 +3,7 @@
 //! - sampled at 0.01 s with one RK4 sub-step (1000 samples): through
 //!   `ehservo::run::run` (scenario → plant + controller → metrics, what the
 //!   command line and a sweep do, trace not kept) and through
-//!   `sim::simulate` directly with a trivial observer;
+//!   `Simulation::run` directly with a trivial observer;
 //! - continuous at h = 1e-4 (100 000 RK4 steps, the law in each of the four
 //!   stages), by both paths;
 //! - the traditional VSC on the same sampled case is not a 10 s run (it
@@ -15,37 +15,28 @@
 //! ```
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use ehservo::plant::{Plant, ThirdOrderPlant, UncertaintySignal};
+use ehservo::plant::ThirdOrderPlant;
 use ehservo::run::{run, Keep};
 use ehservo::scenario::Scenario;
-use ehservo::sim::{simulate, Sample};
+use ehservo::simulation::{Sample, Simulation};
 use ehservo_core::prelude::*;
 use std::hint::black_box;
 use std::time::Duration;
 
-/// `sim::simulate` on the scenario's plant and NNBVSC, observer summing u.
+/// A `Simulation` of the scenario's plant and NNBVSC, observer summing u.
 fn simulate_direct(s: &Scenario) -> (u64, f64) {
-    let plant = ThirdOrderPlant::new(s.plant.params.to_servo(), s.load_model());
-    let model = *plant.nominal();
-    let nn = NnVsc::try_new(
-        model,
-        s.surface().expect("surface"),
-        s.nnvsc_params(),
-        s.rbf().expect("rbf"),
-    )
-    .expect("gains");
-    let reference = s.reference();
-    let mut unc = UncertaintySignal::new(s.uncertainty_spec(), model.coeffs.as_array());
-    let cfg = s.sim_config();
+    let setup = s.setup().expect("valid");
+    let plant = ThirdOrderPlant::new(setup.model.params, setup.model.load);
+    let nn = setup
+        .controller
+        .get::<NnVscConfig>()
+        .expect("nnvsc")
+        .build(&setup.design)
+        .expect("gains");
+    let mut sim =
+        Simulation::new(plant, nn, setup.reference, setup.stages, setup.sim).expect("valid");
     let mut sum = 0.0;
-    let out = simulate(
-        &plant,
-        &nn,
-        &reference,
-        &mut unc,
-        &cfg,
-        &mut |smp: &Sample| sum += smp.out.u,
-    );
+    let out = sim.run(&mut |smp: &Sample| sum += smp.u);
     (out.samples, sum)
 }
 

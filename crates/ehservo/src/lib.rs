@@ -7,24 +7,22 @@
 //!
 //! | module | role |
 //! |---|---|
-//! | [`plant`] | the "true" plants (third-order and physical) with parameter variations and loads |
-//! | [`sim`] | the closed loop, in `continuous` and `sampled` modes |
-//! | [`metrics`] | SPEC §9 metrics, online |
-//! | [`scenario`] | TOML scenario files with the paper's defaults and clear errors |
+//! | [`plant`], [`actuator`], [`sensor`], [`simulation`], [`metrics`] | the closed loop, re-exported from `ehservo-sim` (std, no I/O) |
+//! | [`scenario`] | TOML scenario files with the paper's defaults and clear errors; the controller registry |
 //! | [`run`] | scenario → plant + controller → result |
 //! | [`output`], [`plot`] | CSV, JSON and PNG/SVG outputs, written atomically |
 //! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
 //! | [`study`] | sweeps and Monte Carlo, sharded across machines |
 
 pub mod analysis;
-pub mod metrics;
+pub mod error;
 pub mod output;
-pub mod plant;
 pub mod plot;
 pub mod reproduce;
 pub mod run;
 pub mod scenario;
-pub mod sim;
 pub mod study;
+
+pub use ehservo_sim::{actuator, metrics, plant, sensor, simulation};
 
 pub use ehservo_core as core;

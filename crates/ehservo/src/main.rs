@@ -103,40 +103,22 @@ enum Command {
     Defaults,
 }
 
-/// Bad input: exit code 2.
-struct BadInput(String);
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::BadInput(BadInput(msg))) => {
-            eprintln!("error: {msg}");
-            ExitCode::from(2)
-        }
-        Err(Failure::Other(e)) => {
+        Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            ExitCode::from(ehservo::error::exit_code(&e))
         }
     }
 }
 
-enum Failure {
-    BadInput(BadInput),
-    Other(anyhow::Error),
+fn load(path: &std::path::Path, set: &[String]) -> Result<Scenario> {
+    Ok(Scenario::load(path, set)?)
 }
 
-impl From<anyhow::Error> for Failure {
-    fn from(e: anyhow::Error) -> Self {
-        Failure::Other(e)
-    }
-}
-
-fn load(path: &std::path::Path, set: &[String]) -> Result<Scenario, Failure> {
-    Scenario::load(path, set).map_err(|e| Failure::BadInput(BadInput(e.to_string())))
-}
-
-fn dispatch(cli: Cli) -> Result<(), Failure> {
+fn dispatch(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Run {
             scenario,
@@ -193,10 +175,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                     "diagnostics": diag.as_ref().and_then(|d| d.0.clone()),
                     "diverged_at_s": diag.as_ref().and_then(|d| d.1.map(|x| x.t)),
                 });
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&v).map_err(anyhow::Error::from)?
-                );
+                println!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 println!("{} ({})\n", s.name, scenario.display());
                 print!("{}", a.to_text());
@@ -232,10 +211,10 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             use std::io::IsTerminal;
             let manifest = paper_dir.join("manifest.toml");
             if !manifest.is_file() {
-                return Err(Failure::BadInput(BadInput(format!(
+                ehservo::bad_input!(
                     "{}: not found (run from the repository root, or pass --paper-dir)",
                     manifest.display()
-                ))));
+                );
             }
             let opts = ehservo::reproduce::Options {
                 paper_dir,
@@ -270,17 +249,16 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             no_plot,
         } => {
             use std::io::IsTerminal;
-            let plan = ehservo::study::Plan::load(&study)
-                .map_err(|e| Failure::BadInput(BadInput(e.to_string())))?;
+            let plan = ehservo::study::Plan::load(&study)?;
             let shard = match shard {
                 Some(s) => Some(
                     ehservo::study::parse_shard(&s)
-                        .map_err(|e| Failure::BadInput(BadInput(format!("--shard: {e}"))))?,
+                        .map_err(|e| ehservo::error::InputError(format!("--shard: {e}")))?,
                 ),
                 None => None,
             };
             if threads == Some(0) {
-                return Err(Failure::BadInput(BadInput("--threads: must be ≥ 1".into())));
+                ehservo::bad_input!("--threads: must be ≥ 1");
             }
             let opts = ehservo::study::SweepOptions {
                 out: out.clone(),
@@ -351,14 +329,14 @@ fn print_summary(s: &Scenario, r: &ehservo::run::RunResult, secs: f64) {
     println!(
         "{}: {} on the {} plant, {} (h = {} s{}), horizon {} s",
         s.name,
-        s.controller.kind.as_str(),
+        s.controller.kind(),
         match s.plant.model {
             ehservo::scenario::PlantModel::ThirdOrder => "third-order",
             ehservo::scenario::PlantModel::Physical => "physical",
         },
         sim.mode.as_str(),
         sim.step,
-        if sim.mode == ehservo::sim::Mode::Sampled {
+        if sim.mode == ehservo::simulation::Mode::Sampled {
             format!(", {} RK4 substep(s)", sim.substeps)
         } else {
             String::new()

@@ -5,7 +5,7 @@ use crate::metrics::Metrics;
 use crate::plot::{Dash, Figure, Panel, Series};
 use crate::run::RunResult;
 use crate::scenario::Scenario;
-use crate::sim::Divergence;
+use crate::simulation::{Divergence, Sample};
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::fs;
@@ -118,74 +118,103 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
 }
 
-/// The columns of `trace.csv`, with units.
-pub const TRACE_COLUMNS: [&str; 17] = [
-    "t_s",
-    "theta_d_deg",
-    "theta_deg",
-    "e_deg",
-    "u_V",
-    "u_eq_V",
-    "u_sw_V",
-    "sigma_rad_s2",
-    "sigma_delta_rad_s2",
-    "wphi_rad_s3",
-    "uncertainty_rad_s3",
-    "w_norm",
-    "w_1",
-    "w_128",
-    "mu_rad_s2",
-    "norm_E",
-    "b_bar_V_s3",
-];
+/// The columns every trace starts with.
+pub const TRACE_PREFIX: [&str; 5] = ["t_s", "theta_d_deg", "theta_deg", "e_deg", "u_V"];
 
-/// One trace row, in the order of [`TRACE_COLUMNS`].
-fn trace_row(s: &crate::sim::Sample) -> [f64; 17] {
-    let o = &s.out;
-    [
-        s.t,
-        s.theta_d_deg(),
-        s.theta_deg(),
-        s.e_deg(),
-        o.u,
-        o.u_eq,
-        o.u_sw,
-        o.sigma,
-        o.sigma_delta,
-        o.wphi,
-        s.uncertainty,
-        s.w_norm,
-        s.w_1,
-        s.w_128,
-        o.mu,
-        o.norm_e,
-        o.b_bar,
-    ]
+/// The columns of a run's `trace.csv`: the prefix, the controller's
+/// signals that have a column, then `u_plant_V` when an actuator stands
+/// between the command and the plant.
+#[derive(Debug, Clone)]
+pub struct TraceLayout {
+    /// Column names.
+    pub columns: Vec<&'static str>,
+    parts: Vec<usize>,
+    actuator: bool,
 }
 
-fn write_row<W: std::io::Write>(w: &mut csv::Writer<W>, s: &crate::sim::Sample) -> Result<()> {
-    let row = trace_row(s);
-    // The loop stops before a non-finite sample is logged; this is the
-    // last line of defence for the "never NaN in a CSV" rule.
-    if row.iter().any(|v| !v.is_finite()) {
-        anyhow::bail!(
-            "internal error: non-finite value in the trace at t = {}",
-            s.t
-        );
+impl TraceLayout {
+    /// The layout for samples carrying `signals`.
+    pub fn new(signals: &[ehservo_core::control::Signal], actuator: bool) -> Self {
+        let parts: Vec<usize> = (0..signals.len())
+            .filter(|&i| !signals[i].column.is_empty())
+            .collect();
+        let mut columns: Vec<&'static str> = TRACE_PREFIX.to_vec();
+        columns.extend(parts.iter().map(|&i| signals[i].column));
+        if actuator {
+            columns.push("u_plant_V");
+        }
+        Self {
+            columns,
+            parts,
+            actuator,
+        }
     }
-    w.write_record(row.iter().map(|v| format!("{v}")))?;
-    Ok(())
+
+    /// The layout of a scenario's runs.
+    pub fn of(s: &Scenario) -> Self {
+        let signals = s.controller.visit(SignalsOf);
+        Self::new(signals, !s.actuator.is_identity())
+    }
+
+    fn row(&self, s: &Sample, out: &mut Vec<f64>) {
+        out.clear();
+        out.extend([s.t, s.theta_d_deg(), s.theta_deg(), s.e_deg(), s.u]);
+        out.extend(self.parts.iter().map(|&i| s.values[i]));
+        if self.actuator {
+            out.push(s.u_plant);
+        }
+    }
 }
 
-/// Writes the trace as CSV (one row per kept sample).
-pub fn write_trace_csv(path: &Path, run: &RunResult) -> Result<()> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(TRACE_COLUMNS)?;
-    for s in &run.trace {
-        write_row(&mut w, s)?;
+/// The signals a controller kind logs.
+struct SignalsOf;
+
+impl crate::scenario::Visit for SignalsOf {
+    type Out = &'static [ehservo_core::control::Signal];
+    fn visit<K: crate::scenario::ControllerConfig>(self, _: &K) -> Self::Out {
+        use ehservo_core::control::{Config, Controller, Signals};
+        <<K as Config>::Controller as Controller>::Parts::SIGNALS
     }
-    let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
-    write_atomic(path, &bytes)
+}
+
+/// Streams samples into a CSV writer.
+struct TraceWriter<W: std::io::Write> {
+    w: csv::Writer<W>,
+    layout: TraceLayout,
+    row: Vec<f64>,
+}
+
+impl<W: std::io::Write> TraceWriter<W> {
+    fn new(inner: W, layout: TraceLayout) -> Result<Self> {
+        let mut w = csv::Writer::from_writer(inner);
+        w.write_record(&layout.columns)?;
+        Ok(Self {
+            w,
+            layout,
+            row: Vec::new(),
+        })
+    }
+
+    fn write(&mut self, s: &Sample) -> Result<()> {
+        self.layout.row(s, &mut self.row);
+        // The loop stops before a non-finite sample is logged; this is the
+        // last line of defence for the "never NaN in a CSV" rule.
+        if self.row.iter().any(|v| !v.is_finite()) {
+            anyhow::bail!(
+                "internal error: non-finite value in the trace at t = {}",
+                s.t
+            );
+        }
+        self.w
+            .write_record(self.row.iter().map(|v| format!("{v}")))?;
+        Ok(())
+    }
+
+    fn finish(self) -> Result<W> {
+        self.w
+            .into_inner()
+            .map_err(|e| anyhow::anyhow!("writing trace.csv: {e}"))
+    }
 }
 
 /// `summary.json`.
@@ -216,7 +245,7 @@ pub struct DivergenceInfo {
     /// When (s).
     pub t: f64,
     /// Machine-readable reason.
-    pub reason: crate::sim::DivergenceReason,
+    pub reason: crate::simulation::DivergenceReason,
     /// Human sentence.
     pub message: String,
 }
@@ -238,6 +267,16 @@ pub struct Faults {
     pub valve_root_clamped_samples: u64,
     /// Samples where ‖E‖ = 0 (σΔ, μ, ξ set to 0).
     pub zero_error_norm_samples: u64,
+    /// Samples where the command exceeded the valve range (only when there is one).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub saturated_samples: u64,
+    /// Samples where the sampled loop refused a measurement (only when any did).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub measurement_fault_samples: u64,
+}
+
+fn is_zero(v: &u64) -> bool {
+    *v == 0
 }
 
 /// Derived quantities worth having next to the results.
@@ -255,8 +294,7 @@ pub struct Derived {
 
 /// Builds the summary of a run.
 pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
-    let servo = s.plant.params.to_servo();
-    let model = ehservo_core::servo::NominalModel::new(servo, s.load_model());
+    let model = ehservo_core::servo::NominalModel::new(s.servo(), s.load_model());
     Summary {
         software: SOFTWARE,
         scenario: s,
@@ -265,6 +303,8 @@ pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
         faults: Faults {
             valve_root_clamped_samples: run.outcome.valve_root_clamped,
             zero_error_norm_samples: run.outcome.zero_error_norm,
+            saturated_samples: run.outcome.saturated,
+            measurement_fault_samples: run.outcome.measurement_faults,
         },
         derived: Derived {
             a_nominal: model.coeffs.as_array(),
@@ -280,12 +320,11 @@ pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
 /// The main time histories of a run: the paper's Fig. 2 panels.
 pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
     let t: Vec<f64> = run.trace.iter().map(|x| x.t).collect();
-    let col =
-        |f: &dyn Fn(&crate::sim::Sample) -> f64| run.trace.iter().map(f).collect::<Vec<f64>>();
+    let col = |f: &dyn Fn(&Sample) -> f64| run.trace.iter().map(f).collect::<Vec<f64>>();
     let mut title = format!(
         "{} — {} on the {} plant, {} h = {} s",
         s.name,
-        s.controller.kind.as_str(),
+        s.controller.kind(),
         match s.plant.model {
             crate::scenario::PlantModel::ThirdOrder => "third-order",
             crate::scenario::PlantModel::Physical => "physical",
@@ -300,12 +339,12 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
     let mut d_series = vec![Series::new(
         "Σ Δa_i x_i − Δb u_eq + d − ξ",
         t.clone(),
-        col(&|x| x.uncertainty),
+        col(&|x| x.part("uncertainty")),
         1,
     )
     .dash(Dash::Dashed)];
     if run.metrics.w_norm_max.is_some() {
-        d_series.push(Series::new("WᵀΦ", t.clone(), col(&|x| x.out.wphi), 0));
+        d_series.push(Series::new("WᵀΦ", t.clone(), col(&|x| x.part("wphi")), 0));
     }
     Figure {
         title,
@@ -327,14 +366,14 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
                 title: "(b) control input u".into(),
                 x_label: time.clone(),
                 y_label: "u (V)".into(),
-                series: vec![Series::new("", t.clone(), col(&|x| x.out.u), 0)],
+                series: vec![Series::new("", t.clone(), col(&|x| x.u), 0)],
                 log_y: false,
             },
             Panel {
                 title: "(c) switching function σ".into(),
                 x_label: time.clone(),
                 y_label: "σ (rad/s²)".into(),
-                series: vec![Series::new("", t.clone(), col(&|x| x.out.sigma), 0)],
+                series: vec![Series::new("", t.clone(), col(&|x| x.part("sigma")), 0)],
                 log_y: false,
             },
             Panel {
@@ -346,22 +385,6 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
             },
         ],
     }
-}
-
-/// Writes `trace.csv`, `summary.json` and (unless `plot` is false)
-/// `trace.png` into `dir` through a staging directory, from a finished run.
-pub fn write_run(dir: &Path, s: &Scenario, run: &RunResult, plot: bool) -> Result<Vec<PathBuf>> {
-    let stage = Staging::new(dir)?;
-    let mut files = vec!["trace.csv", "summary.json"];
-    write_trace_csv(&stage.path().join("trace.csv"), run)?;
-    let json = serde_json::to_string_pretty(&summary(s, run))?;
-    write_atomic(&stage.path().join("summary.json"), json.as_bytes())?;
-    if plot {
-        trace_figure(s, run).png(&stage.path().join("trace.png"))?;
-        files.push("trace.png");
-    }
-    stage.commit()?;
-    Ok(files.iter().map(|f| dir.join(f)).collect())
 }
 
 /// Most samples kept in memory by [`run_to_dir`] (for the plot and the
@@ -378,8 +401,7 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     let csv_path = stage.path().join("trace.csv");
     let file =
         fs::File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
-    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
-    w.write_record(TRACE_COLUMNS)?;
+    let mut w = TraceWriter::new(std::io::BufWriter::new(file), TraceLayout::of(s))?;
     let decimate = s.output.decimate.max(1) as u64;
     let steps = s.sim_config().steps;
     let keep_every = decimate.max((steps + 1).div_ceil(MAX_KEPT));
@@ -388,7 +410,7 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     let mut failure: Option<anyhow::Error> = None;
     let (outcome, metrics) = crate::run::run_observed(s, &mut |smp| {
         if failure.is_none() && smp.k % decimate == 0 {
-            if let Err(e) = write_row(&mut w, smp) {
+            if let Err(e) = w.write(smp) {
                 failure = Some(e);
             }
         }
@@ -402,13 +424,11 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
         return Err(e);
     }
     if let Some(l) = last {
-        if kept.last().is_none_or(|t: &crate::sim::Sample| t.k < l.k) {
+        if kept.last().is_none_or(|t: &Sample| t.k < l.k) {
             kept.push(l);
         }
     }
-    let mut inner = w
-        .into_inner()
-        .map_err(|e| anyhow::anyhow!("writing trace.csv: {e}"))?;
+    let mut inner = w.finish()?;
     inner.flush()?;
     let run = RunResult {
         outcome,

@@ -1,15 +1,14 @@
-//! From a validated [`Scenario`] to a finished run: build the plant and the
-//! controller, run [`crate::sim::simulate`], keep the metrics (and the trace
-//! if asked).
+//! From a validated [`Scenario`] to a finished run: the registry hands the
+//! typed controller parameters to [`Runner`], which builds the plant and the
+//! controller and runs the [`Simulation`], keeping the metrics (and the
+//! trace if asked).
 
 use crate::metrics::{Metrics, MetricsAccumulator};
-use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant, UncertaintySignal};
-use crate::scenario::{ControllerKind, PlantModel, Scenario};
-use crate::sim::{simulate, Outcome, Sample};
-use anyhow::{anyhow, Result};
-use ehservo_core::control::nnvsc::NnVsc;
-use ehservo_core::control::vsc::Vsc;
+use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant};
+use crate::scenario::{ControllerConfig, PlantModel, Scenario, ScenarioError, Setup, Visit};
+use crate::simulation::{Outcome, Sample, Simulation};
 use ehservo_core::control::Controller;
+use ehservo_core::rk4::OdeState;
 
 /// A finished run.
 #[derive(Debug, Clone)]
@@ -31,8 +30,8 @@ pub enum Keep {
     Every(u32),
 }
 
-/// Runs a scenario (which must have passed [`Scenario::validate`]).
-pub fn run(s: &Scenario, keep: Keep) -> Result<RunResult> {
+/// Runs a scenario.
+pub fn run(s: &Scenario, keep: Keep) -> Result<RunResult, ScenarioError> {
     let every = match keep {
         Keep::Nothing => 0,
         Keep::Every(n) => n.max(1) as u64,
@@ -66,63 +65,57 @@ pub fn run(s: &Scenario, keep: Keep) -> Result<RunResult> {
 
 /// Runs a scenario, handing every sample to `observe` (which may stream it
 /// to a file) and keeping only the metrics.
-pub fn run_observed(s: &Scenario, observe: &mut dyn FnMut(&Sample)) -> Result<(Outcome, Metrics)> {
-    let params = s.plant.params.to_servo();
-    let load = s.load_model();
-    match s.plant.model {
-        PlantModel::ThirdOrder => with_controller(&ThirdOrderPlant::new(params, load), s, observe),
-        PlantModel::Physical => with_controller(&PhysicalPlant::new(params, load), s, observe),
-    }
-}
-
-fn with_controller<P: Plant>(
-    plant: &P,
+pub fn run_observed(
     s: &Scenario,
     observe: &mut dyn FnMut(&Sample),
-) -> Result<(Outcome, Metrics)> {
-    let surface = s.surface().map_err(|(k, r)| anyhow!("{k}: {r}"))?;
-    let model = *plant.nominal();
-    match s.controller.kind {
-        ControllerKind::Nnvsc => {
-            let rbf = s.rbf().map_err(|e| anyhow!("controller.{e}"))?;
-            let c = NnVsc::try_new(model, surface, s.nnvsc_params(), rbf)
-                .map_err(|e| anyhow!("controller.{e}"))?;
-            Ok(execute(plant, &c, s, observe, true))
-        }
-        ControllerKind::Vsc | ControllerKind::VscSat => {
-            let c = Vsc::try_new(model, surface, s.vsc_params())
-                .map_err(|e| anyhow!("controller.{e}"))?;
-            Ok(execute(plant, &c, s, observe, false))
+) -> Result<(Outcome, Metrics), ScenarioError> {
+    let setup = s.setup()?;
+    Ok(run_setup(&setup, observe))
+}
+
+/// Runs a built scenario.
+pub fn run_setup(setup: &Setup, observe: &mut dyn FnMut(&Sample)) -> (Outcome, Metrics) {
+    setup.controller.visit(Runner { setup, observe })
+}
+
+/// Builds the plant and the controller of a [`Setup`] and runs them: the
+/// generic half of [`run_setup`], monomorphised per kind and plant.
+pub struct Runner<'a, 'b> {
+    setup: &'a Setup,
+    observe: &'b mut dyn FnMut(&Sample),
+}
+
+impl Visit for Runner<'_, '_> {
+    type Out = (Outcome, Metrics);
+    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
+        let ctrl = cfg
+            .build(&self.setup.design)
+            .expect("Setup::new built this controller once already");
+        let (p, l) = (self.setup.model.params, self.setup.model.load);
+        match self.setup.plant {
+            PlantModel::ThirdOrder => {
+                execute(ThirdOrderPlant::new(p, l), ctrl, self.setup, self.observe)
+            }
+            PlantModel::Physical => {
+                execute(PhysicalPlant::new(p, l), ctrl, self.setup, self.observe)
+            }
         }
     }
 }
 
 fn execute<P: Plant, C: Controller>(
-    plant: &P,
-    ctrl: &C,
-    s: &Scenario,
+    plant: P,
+    ctrl: C,
+    setup: &Setup,
     observe: &mut dyn FnMut(&Sample),
-    network: bool,
 ) -> (Outcome, Metrics) {
-    let cfg = s.sim_config();
-    let reference = s.reference();
-    let mut unc = UncertaintySignal::new(s.uncertainty_spec(), plant.nominal().coeffs.as_array());
-    let mut acc = MetricsAccumulator::new(
-        s.simulation.horizon,
-        s.simulation.settle,
-        1.0 / s.reference.frequency_hz,
-        network,
-    );
-    let outcome = simulate(
-        plant,
-        ctrl,
-        &reference,
-        &mut unc,
-        &cfg,
-        &mut |smp: &Sample| {
-            acc.push(smp);
-            observe(smp);
-        },
-    );
+    let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
+    let mut acc = MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network);
+    let mut sim = Simulation::new(plant, ctrl, setup.reference, setup.stages, setup.sim)
+        .expect("Setup::new validated the sample period and the policy");
+    let outcome = sim.run(&mut |smp: &Sample| {
+        acc.push(smp);
+        observe(smp);
+    });
     (outcome, acc.finish(outcome.diverged))
 }

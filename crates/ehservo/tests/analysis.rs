@@ -420,20 +420,30 @@ fn diagnostics_along_a_run() {
     }
     assert_eq!(d.samples, r.trace.len());
     let n = r.trace.len() as f64;
-    let dead = r.trace.iter().filter(|x| x.out.sigma_delta == 0.0).count() as f64 / n;
+    let dead = r
+        .trace
+        .iter()
+        .filter(|x| x.part("sigma_delta") == 0.0)
+        .count() as f64
+        / n;
     assert!((d.dead_zone - dead).abs() < 1e-12);
     // Fig. 2: η = 0.25, Wmax = 4, ε0 = ε1 = 0.1, γ1 = 100, α = 250, ᾱ = 5.
     let (mut left, mut right, mut both) = (0, 0, 0);
     for x in &r.trace {
-        let o = &x.out;
-        let c = 0.25 * 16.0 / 4.0 + 0.1 * o.phi_norm + 0.1;
-        let f1 = (o.mu + o.gain / 100.0 - c / 100.0) / 2.0;
-        let f2 = c * o.mu / 100.0;
+        let (phi_norm, mu, gain, norm_e) = (
+            x.part("phi_norm"),
+            x.part("mu"),
+            x.part("gain"),
+            x.part("norm_e"),
+        );
+        let c = 0.25 * 16.0 / 4.0 + 0.1 * phi_norm + 0.1;
+        let f1 = (mu + gain / 100.0 - c / 100.0) / 2.0;
+        let f2 = c * mu / 100.0;
         let f = (f1 * f1 + f2).sqrt() - f1;
         // f the textbook way; the library's cancellation-free form differs
         // by rounding only, and the counts below agree exactly.
-        let l = f + 5.0 * o.norm_e < 250.0 * o.norm_e;
-        let rr = 250.0 * o.norm_e < c / 100.0 + 5.0 * o.norm_e;
+        let l = f + 5.0 * norm_e < 250.0 * norm_e;
+        let rr = 250.0 * norm_e < c / 100.0 + 5.0 * norm_e;
         left += usize::from(l);
         right += usize::from(rr);
         both += usize::from(l && rr);

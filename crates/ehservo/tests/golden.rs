@@ -125,10 +125,10 @@ fn every_scenario_gives_the_captured_outputs_bit_for_bit() {
         for key in ["metrics", "divergence", "faults"] {
             // Both printed by serde_json's shortest round-trip writer:
             // equal text is equal bits (and tells 0.0 from -0.0).
-            if summary[key].to_string() != gold[key].to_string() {
+            let (now, want) = (summary[key].to_string(), gold[key].to_string());
+            if now != want {
                 failures.push(format!(
-                    "{name}: summary.json `{key}` differs:\n  golden: {}\n  now:    {}",
-                    gold[key], summary[key]
+                    "{name}: summary.json `{key}` differs:\n  golden: {want}\n  now:    {now}"
                 ));
             }
         }

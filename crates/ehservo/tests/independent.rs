@@ -85,15 +85,15 @@ fn fig2_sampled_trace_matches_the_independent_implementation() {
         let smp = &r.trace[k];
         assert!((smp.t - t).abs() < 1e-12);
         close(&format!("θ at {t}"), smp.theta_deg(), theta, 1e-9);
-        close(&format!("u at {t}"), smp.out.u, u, 1e-9);
-        close(&format!("σ at {t}"), smp.out.sigma, sigma, 1e-9);
-        close(&format!("WᵀΦ at {t}"), smp.out.wphi, wphi, 1e-9);
-        close(&format!("w_128 at {t}"), smp.w_128, w128, 1e-9);
+        close(&format!("u at {t}"), smp.u, u, 1e-9);
+        close(&format!("σ at {t}"), smp.part("sigma"), sigma, 1e-9);
+        close(&format!("WᵀΦ at {t}"), smp.part("wphi"), wphi, 1e-9);
+        close(&format!("w_128 at {t}"), smp.part("w_128"), w128, 1e-9);
     }
     // The first sample's lumped uncertainty (19) (includes −ξ).
     close(
         "uncertainty at 0",
-        r.trace[0].uncertainty,
+        r.trace[0].part("uncertainty"),
         -350.9907649818934,
         1e-9,
     );

@@ -18,7 +18,7 @@ fn open_loop<P: Plant>(plant: &P, h: f64, horizon: f64, v: &Variation) -> Vec<f6
         let t = k as f64 * h;
         let u = 0.2 * (2.0 * std::f64::consts::PI * t).sin();
         rk4_step(
-            |tt, y: &[f64; 3], dy: &mut [f64; 3]| plant.deriv(tt, y, u, v, dy),
+            |tt, y: &P::State, dy: &mut P::State| plant.deriv(tt, y, u, v, dy),
             t,
             &mut s,
             h,

@@ -32,8 +32,10 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-use ehservo::plant::{ThirdOrderPlant, UncertaintySignal, UncertaintySpec};
-use ehservo::sim::{simulate, Mode, SimConfig};
+use ehservo::actuator::Actuator;
+use ehservo::plant::{ThirdOrderPlant, UncertaintySpec};
+use ehservo::sensor::Sensor;
+use ehservo::simulation::{Mode, SimConfig, Simulation, Stages};
 use ehservo_core::prelude::*;
 
 #[test]
@@ -85,19 +87,20 @@ fn control_and_simulation_steps_do_not_allocate() {
             theta_limit: 1.0,
             x0: [0.0; 3],
         };
-        let mut unc = UncertaintySignal::new(
-            UncertaintySpec {
+        let stages = Stages {
+            uncertainty: UncertaintySpec {
                 a_random: 0.5,
                 b_random: 0.25,
                 ..UncertaintySpec::NONE
             },
-            model.coeffs.as_array(),
-        );
+            actuator: Actuator::IDENTITY,
+            sensor: Sensor::IDENTITY,
+            policy: FaultPolicy::default(),
+        };
+        let mut sim = Simulation::new(plant, nn, reference, stages, cfg).unwrap();
         let mut sum = 0.0;
         let before = ALLOCS.load(Ordering::SeqCst);
-        let out = simulate(&plant, &nn, &reference, &mut unc, &cfg, &mut |s| {
-            sum += s.out.u
-        });
+        let out = sim.run(&mut |s| sum += s.u);
         let n = ALLOCS.load(Ordering::SeqCst) - before;
         assert!(out.diverged.is_none() && sum.is_finite());
         assert_eq!(n, 0, "{mode:?}: {n} allocations in 2000 simulation steps");

@@ -74,8 +74,8 @@ proptest! {
                 if steps <= 20_000 {
                     let r = run(&s, Keep::Every(1)).unwrap();
                     for smp in &r.trace {
-                        prop_assert!(smp.out.u.is_finite() && smp.x.iter().all(|v| v.is_finite()));
-                        prop_assert!(smp.uncertainty.is_finite());
+                        prop_assert!(smp.u.is_finite() && smp.x.iter().all(|v| v.is_finite()));
+                        prop_assert!(smp.values.iter().all(|v| v.is_finite()));
                     }
                     let json = serde_json::to_string(&summary(&s, &r)).unwrap();
                     prop_assert!(!json.contains("NaN"));

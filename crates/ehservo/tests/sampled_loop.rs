@@ -35,7 +35,7 @@ fn sampled_mode_equals_the_core_fixed_rate_loop() {
     for (k, smp) in sim.trace.iter().enumerate() {
         let t = k as f64 * 0.01;
         let out = ctl.step(t, x, reference.z(t));
-        assert_eq!(out.u.to_bits(), smp.out.u.to_bits(), "u differs at k = {k}");
+        assert_eq!(out.u.to_bits(), smp.u.to_bits(), "u differs at k = {k}");
         for j in 0..4 {
             let ts = t + j as f64 * 0.0025;
             let v = unc.at(ts);

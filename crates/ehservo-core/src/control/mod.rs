@@ -1,25 +1,44 @@
-//! Controllers as dynamic systems.
+//! Controllers as dynamic systems, and the one interface every controller
+//! meets.
 //!
 //! A controller has a configuration (gains, surface, network) and a state ξ
 //! (∫e, and for the NNBVSC the weights W). It is evaluated as
 //! `u = h(t, ξ, x, z)` with `ξ̇ = f(t, ξ, x, z)` by [`Controller::law`], which
-//! returns the parts of its law as plain fields ([`ControlOutput`]) and
-//! writes ξ̇. It never integrates itself: the simulator (continuous or
-//! sampled) or [`crate::sampled::SampledController`] (hardware) decides how ξ
-//! advances.
+//! returns `u` and the parts of its law ([`Output`]) and writes ξ̇. It never
+//! integrates itself: the simulator (continuous or sampled) or
+//! [`crate::sampled::SampledController`] (hardware) decides how ξ advances.
 //!
-//! **The sign of the valve.** Both laws divide by the nominal gain
-//! `b̄(t) = b(x, sgn u)`, which itself depends on `sgn(u)` through the valve
-//! root (2). The circle is exact to break: with `β = bound_b·b̄`, the product
-//! `v = b̄·u` does not depend on `b̄` (for (11)–(14):
+//! **Parts are named signals.** Each controller declares its own parts type
+//! (`Controller::Parts`), as a PID has p, i and d: a plain `Copy` struct that
+//! lists its signals with units ([`Signals::SIGNALS`]) and writes their
+//! values in that order ([`Signals::write`]). Traces, plots and bindings read
+//! them generically, by key. [`Output`] dereferences to its parts, so
+//! `out.sigma` reads the σ of a sliding-mode law.
+//!
+//! **Configuration as data.** Each controller kind has a parameter type that
+//! implements [`Config`]: its kind name, whether it uses the switching
+//! surface, and how to build the controller from the [`Design`] context (the
+//! nominal model, the surface, the sample period). With the `serde` feature
+//! these parameter types are (de)serialisable: a scenario's `[controller]`
+//! table is exactly one of them.
+//!
+//! **The sign of the valve.** The sliding-mode laws divide by the nominal
+//! gain `b̄(t) = b(x, sgn u)`, which itself depends on `sgn(u)` through the
+//! valve root (2). The circle is exact to break: with `β = bound_b·b̄`, the
+//! product `v = b̄·u` does not depend on `b̄` (for (11)–(14):
 //! `v = N + sgn(σ)·[Σα_i|x_i| + γ + bound_b·|N|]/(1 − bound_b)`; for
 //! (23)–(25): `v = N + WᵀΦ + [γ1σΔ + γ2σΔ/(|σΔ| + μ)]/(1 − bound_b)`), and
-//! `b̄ > 0`, so `sgn(u) = sgn(v)`; then `b̄ = b(x, sgn v)` and `u = v/b̄`.
+//! `b̄ > 0`, so `sgn(u) = sgn(v)`; then `b̄ = b(x, sgn v)` and `u = v/b̄`
+//! ([`crate::servo::NominalModel::gain_for`]).
 
 pub mod nnvsc;
+pub mod sliding;
 pub mod vsc;
 
+use crate::error::ParamError;
 use crate::rk4::OdeState;
+use crate::servo::NominalModel;
+use crate::surface::SwitchingSurface;
 
 /// What the controller measures at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -32,7 +51,7 @@ pub struct Measurement {
     pub z: [f64; 4],
 }
 
-/// Flags a law may raise (bit set in [`ControlOutput::flags`]).
+/// Flags a law may raise (bit set in [`Output::flags`]).
 pub mod flags {
     /// The valve root of (2) had a negative argument and was clamped at 0;
     /// the nominal gain b̄ was floored to keep u finite.
@@ -43,63 +62,143 @@ pub mod flags {
     /// command was returned and the state left alone
     /// ([`crate::sampled::SampledController`]).
     pub const MEASUREMENT_FAULT: u8 = 4;
-    /// The law produced a non-finite u or state derivative: the safe command
-    /// was returned and the state left alone.
+    /// The law produced a non-finite u: the safe command was returned and
+    /// the state left alone.
     pub const NON_FINITE_CONTROL: u8 = 8;
-    /// u was clamped to the valve range.
+    /// u was clamped to the valve range (or a controller's own output limit).
     pub const SATURATED: u8 = 16;
+    /// The state update ξ + dt·ξ̇ was non-finite: the safe command was
+    /// returned and the state left alone.
+    pub const NON_FINITE_STATE: u8 = 32;
 }
 
-/// The parts of a control law at one instant (like a PID's p, i, d terms).
+/// One named signal of a controller's parts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Signal {
+    /// The key code looks it up by (`"sigma"`, `"p"`).
+    pub key: &'static str,
+    /// Its column in `trace.csv`, unit included (`"sigma_rad_s2"`); empty
+    /// when the signal is kept in memory but not written.
+    pub column: &'static str,
+    /// Its unit, for people (`"rad/s²"`; empty when dimensionless).
+    pub unit: &'static str,
+    /// One line on what it is.
+    pub doc: &'static str,
+}
+
+impl Signal {
+    /// A signal written to traces under `column`.
+    pub const fn new(
+        key: &'static str,
+        column: &'static str,
+        unit: &'static str,
+        doc: &'static str,
+    ) -> Self {
+        Self {
+            key,
+            column,
+            unit,
+            doc,
+        }
+    }
+}
+
+/// A controller's parts as named signals.
+pub trait Signals: Copy + Default {
+    /// The signals, in the order [`Signals::write`] writes them.
+    const SIGNALS: &'static [Signal];
+    /// Writes the values in the order of [`Signals::SIGNALS`];
+    /// `out.len() >= SIGNALS.len()`.
+    fn write(&self, out: &mut [f64]);
+}
+
+/// No parts at all.
+impl Signals for () {
+    const SIGNALS: &'static [Signal] = &[];
+    fn write(&self, _out: &mut [f64]) {}
+}
+
+/// The result of a law at one instant: the command, the law's flags and its
+/// parts. Dereferences to the parts.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ControlOutput {
-    /// Control voltage u = u_eq + u_sw (V).
+pub struct Output<P> {
+    /// Control voltage u (V).
     pub u: f64,
-    /// Equivalent control (12) or (24) (V).
-    pub u_eq: f64,
-    /// Switching control (13) or (25) (V).
-    pub u_sw: f64,
-    /// Tracking error e = θd − x1 (rad).
-    pub e: f64,
-    /// Switching function σ of (10) (rad/s²).
-    pub sigma: f64,
-    /// Dead-zone switching function σΔ of (27) (σ itself for the VSC).
-    pub sigma_delta: f64,
-    /// The network's estimate WᵀΦ (rad/s³); 0 for the VSC.
-    pub wphi: f64,
-    /// ‖Φ‖ (0 for the VSC).
-    pub phi_norm: f64,
-    /// ξ = ᾱ·EᵀĖ·sgn(σ)/‖E‖ of (19) (rad/s³); 0 for the VSC.
-    pub xi: f64,
-    /// Nominal gain b̄(t) used by the law (s⁻³V⁻¹).
-    pub b_bar: f64,
-    /// Switching gain: k of (14) for the VSC, γ2 of (34) for the NNBVSC.
-    pub gain: f64,
-    /// Boundary layer: μ(t) (NNBVSC, SPEC §5) or the constant μ (VSC-sat).
-    pub mu: f64,
-    /// ‖E‖.
-    pub norm_e: f64,
     /// Bit set of [`flags`].
     pub flags: u8,
+    /// The parts of the law.
+    pub parts: P,
+}
+
+impl<P> core::ops::Deref for Output<P> {
+    type Target = P;
+    fn deref(&self) -> &P {
+        &self.parts
+    }
+}
+
+impl<P> core::ops::DerefMut for Output<P> {
+    fn deref_mut(&mut self) -> &mut P {
+        &mut self.parts
+    }
+}
+
+/// What the simulator knows of the true plant at a sample, for the
+/// diagnostics a law may log (never for the law itself).
+pub trait Truth {
+    /// The part of θ⃛ the nominal model misses when the law's equivalent
+    /// control is `u_eq` with nominal gain `b_bar` and the applied command
+    /// is `u`: `Σ Δa_i x_i − Δb·u_eq + d` of (19), without ξ.
+    fn lumped_uncertainty(&self, u: f64, u_eq: f64, b_bar: f64) -> f64;
 }
 
 /// A control law with state.
 pub trait Controller {
     /// The controller state ξ.
     type State: OdeState;
+    /// The parts of the law, as named signals.
+    type Parts: Signals;
 
-    /// Short name (`"vsc"`, `"vsc-sat"`, `"nnvsc"`).
-    fn name(&self) -> &'static str;
-
-    /// ξ(0): ∫e = 0 and W(0) = 0.
+    /// ξ(0).
     fn initial_state(&self) -> Self::State;
 
     /// Evaluates the law at measurement `m` and state `s`; writes ξ̇ into
     /// `ds`. Infallible and allocation-free.
-    fn law(&self, m: &Measurement, s: &Self::State, ds: &mut Self::State) -> ControlOutput;
+    fn law(&self, m: &Measurement, s: &Self::State, ds: &mut Self::State) -> Output<Self::Parts>;
 
     /// The network weights in `s` (empty for controllers without any).
     fn weights<'a>(&self, _s: &'a Self::State) -> &'a [f64] {
         &[]
     }
+
+    /// Fills the parts that are diagnostics rather than law (a weight norm,
+    /// the uncertainty the network should learn) once per logged sample,
+    /// with the state the law saw and what the simulator knows of the true
+    /// plant. The default does nothing.
+    fn annotate(&self, _s: &Self::State, _out: &mut Output<Self::Parts>, _truth: &dyn Truth) {}
+}
+
+/// What a controller is designed from besides its own parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Design {
+    /// The nominal model (what the controller is told of the plant).
+    pub model: NominalModel,
+    /// The switching surface (for the laws that use one).
+    pub surface: SwitchingSurface,
+    /// The sample period (s) of the loop the controller runs in.
+    pub dt: f64,
+}
+
+/// A controller kind's parameters: what a scenario's `[controller]` table
+/// holds, and how to build the controller from it.
+pub trait Config {
+    /// The kind's name in a scenario (`controller.kind`).
+    const KIND: &'static str;
+    /// Whether the law uses the switching surface (`[surface]`).
+    const USES_SURFACE: bool;
+    /// The controller built.
+    type Controller: Controller;
+    /// Checks every parameter (all of them, whether or not this law reads
+    /// them) and builds the controller; the error names the parameter.
+    fn build(&self, design: &Design) -> Result<Self::Controller, ParamError>;
 }

@@ -25,7 +25,8 @@
 //! Paper's Fig. 2 values ([`NnVscParams::paper`]): γ1 = 100, η = 0.25,
 //! ᾱ = 5, α = 250, Wmax = 4, ε0 = ε1 = 0.1, ε2 = 0.01, h = 1, bound_b = 0.5.
 
-use super::{flags, ControlOutput, Controller, Measurement};
+use super::sliding::SlidingParts;
+use super::{flags, Controller, Measurement, Output, Truth};
 use crate::error::{non_negative, positive, ParamError};
 use crate::math::sgn;
 use crate::rbf::{Rbf, N_KERNELS, N_LEVELS, N_PHI};
@@ -45,6 +46,24 @@ pub enum MuRule {
     Literal33,
     /// μ = 0: the γ2 term becomes γ2·sgn(σΔ) (a discontinuous switching).
     Zero,
+}
+
+impl MuRule {
+    /// The scenario spelling (`controller.mu_rule`).
+    pub const fn as_str(&self) -> &'static str {
+        match self {
+            MuRule::Remark7 => "remark7",
+            MuRule::Literal33 => "literal-33",
+            MuRule::Zero => "zero",
+        }
+    }
+
+    /// From the scenario spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        [MuRule::Remark7, MuRule::Literal33, MuRule::Zero]
+            .into_iter()
+            .find(|r| r.as_str() == s)
+    }
 }
 
 /// Gains of the NNBVSC.
@@ -240,17 +259,14 @@ impl NnVsc {
 
 impl Controller for NnVsc {
     type State = NnState;
-
-    fn name(&self) -> &'static str {
-        "nnvsc"
-    }
+    type Parts = SlidingParts;
 
     fn initial_state(&self) -> NnState {
         NnState::zero()
     }
 
     #[inline]
-    fn law(&self, m: &Measurement, s: &NnState, ds: &mut NnState) -> ControlOutput {
+    fn law(&self, m: &Measurement, s: &NnState, ds: &mut NnState) -> Output<SlidingParts> {
         let p = &self.params;
         let x = &m.x;
         let st = self.surface.evaluate(x, &m.z, s.int_e);
@@ -334,36 +350,40 @@ impl Controller for NnVsc {
             .surface
             .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
         let v = n + wphi + sw_num / (1.0 - p.bound_b);
-        let (b, clamped) = self.model.b(x, sgn(v));
-        let b_bar = if clamped || b < self.b_floor {
+        let (b_bar, clamped) = self.model.gain_for(x, v, self.b_floor);
+        if clamped {
             fl |= flags::VALVE_ROOT_CLAMPED;
-            b.max(self.b_floor)
-        } else {
-            b
-        };
+        }
         let u_eq = (n + wphi) / b_bar;
         let u_sw = sw_num / (b_bar * (1.0 - p.bound_b));
 
-        ControlOutput {
+        Output {
             u: u_eq + u_sw,
-            u_eq,
-            u_sw,
-            e: st.e,
-            sigma: st.sigma,
-            sigma_delta: sd,
-            wphi,
-            phi_norm,
-            xi,
-            b_bar,
-            gain: gamma2,
-            mu,
-            norm_e: st.norm_e,
             flags: fl,
+            parts: SlidingParts {
+                u_eq,
+                u_sw,
+                e: st.e,
+                sigma: st.sigma,
+                sigma_delta: sd,
+                wphi,
+                phi_norm,
+                xi,
+                b_bar,
+                gain: gamma2,
+                mu,
+                norm_e: st.norm_e,
+                ..SlidingParts::default()
+            },
         }
     }
 
     fn weights<'a>(&self, s: &'a NnState) -> &'a [f64] {
         &s.w
+    }
+
+    fn annotate(&self, s: &NnState, out: &mut Output<SlidingParts>, truth: &dyn Truth) {
+        SlidingParts::annotate(out, &s.w, truth);
     }
 }
 

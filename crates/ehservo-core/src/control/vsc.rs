@@ -13,7 +13,8 @@
 //! Remark 2's boundary-layer variant replaces sgn(σ) by sat(σ/μ).
 //! The state is ∫e alone (it enters σ through p3).
 
-use super::{flags, ControlOutput, Controller, Measurement};
+use super::sliding::SlidingParts;
+use super::{flags, Controller, Measurement, Output, Truth};
 use crate::error::{non_negative, positive, ParamError};
 use crate::math::{sat, sgn};
 use crate::servo::NominalModel;
@@ -114,20 +115,14 @@ impl Vsc {
 
 impl Controller for Vsc {
     type State = [f64; 1];
-
-    fn name(&self) -> &'static str {
-        match self.params.switching {
-            Switching::Sign => "vsc",
-            Switching::Saturation { .. } => "vsc-sat",
-        }
-    }
+    type Parts = SlidingParts;
 
     fn initial_state(&self) -> [f64; 1] {
         [0.0]
     }
 
     #[inline]
-    fn law(&self, m: &Measurement, s: &[f64; 1], ds: &mut [f64; 1]) -> ControlOutput {
+    fn law(&self, m: &Measurement, s: &[f64; 1], ds: &mut [f64; 1]) -> Output<SlidingParts> {
         let x = &m.x;
         let st = self.surface.evaluate(x, &m.z, s[0]);
         let a = self.model.coeffs.as_array();
@@ -146,34 +141,35 @@ impl Controller for Vsc {
             + bb * n.abs())
             / (1.0 - bb);
         let v = n + switch * kb;
-        let (b, clamped) = self.model.b(x, sgn(v));
         let mut fl = 0;
-        let b_bar = if clamped || b < self.b_floor {
+        let (b_bar, clamped) = self.model.gain_for(x, v, self.b_floor);
+        if clamped {
             fl |= flags::VALVE_ROOT_CLAMPED;
-            b.max(self.b_floor)
-        } else {
-            b
-        };
+        }
         let u_eq = n / b_bar;
         let k = kb / b_bar;
         let u_sw = k * switch;
         ds[0] = st.e;
-        ControlOutput {
+        Output {
             u: u_eq + u_sw,
-            u_eq,
-            u_sw,
-            e: st.e,
-            sigma: st.sigma,
-            sigma_delta: st.sigma,
-            wphi: 0.0,
-            phi_norm: 0.0,
-            xi: 0.0,
-            b_bar,
-            gain: k,
-            mu,
-            norm_e: st.norm_e,
             flags: fl,
+            parts: SlidingParts {
+                u_eq,
+                u_sw,
+                e: st.e,
+                sigma: st.sigma,
+                sigma_delta: st.sigma,
+                b_bar,
+                gain: k,
+                mu,
+                norm_e: st.norm_e,
+                ..SlidingParts::default()
+            },
         }
+    }
+
+    fn annotate(&self, _s: &[f64; 1], out: &mut Output<SlidingParts>, truth: &dyn Truth) {
+        SlidingParts::annotate(out, &[], truth);
     }
 }
 

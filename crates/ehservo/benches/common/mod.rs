@@ -21,17 +21,18 @@ pub struct Fig2 {
 /// The default scenario (the paper's Fig. 2 case), built as `run::run` does.
 pub fn fig2() -> Fig2 {
     let s = Scenario::parse("").expect("the default scenario is Fig. 2");
-    let plant = ThirdOrderPlant::new(s.plant.params.to_servo(), s.load_model());
+    let plant = ThirdOrderPlant::new(s.servo(), s.load_model());
     let model = *plant.nominal();
     let surface = s.surface().expect("paper surface");
+    let gains = SlidingConfig::default();
     let nn = NnVsc::try_new(
         model,
         surface,
-        s.nnvsc_params(),
-        s.rbf().expect("paper RBF"),
+        gains.nnvsc(),
+        gains.rbf.build().expect("paper RBF"),
     )
     .expect("paper gains");
-    let vsc = Vsc::try_new(model, surface, s.vsc_params()).expect("paper bounds");
+    let vsc = Vsc::try_new(model, surface, gains.vsc(false)).expect("paper bounds");
     let unc = UncertaintySignal::new(s.uncertainty_spec(), model.coeffs.as_array());
     Fig2 {
         plant,

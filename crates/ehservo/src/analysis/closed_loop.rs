@@ -4,8 +4,10 @@
 
 use super::fmt_sig;
 use super::poles::{sort_poles, Pole};
-use crate::scenario::{ControllerKind, Scenario};
-use crate::sim::Mode;
+use super::{paper_law, PaperLaw};
+use crate::scenario::Scenario;
+use crate::simulation::Mode;
+use ehservo_core::control::sliding::SlidingConfig;
 use ehservo_core::reference::Reference;
 use ehservo_core::servo::NominalModel;
 use nalgebra::{Complex, Matrix3, Matrix4, Vector3};
@@ -63,6 +65,38 @@ pub struct LoopAnalysis {
     pub warning: Option<String>,
 }
 
+/// The σ-loop of a controller that is not one of the paper's laws: not
+/// computed.
+fn not_applicable(s: &Scenario) -> LoopAnalysis {
+    LoopAnalysis {
+        controller: s.controller.kind().into(),
+        mode: s.simulation.mode.as_str().into(),
+        step: s.simulation.step,
+        substeps: s.simulation.substeps,
+        b_ratio: 1.0 + s.uncertainty.b_reference * s.uncertainty.b_bias,
+        b_ratio_worst: 1.0
+            + s.uncertainty.b_reference * (s.uncertainty.b_bias + s.uncertainty.b_random.abs()),
+        switching_slope: None,
+        vsc_sat_kb: None,
+        sigma_gain: None,
+        sigma_gain_worst: None,
+        load_slopes: [0.0; 3],
+        eigenvalues: Vec::new(),
+        fast: None,
+        fast_estimate: None,
+        fast_worst: None,
+        h_lambda: None,
+        growth: None,
+        stable: None,
+        check: "none".into(),
+        verdict: format!(
+            "not applicable: the linearised σ-loop is the paper's sliding-mode laws' (vsc, vsc-sat, nnvsc), not `{}`'s",
+            s.controller.kind()
+        ),
+        warning: None,
+    }
+}
+
 /// RK4's amplification R(z) = 1 + z + z²/2 + z³/6 + z⁴/24.
 pub fn rk4_amplification(z: Complex<f64>) -> Complex<f64> {
     let one = Complex::new(1.0, 0.0);
@@ -97,10 +131,10 @@ fn loop_matrix(abar: &[f64; 3], v: &Truth, dd: &[f64; 3], gs: f64, p: [f64; 3]) 
 
 /// kb = b̄·k of (14) along the reference with the state on it: least and
 /// largest over one period.
-fn vsc_kb_range(s: &Scenario, model: &NominalModel) -> [f64; 2] {
+fn vsc_kb_range(s: &Scenario, c: &SlidingConfig, model: &NominalModel) -> [f64; 2] {
     let abar = model.coeffs.as_array();
-    let bb = s.controller.bound_b;
-    let ba = s.controller.bound_a;
+    let bb = c.bound_b;
+    let ba = c.bound_a;
     let Ok(surf) = s.surface() else {
         return [f64::NAN; 2];
     };
@@ -123,8 +157,10 @@ fn vsc_kb_range(s: &Scenario, model: &NominalModel) -> [f64; 2] {
 }
 
 pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> LoopAnalysis {
-    let c = &s.controller;
     let sim = &s.simulation;
+    let Some((law, c)) = paper_law(s) else {
+        return not_applicable(s);
+    };
     let abar = model.coeffs.as_array();
     let u = &s.uncertainty;
     let h = sim.step;
@@ -151,16 +187,16 @@ pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> 
     let jt = model.params.jt;
     let dd = [kd * amp_k, amp_k / jt + kd * bv, bv / jt];
     let bb = c.bound_b;
-    let (slope, kb_range) = match c.kind {
-        ControllerKind::Nnvsc => (Some(c.gamma1 / (1.0 - bb)), None),
-        ControllerKind::VscSat => {
-            let kb = vsc_kb_range(s, model);
+    let (slope, kb_range) = match law {
+        PaperLaw::Nnvsc => (Some(c.gamma1 / (1.0 - bb)), None),
+        PaperLaw::VscSat => {
+            let kb = vsc_kb_range(s, c, model);
             (Some(kb[1] / c.mu), Some(kb))
         }
-        ControllerKind::Vsc => (None, None),
+        PaperLaw::Vsc => (None, None),
     };
     let mut out = LoopAnalysis {
-        controller: c.kind.as_str().into(),
+        controller: s.controller.kind().into(),
         mode: sim.mode.as_str().into(),
         step: h,
         substeps: sim.substeps,
@@ -245,7 +281,7 @@ pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> 
             fmt_sig(h * fast_worst, 4)
         ),
     };
-    let sat = c.kind == ControllerKind::VscSat;
+    let sat = law == PaperLaw::VscSat;
     out.verdict = match (stable, sat) {
         (true, false) => format!("stable: {what}"),
         (false, false) => format!("unstable: {what}"),

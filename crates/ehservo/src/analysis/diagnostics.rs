@@ -1,8 +1,10 @@
 //! After a run: f of (29)–(31), condition 4) of Theorem 3 and the dead zone
 //! along a trace ([`RunDiagnostics`]).
 
-use crate::scenario::{ControllerKind, Scenario};
-use crate::sim::Sample;
+use super::{paper_law, PaperLaw};
+use crate::scenario::Scenario;
+use crate::simulation::Sample;
+use ehservo_core::control::sliding::SlidingConfig;
 use serde::Serialize;
 
 /// Condition 4) and the dead zone along a run.
@@ -34,11 +36,17 @@ pub struct RunDiagnostics {
 /// f2/(sqrt(f1² + f2) + f1) when f1 > 0 (no cancellation when f2 ≪ f1²).
 /// NaN when f1² + f2 < 0 (a negative μ, `mu_rule = "literal-33"`).
 pub fn f_of(s: &Scenario, smp: &Sample) -> f64 {
-    let c = &s.controller;
-    let o = &smp.out;
-    let cc = c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * o.phi_norm + c.eps1;
-    let f1 = (o.mu + o.gain / c.gamma1 - cc / c.gamma1) / 2.0;
-    let f2 = cc * o.mu / c.gamma1;
+    match paper_law(s) {
+        Some((PaperLaw::Nnvsc, c)) => f_with(c, smp),
+        _ => f64::NAN,
+    }
+}
+
+fn f_with(c: &SlidingConfig, smp: &Sample) -> f64 {
+    let (mu, gain) = (smp.part("mu"), smp.part("gain"));
+    let cc = c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * smp.part("phi_norm") + c.eps1;
+    let f1 = (mu + gain / c.gamma1 - cc / c.gamma1) / 2.0;
+    let f2 = cc * mu / c.gamma1;
     let root = (f1 * f1 + f2).sqrt();
     if f1 > 0.0 {
         f2 / (root + f1)
@@ -66,18 +74,21 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// trace). The shares are over the samples of the trace (a decimated trace
 /// gives the shares of its samples), and again over t ≥ settle.
 pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
-    if s.controller.kind != ControllerKind::Nnvsc || trace.is_empty() {
+    let Some((PaperLaw::Nnvsc, c)) = paper_law(s) else {
+        return None;
+    };
+    if trace.is_empty() {
         return None;
     }
-    let c = &s.controller;
     let tol = 1e-9 * s.simulation.horizon.max(1.0);
-    let cc_of = |smp: &Sample| c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * smp.out.phi_norm + c.eps1;
+    let cc_of =
+        |smp: &Sample| c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * smp.part("phi_norm") + c.eps1;
     let eval = |smp: &Sample| {
-        let o = &smp.out;
+        let norm_e = smp.part("norm_e");
         let cc = cc_of(smp);
-        let left = f_of(s, smp) + c.alpha_bar * o.norm_e < c.alpha * o.norm_e;
-        let right = c.alpha * o.norm_e < cc / c.gamma1 + c.alpha_bar * o.norm_e;
-        [left && right, left, right, o.sigma_delta == 0.0]
+        let left = f_with(c, smp) + c.alpha_bar * norm_e < c.alpha * norm_e;
+        let right = c.alpha * norm_e < cc / c.gamma1 + c.alpha_bar * norm_e;
+        [left && right, left, right, smp.part("sigma_delta") == 0.0]
     };
     let share = |it: &mut dyn Iterator<Item = &Sample>| {
         let mut n = 0usize;
@@ -101,7 +112,7 @@ pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
         condition4_right: all[2],
         dead_zone: all[3],
         after_settle: after,
-        norm_e_median: median(trace.iter().map(|x| x.out.norm_e).collect()),
+        norm_e_median: median(trace.iter().map(|x| x.part("norm_e")).collect()),
         right_half_limit_median: median(
             trace
                 .iter()
@@ -115,6 +126,17 @@ pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
 #[allow(clippy::float_cmp)] // exact values are the point of several checks
 mod tests {
     use super::*;
+    use ehservo_core::control::sliding::SlidingParts;
+    use ehservo_core::control::Signals;
+
+    fn sample(p: SlidingParts) -> Sample {
+        let mut s = Sample {
+            signals: SlidingParts::SIGNALS,
+            ..Sample::default()
+        };
+        p.write(&mut s.values);
+        s
+    }
 
     fn paper_scenario(set: &[&str]) -> Scenario {
         let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
@@ -126,17 +148,19 @@ mod tests {
     #[test]
     fn f_is_the_root_of_a5() {
         let s = paper_scenario(&[]);
-        let c = &s.controller;
+        let c = super::paper_law(&s).unwrap().1;
         let phi = 5.0;
         let cc = c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * phi + c.eps1; // 1 + 0.5 + 0.1 = 1.6
         assert!((cc - 1.6).abs() < 1e-12);
         for norm_e in [1e-6, 1e-4, 1e-2, 1.0] {
             let mu = (c.alpha - c.alpha_bar) * norm_e * c.eps2 / cc;
-            let mut smp = Sample::default();
-            smp.out.mu = mu;
-            smp.out.gain = cc + c.eps2;
-            smp.out.phi_norm = phi;
-            smp.out.norm_e = norm_e;
+            let smp = sample(SlidingParts {
+                mu,
+                gain: cc + c.eps2,
+                phi_norm: phi,
+                norm_e,
+                ..Default::default()
+            });
             let f = f_of(&s, &smp);
             let f1 = (mu + c.eps2 / c.gamma1) / 2.0;
             let f2 = cc * mu / c.gamma1;
@@ -147,9 +171,11 @@ mod tests {
             assert!(f > 0.0 && f < (c.alpha - c.alpha_bar) * norm_e);
         }
         // μ = 0: f = 0.
-        let mut smp = Sample::default();
-        smp.out.gain = cc + c.eps2;
-        smp.out.phi_norm = phi;
+        let smp = sample(SlidingParts {
+            gain: cc + c.eps2,
+            phi_norm: phi,
+            ..Default::default()
+        });
         assert!(f_of(&s, &smp).abs() < 1e-300);
     }
 

@@ -102,7 +102,8 @@
 //! advanced by `substeps` RK4 steps, ∫e by forward Euler — whose spectral
 //! radius must be < 1.
 
-use crate::scenario::{ControllerKind, Scenario};
+use crate::scenario::Scenario;
+use ehservo_core::control::sliding::{NnVscConfig, SlidingConfig, VscConfig, VscSatConfig};
 use ehservo_core::servo::NominalModel;
 use nalgebra::Matrix3;
 use serde::Serialize;
@@ -189,7 +190,10 @@ fn theorem2(s: &Scenario, pm: &Matrix3<f64>, sp: [Pole; 3], surface: [f64; 3]) -
     let k2 = -cluster.iter().sum::<f64>() / cluster.len() as f64;
     let k1v = k1(pm, &sp, k2);
     let bound = k1v.value.map(|v| k2 / v).unwrap_or(0.0);
-    let alpha = (s.controller.kind == ControllerKind::Nnvsc).then_some(s.controller.alpha);
+    let alpha = match paper_law(s) {
+        Some((PaperLaw::Nnvsc, c)) => Some(c.alpha),
+        _ => None,
+    };
     let holds = alpha.map(|al| al > 0.0 && al < bound);
     let decades_over = match (alpha, holds) {
         (Some(al), Some(false)) if bound > 0.0 && al > 0.0 => Some((al / bound).log10()),
@@ -242,9 +246,31 @@ fn theorem2(s: &Scenario, pm: &Matrix3<f64>, sp: [Pole; 3], surface: [f64; 3]) -
     }
 }
 
+/// Which of the paper's laws a scenario runs: the theory of this module
+/// is theirs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PaperLaw {
+    /// Theorem 1 with sgn(σ).
+    Vsc,
+    /// Theorem 1 with sat(σ/μ) (Remark 2).
+    VscSat,
+    /// Theorem 3.
+    Nnvsc,
+}
+
+/// The paper's law a scenario runs and its `[controller]` table; None for
+/// any other controller kind (the theory then does not apply).
+pub fn paper_law(s: &Scenario) -> Option<(PaperLaw, &SlidingConfig)> {
+    let c = &s.controller;
+    c.get::<NnVscConfig>()
+        .map(|k| (PaperLaw::Nnvsc, &k.0))
+        .or_else(|| c.get::<VscConfig>().map(|k| (PaperLaw::Vsc, &k.0)))
+        .or_else(|| c.get::<VscSatConfig>().map(|k| (PaperLaw::VscSat, &k.0)))
+}
+
 /// Analyses a validated scenario (see the module doc).
 pub fn analyze(s: &Scenario) -> Analysis {
-    let servo = s.plant.params.to_servo();
+    let servo = s.servo();
     let model = NominalModel::new(servo, s.load_model());
     let a = model.coeffs.as_array();
     let surface = s
@@ -259,7 +285,10 @@ pub fn analyze(s: &Scenario) -> Analysis {
         d_coefficients: [servo.d_per_torque(), 1.0 / servo.jt],
         open_loop_poles: open_loop_poles(a),
         surface: theorem2(s, &pm, sp, surface),
-        weights: (s.controller.kind == ControllerKind::Nnvsc).then(|| weight_analysis(s)),
+        weights: match paper_law(s) {
+            Some((PaperLaw::Nnvsc, c)) => Some(weight_analysis(s, c)),
+            _ => None,
+        },
         closed_loop: loop_analysis(s, &model, surface),
     }
 }

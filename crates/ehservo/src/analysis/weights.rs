@@ -5,6 +5,7 @@
 use super::fmt_sig;
 use super::k1::golden_max;
 use crate::scenario::Scenario;
+use ehservo_core::control::sliding::SlidingConfig;
 use ehservo_core::rbf::{Rbf, N_PHI};
 use ehservo_core::reference::Reference;
 use serde::Serialize;
@@ -104,7 +105,7 @@ pub fn kernel_sq_max(rbf: &Rbf, bound: [f64; 3]) -> (f64, [f64; 3]) {
 /// Largest ‖Φ‖ and ‖z‖ along the reference over one period, with the state
 /// on the reference (perfect tracking).
 pub fn phi_norm_reference(s: &Scenario) -> (f64, f64) {
-    let Ok(rbf) = s.rbf() else {
+    let Ok(rbf) = sliding(s).rbf.build() else {
         return (f64::NAN, f64::NAN);
     };
     let r = s.reference();
@@ -121,8 +122,16 @@ pub fn phi_norm_reference(s: &Scenario) -> (f64, f64) {
 
 /// Largest ‖Φ‖ over Ω of Section IV: sqrt(1 + sup_Ω Σφ_j² + [`OMEGA_Z`]²).
 pub fn phi_norm_omega(s: &Scenario) -> f64 {
-    let Ok(rbf) = s.rbf() else { return f64::NAN };
+    let Ok(rbf) = sliding(s).rbf.build() else {
+        return f64::NAN;
+    };
     (1.0 + kernel_sq_max(&rbf, OMEGA_X).0 + OMEGA_Z * OMEGA_Z).sqrt()
+}
+
+/// The scenario's sliding-mode table (the paper's defaults for any other
+/// controller kind, whose network this is not).
+fn sliding(s: &Scenario) -> SlidingConfig {
+    super::paper_law(s).map(|(_, c)| *c).unwrap_or_default()
 }
 
 /// Remark 6: r(‖Φ‖) = Wmax/2 + sqrt(Wmax²/4 + (ε0‖Φ‖ + ε1)/η); None
@@ -131,8 +140,7 @@ pub fn invariant_radius(eta: f64, w_max: f64, eps0: f64, eps1: f64, phi_norm: f6
     (eta > 0.0).then(|| w_max / 2.0 + (w_max * w_max / 4.0 + (eps0 * phi_norm + eps1) / eta).sqrt())
 }
 
-pub(super) fn weight_analysis(s: &Scenario) -> WeightAnalysis {
-    let c = &s.controller;
+pub(super) fn weight_analysis(s: &Scenario, c: &SlidingConfig) -> WeightAnalysis {
     let (pref, zref) = phi_norm_reference(s);
     let pom = phi_norm_omega(s);
     let (pmax, from) = if pref > pom {

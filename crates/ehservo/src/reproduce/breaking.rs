@@ -78,9 +78,7 @@ fn point(base: &Scenario, set: &[String], x: f64) -> Result<ScanPoint> {
         .filter_map(|s| s.split_once('='))
         .map(|(k, v)| (k.trim().to_string(), parse_value(v)))
         .collect();
-    let s = base
-        .with_values(&values)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let s = base.with_values(&values).map_err(anyhow::Error::from)?;
     let m = run(&s, Keep::Nothing)?.metrics;
     Ok(ScanPoint {
         x,

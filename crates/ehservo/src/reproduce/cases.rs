@@ -37,8 +37,7 @@ pub fn load_cases(m: &Manifest, dir: &Path) -> Result<Vec<(usize, usize, Scenari
     let mut v = Vec::new();
     for (ri, r) in m.reading.iter().enumerate() {
         for (ci, c) in m.case.iter().enumerate() {
-            let s =
-                Scenario::load(&dir.join(&c.file), &r.set).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let s = Scenario::load(&dir.join(&c.file), &r.set).map_err(anyhow::Error::from)?;
             v.push((ri, ci, s));
         }
     }
@@ -81,8 +80,7 @@ pub(super) fn sensitivity(
                 if let Some(k) = seed {
                     set.push(format!("uncertainty.seed={k}"));
                 }
-                let s =
-                    Scenario::load(&dir.join(file), &set).map_err(|e| anyhow::anyhow!("{e}"))?;
+                let s = Scenario::load(&dir.join(file), &set).map_err(anyhow::Error::from)?;
                 jobs.push((si, ci, seed, s));
             }
         }
@@ -125,7 +123,7 @@ pub(super) fn boundaries(
     progress: bool,
 ) -> Result<(Vec<Boundary>, Vec<Boundary>)> {
     let load = |file: &str, set: &[String]| {
-        Scenario::load(&dir.join(file), set).map_err(|e| anyhow::anyhow!("{e}"))
+        Scenario::load(&dir.join(file), set).map_err(anyhow::Error::from)
     };
     let vsc_grid: Vec<f64> = (0..=30).map(|i| i as f64 * 0.05).collect();
     let nn_grid: Vec<f64> = (0..=40).map(|i| i as f64 * 0.25).collect();

@@ -15,7 +15,7 @@
 //! variance), never NaN.
 
 use crate::metrics::Metrics;
-use crate::sim::Sample;
+use crate::simulation::Sample;
 use serde::Serialize;
 
 /// SPEC §9 metrics plus the derived ones.
@@ -100,7 +100,11 @@ impl CaseMetrics {
 
         let sigma_rms = if ok {
             finite(
-                (after.iter().map(|s| s.out.sigma * s.out.sigma).sum::<f64>() / after.len() as f64)
+                (after
+                    .iter()
+                    .map(|s| s.part("sigma") * s.part("sigma"))
+                    .sum::<f64>()
+                    / after.len() as f64)
                     .sqrt(),
             )
         } else {
@@ -109,16 +113,16 @@ impl CaseMetrics {
 
         let (capture_corr, capture_gain) = if ok && network {
             let n = after.len() as f64;
-            let mx = after.iter().map(|s| s.out.wphi).sum::<f64>() / n;
-            let my = after.iter().map(|s| s.uncertainty).sum::<f64>() / n;
+            let mx = after.iter().map(|s| s.part("wphi")).sum::<f64>() / n;
+            let my = after.iter().map(|s| s.part("uncertainty")).sum::<f64>() / n;
             let (mut sxy, mut sxx, mut syy, mut qx, mut qy) = (0.0, 0.0, 0.0, 0.0, 0.0);
             for s in &after {
-                let (x, y) = (s.out.wphi - mx, s.uncertainty - my);
+                let (x, y) = (s.part("wphi") - mx, s.part("uncertainty") - my);
                 sxy += x * y;
                 sxx += x * x;
                 syy += y * y;
-                qx += s.out.wphi * s.out.wphi;
-                qy += s.uncertainty * s.uncertainty;
+                qx += s.part("wphi") * s.part("wphi");
+                qy += s.part("uncertainty") * s.part("uncertainty");
             }
             let corr = if sxx > 0.0 && syy > 0.0 {
                 finite(sxy / (sxx * syy).sqrt())
@@ -143,8 +147,9 @@ impl CaseMetrics {
                 .find(|s| s.t >= mid_t - tol)
                 .copied()
                 .unwrap_or(last);
-            if mid.w_norm > 0.0 {
-                finite((last.w_norm - mid.w_norm) / mid.w_norm)
+            let mid_w = mid.part("w_norm");
+            if mid_w > 0.0 {
+                finite((last.part("w_norm") - mid_w) / mid_w)
             } else {
                 None
             }
@@ -156,7 +161,7 @@ impl CaseMetrics {
             let t_end = trace[trace.len() - 1].t;
             let tail = trace.iter().filter(|s| s.t >= t_end - 5.0 - tol);
             let (lo, hi) = tail.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
-                (lo.min(s.w_128), hi.max(s.w_128))
+                (lo.min(s.part("w_128")), hi.max(s.part("w_128")))
             });
             finite(hi - lo)
         } else {
@@ -201,7 +206,7 @@ fn hf_share(after: &[&Sample], f_ref: f64, horizon: f64) -> Option<f64> {
     let win: Vec<f64> = after
         .iter()
         .filter(|s| s.t > t_end - t_w + tol)
-        .map(|s| s.out.e)
+        .map(|s| s.e)
         .collect();
     let n = win.len();
     if n < 8 {
@@ -233,7 +238,6 @@ fn hf_share(after: &[&Sample], f_ref: f64, horizon: f64) -> Option<f64> {
 #[allow(clippy::float_cmp)] // exact values are the point of several checks
 mod tests {
     use super::*;
-    use ehservo_core::control::ControlOutput;
 
     fn samples(h: f64, n: usize, e: impl Fn(f64) -> f64) -> Vec<Sample> {
         (0..n)
@@ -242,10 +246,7 @@ mod tests {
                 Sample {
                     k: k as u64,
                     t,
-                    out: ControlOutput {
-                        e: e(t),
-                        ..Default::default()
-                    },
+                    e: e(t),
                     ..Default::default()
                 }
             })

@@ -5,7 +5,7 @@
 use super::breaking::Boundary;
 use crate::plot::{Dash, Figure, Panel, Series};
 use crate::run::RunResult;
-use crate::sim::Sample;
+use crate::simulation::Sample;
 use std::collections::BTreeMap;
 
 /// Longest series drawn; longer ones are reduced by min/max per bucket, which
@@ -73,11 +73,7 @@ fn panel(title: &str, y_label: &str, series: Vec<Series>) -> Panel {
 
 /// A panel of u(t) (V).
 fn u_panel(title: &str, t: &[Sample]) -> Panel {
-    panel(
-        title,
-        "u (V)",
-        vec![series("", t, |s| s.out.u, 0, Dash::Solid)],
-    )
+    panel(title, "u (V)", vec![series("", t, |s| s.u, 0, Dash::Solid)])
 }
 
 /// A panel of σ(t) (rad/s²).
@@ -85,7 +81,7 @@ fn sigma_panel(title: &str, t: &[Sample]) -> Panel {
     panel(
         title,
         "σ (rad/s²)",
-        vec![series("", t, |s| s.out.sigma, 0, Dash::Solid)],
+        vec![series("", t, |s| s.part("sigma"), 0, Dash::Solid)],
     )
 }
 
@@ -147,8 +143,14 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
                         "(d) Σ Δa_i x_i − Δb u_eq + d − ξ (---) and WᵀΦ (—)",
                         "(rad/s³)",
                         vec![
-                            series("uncertainty (19)", t, |s| s.uncertainty, 1, Dash::Dashed),
-                            series("WᵀΦ", t, |s| s.out.wphi, 0, Dash::Solid),
+                            series(
+                                "uncertainty (19)",
+                                t,
+                                |s| s.part("uncertainty"),
+                                1,
+                                Dash::Dashed,
+                            ),
+                            series("WᵀΦ", t, |s| s.part("wphi"), 0, Dash::Solid),
                         ],
                     ),
                 ],
@@ -212,12 +214,12 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
     }
 
     if let Some(r) = get("gamma1-200") {
-        let mut s = vec![series("γ1 = 200", &r.trace, |s| s.out.u, 0, Dash::Solid)];
+        let mut s = vec![series("γ1 = 200", &r.trace, |s| s.u, 0, Dash::Solid)];
         if let Some(f2) = get("fig2") {
             s.push(series(
                 "γ1 = 100 (Fig. 2(b))",
                 &f2.trace,
-                |s| s.out.u,
+                |s| s.u,
                 1,
                 Dash::Dashed,
             ));
@@ -262,8 +264,8 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
                 cols: 1,
                 size: (1200, 1000),
                 panels: vec![
-                    panel("(a) w_1(t)", "w_1", mk(|s| s.w_1)),
-                    panel("(b) w_128(t)", "w_128", mk(|s| s.w_128)),
+                    panel("(a) w_1(t)", "w_1", mk(|s| s.part("w_1"))),
+                    panel("(b) w_128(t)", "w_128", mk(|s| s.part("w_128"))),
                 ],
             },
         });
@@ -279,7 +281,9 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
         let s: Vec<Series> = fig7
             .iter()
             .enumerate()
-            .map(|(i, (id, label, dash))| series(label, &runs[*id].trace, |s| s.w_128, i, *dash))
+            .map(|(i, (id, label, dash))| {
+                series(label, &runs[*id].trace, |s| s.part("w_128"), i, *dash)
+            })
             .collect();
         out.push(PaperFigure {
             stem: "fig7".into(),
@@ -321,8 +325,8 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
                         "(b) u(t)",
                         "u (V)",
                         vec![
-                            series("Fig. 2 case", &f2.trace, |s| s.out.u, 0, Dash::Solid),
-                            series("half bias, half random", &f8.trace, |s| s.out.u, 1, Dash::DashDot),
+                            series("Fig. 2 case", &f2.trace, |s| s.u, 0, Dash::Solid),
+                            series("half bias, half random", &f8.trace, |s| s.u, 1, Dash::DashDot),
                         ],
                     ),
                 ],

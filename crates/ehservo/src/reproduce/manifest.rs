@@ -1,6 +1,6 @@
 //! `scenarios/paper/manifest.toml`: readings, cases and claims as data.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use serde::Deserialize;
 use std::collections::HashSet;
 use std::path::Path;
@@ -129,27 +129,27 @@ impl Manifest {
     fn check(&self) -> Result<()> {
         let cases: HashSet<&str> = self.case.iter().map(|c| c.id.as_str()).collect();
         if cases.len() != self.case.len() {
-            bail!("duplicate case id");
+            crate::bad_input!("duplicate case id");
         }
         if self.reading.is_empty() {
-            bail!("no [[reading]]");
+            crate::bad_input!("no [[reading]]");
         }
         for c in &self.claim {
             if !cases.contains(c.case.as_str()) {
-                bail!("claim `{}`: unknown case `{}`", c.id, c.case);
+                crate::bad_input!("claim `{}`: unknown case `{}`", c.id, c.case);
             }
             if let Some(o) = &c.other {
                 if !cases.contains(o.as_str()) {
-                    bail!("claim `{}`: unknown other case `{o}`", c.id);
+                    crate::bad_input!("claim `{}`: unknown other case `{o}`", c.id);
                 }
             }
             let needs_metric = !matches!(c.kind, ClaimKind::Bounded | ClaimKind::Unbounded);
             if needs_metric && c.metric.is_none() {
-                bail!("claim `{}`: kind needs `metric`", c.id);
+                crate::bad_input!("claim `{}`: kind needs `metric`", c.id);
             }
             if let Some(m) = &c.metric {
                 if !super::derived::is_metric(m) {
-                    bail!("claim `{}`: unknown metric `{m}`", c.id);
+                    crate::bad_input!("claim `{}`: unknown metric `{m}`", c.id);
                 }
             }
             let needs_other = matches!(
@@ -157,27 +157,27 @@ impl Manifest {
                 ClaimKind::Less | ClaimKind::Greater | ClaimKind::Ratio | ClaimKind::Similar
             );
             if needs_other && c.other.is_none() {
-                bail!("claim `{}`: kind needs `other`", c.id);
+                crate::bad_input!("claim `{}`: kind needs `other`", c.id);
             }
             let needs_value = matches!(
                 c.kind,
                 ClaimKind::Approx | ClaimKind::Ratio | ClaimKind::AtLeast | ClaimKind::AtMost
             );
             if needs_value && c.value.is_none() {
-                bail!("claim `{}`: kind needs `value`", c.id);
+                crate::bad_input!("claim `{}`: kind needs `value`", c.id);
             }
             if matches!(
                 c.kind,
                 ClaimKind::Approx | ClaimKind::Ratio | ClaimKind::Similar
             ) && c.tol.is_none()
             {
-                bail!("claim `{}`: kind needs `tol`", c.id);
+                crate::bad_input!("claim `{}`: kind needs `tol`", c.id);
             }
         }
         for s in &self.sensitivity {
             for c in &s.cases {
                 if !cases.contains(c.as_str()) {
-                    bail!("sensitivity `{}`: unknown case `{c}`", s.id);
+                    crate::bad_input!("sensitivity `{}`: unknown case `{c}`", s.id);
                 }
             }
         }

@@ -2,14 +2,14 @@
 
 use super::StudyRecord;
 use crate::output::{write_atomic, Staging};
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
 
 /// Joins shard outputs into one results.csv (rows in run order), refusing
 /// shards of different studies, overlaps and gaps.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     if dirs.is_empty() {
-        bail!("nothing to merge");
+        crate::bad_input!("nothing to merge");
     }
     let mut records: Vec<(PathBuf, StudyRecord)> = Vec::new();
     for d in dirs {
@@ -23,14 +23,14 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     let (first_dir, first) = records[0].clone();
     for (d, r) in &records[1..] {
         if r.study != first.study || r.base != first.base || r.runs != first.runs {
-            bail!(
+            crate::bad_input!(
                 "{} and {} are outputs of different studies: refusing to merge",
                 first_dir.display(),
                 d.display()
             );
         }
         if r.version != first.version {
-            bail!(
+            crate::bad_input!(
                 "{} was written by {} {} and {} by {}: refusing to merge",
                 first_dir.display(),
                 first.software,
@@ -44,7 +44,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     let mut next = 0u64;
     for (d, r) in &records {
         if r.range[0] != next {
-            bail!(
+            crate::bad_input!(
                 "runs {}..{} are {} (at {}): shards overlap or one is missing",
                 next,
                 r.range[0],
@@ -59,7 +59,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
         next = r.range[1];
     }
     if next != first.runs {
-        bail!("runs {next}..{} are missing: a shard is absent", first.runs);
+        crate::bad_input!("runs {next}..{} are missing: a shard is absent", first.runs);
     }
     let mut out_bytes: Vec<u8> = Vec::new();
     let mut header: Option<String> = None;
@@ -74,7 +74,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
                 out_bytes.extend_from_slice(h.as_bytes());
                 header = Some(h);
             }
-            Some(h0) if *h0 != h => bail!("{}: a different header", p.display()),
+            Some(h0) if *h0 != h => crate::bad_input!("{}: a different header", p.display()),
             _ => {}
         }
         for l in lines {

@@ -20,7 +20,7 @@
 //! A value that is undefined (no sample after t_s, a run with u ≡ 0) is
 //! `None` (JSON `null`), never NaN.
 
-use crate::sim::{Divergence, Sample};
+use crate::simulation::{Divergence, Sample};
 use ehservo_core::math::DR;
 use serde::{Deserialize, Serialize};
 
@@ -127,12 +127,15 @@ pub struct MetricsAccumulator {
     w_last: f64,
     dead: u64,
     saw_final: bool,
+    i_w_norm: Option<usize>,
+    i_sigma_delta: Option<usize>,
 }
 
 impl MetricsAccumulator {
     /// For a run of horizon `horizon` (s), transient end `settle` (s), a
     /// reference of period `period` (s), and whether the controller has a
-    /// network (for the dead-zone share).
+    /// network (for ‖W‖ and the dead-zone share, read from the samples'
+    /// `w_norm` and `sigma_delta` signals).
     pub fn new(horizon: f64, settle: f64, period: f64, has_network: bool) -> Self {
         // A relative tolerance keeps t_k = k·h on the right side of the
         // window edges despite rounding.
@@ -157,20 +160,27 @@ impl MetricsAccumulator {
             w_last: 0.0,
             dead: 0,
             saw_final: false,
+            i_w_norm: None,
+            i_sigma_delta: None,
         }
     }
 
     /// Takes one sample.
     pub fn push(&mut self, s: &Sample) {
-        let e = s.out.e.abs() / DR;
-        let u = s.out.u;
+        if self.n == 0 && self.has_network {
+            self.i_w_norm = s.index_of("w_norm");
+            self.i_sigma_delta = s.index_of("sigma_delta");
+        }
+        let e = s.e.abs() / DR;
+        let u = s.u;
+        let w_norm = self.i_w_norm.map_or(0.0, |i| s.values[i]);
         self.n += 1;
         self.t_last = s.t;
         self.u_max = self.u_max.max(u.abs());
-        self.w_max = self.w_max.max(s.w_norm);
-        self.w_last = s.w_norm;
+        self.w_max = self.w_max.max(w_norm);
+        self.w_last = w_norm;
         if s.t >= self.settle {
-            if s.out.sigma_delta == 0.0 {
+            if self.i_sigma_delta.is_some_and(|i| s.values[i] == 0.0) {
                 self.dead += 1;
             }
             if self.t_first_after.is_none() {
@@ -223,21 +233,25 @@ impl MetricsAccumulator {
 #[allow(clippy::float_cmp)] // exact values are the point of several checks
 mod tests {
     use super::*;
-    use ehservo_core::control::ControlOutput;
+    use ehservo_core::control::sliding::SlidingParts;
+    use ehservo_core::control::Signals;
 
     fn sample(k: u64, h: f64, e_deg: f64, u: f64) -> Sample {
-        Sample {
-            k,
-            t: k as f64 * h,
-            out: ControlOutput {
-                e: e_deg * DR,
-                u,
-                sigma_delta: if k % 2 == 0 { 0.0 } else { 1.0 },
-                ..Default::default()
-            },
+        let parts = SlidingParts {
+            sigma_delta: if k % 2 == 0 { 0.0 } else { 1.0 },
             w_norm: k as f64,
             ..Default::default()
-        }
+        };
+        let mut s = Sample {
+            k,
+            t: k as f64 * h,
+            e: e_deg * DR,
+            u,
+            signals: SlidingParts::SIGNALS,
+            ..Default::default()
+        };
+        parts.write(&mut s.values);
+        s
     }
 
     /// Ten samples at h = 1 s, settle 5 s, period 2 s, horizon 9 s:
@@ -276,7 +290,7 @@ mod tests {
         m.push(&sample(0, 0.01, 0.5, 0.0));
         let r = m.finish(Some(Divergence {
             t: 0.01,
-            reason: crate::sim::DivergenceReason::ThetaLimit,
+            reason: crate::simulation::DivergenceReason::ThetaLimit,
         }));
         assert_eq!(r.e_max_deg, None);
         assert_eq!(r.e_final_deg, None);

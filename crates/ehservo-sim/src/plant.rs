@@ -22,6 +22,7 @@
 //! `a_bias = a_random = 0.5` and `b_bias = b_random = 0.25`.
 
 use ehservo_core::math::sgn;
+use ehservo_core::rk4::OdeState;
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -109,10 +110,33 @@ impl UncertaintySignal {
     /// The variation at time `t ≥ 0`. Times must not go backwards across
     /// hold intervals (the simulator only moves forward).
     pub fn at(&mut self, t: f64) -> Variation {
+        // Interval index; the tiny offset keeps t = k·hold in interval k
+        // despite rounding of k·h.
+        let j = (t / self.spec.hold + 1e-9).floor().max(0.0) as u64;
+        self.at_interval(j)
+    }
+
+    /// How many (sub)steps of `hs` seconds make one hold interval, when the
+    /// hold is a whole number of them (to 1e-9): the simulator then finds a
+    /// (sub)step's interval by integer division, exact however long the run.
+    pub fn steps_per_hold(&self, hs: f64) -> Option<u64> {
+        let r = self.spec.hold / hs;
+        let n = r.round();
+        ((1.0..9.0e15).contains(&n) && (r - n).abs() <= 1e-9 * n).then_some(n as u64)
+    }
+
+    /// The variation over the `j`-th (sub)step of `hs` seconds (it starts
+    /// at `j·hs`), with `per_hold = steps_per_hold(hs)`.
+    pub fn at_step(&mut self, j: u64, hs: f64, per_hold: Option<u64>) -> Variation {
+        match per_hold {
+            Some(n) => self.at_interval(j / n),
+            None => self.at(j as f64 * hs),
+        }
+    }
+
+    /// The variation over hold interval `j` (intervals never go backwards).
+    pub fn at_interval(&mut self, j: u64) -> Variation {
         if self.random {
-            // Interval index; the tiny offset keeps t = k·hold in interval k
-            // despite rounding of k·h.
-            let j = (t / self.spec.hold + 1e-9).floor().max(0.0) as u64;
             while self.drawn <= j {
                 for i in 0..4 {
                     self.r[i] = self.uniform();
@@ -129,16 +153,19 @@ impl UncertaintySignal {
     }
 }
 
-/// A plant as a pure derivative, with a measurement map to x = (θ, θ̇, θ̈).
+/// A plant as a pure derivative over its own state (of any dimension: a
+/// spool, a cylinder's two pressures), with an output map to the
+/// x = (θ, θ̇, θ̈) that the sensors see.
 pub trait Plant {
-    /// Short name.
-    fn name(&self) -> &'static str;
+    /// The plant's state.
+    type State: OdeState;
     /// The plant state that corresponds to x(0).
-    fn initial_state(&self, x0: [f64; 3]) -> [f64; 3];
+    fn initial_state(&self, x0: [f64; 3]) -> Self::State;
     /// x = (θ, θ̇, θ̈) from the plant state.
-    fn measure(&self, s: &[f64; 3]) -> [f64; 3];
-    /// The state derivative under input `u` and variation `v`.
-    fn deriv(&self, t: f64, s: &[f64; 3], u: f64, v: &Variation, ds: &mut [f64; 3]);
+    fn measure(&self, s: &Self::State) -> [f64; 3];
+    /// The state derivative under input `u` (the valve command, V) and
+    /// variation `v`.
+    fn deriv(&self, t: f64, s: &Self::State, u: f64, v: &Variation, ds: &mut Self::State);
     /// The nominal model (what a controller is told).
     fn nominal(&self) -> &NominalModel;
     /// The lumped uncertainty of (19) without ξ: `Σ Δa_i x_i − Δb·u_eq + d`,
@@ -173,9 +200,7 @@ impl ThirdOrderPlant {
 }
 
 impl Plant for ThirdOrderPlant {
-    fn name(&self) -> &'static str {
-        "third-order"
-    }
+    type State = [f64; 3];
 
     fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {
         x0
@@ -218,9 +243,7 @@ impl PhysicalPlant {
 }
 
 impl Plant for PhysicalPlant {
-    fn name(&self) -> &'static str {
-        "physical"
-    }
+    type State = [f64; 3];
 
     /// Pl(0) from the torque balance (4) with θ̈(0) = x0[2].
     fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {

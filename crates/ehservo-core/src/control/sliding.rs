@@ -1,0 +1,355 @@
+//! What the paper's two sliding-mode laws share: their parts as signals,
+//! and their `[controller]` table.
+//!
+//! The traditional VSC of Theorem 1 ([`super::vsc`]) and the NNBVSC of
+//! Theorem 3 ([`super::nnvsc`]) both split `u = u_eq + u_sw` on the
+//! switching surface σ of (10), so they log the same parts
+//! ([`SlidingParts`]; the VSC's network terms are 0). Their parameters are
+//! one table ([`SlidingConfig`]): a scenario or a study can switch
+//! `controller.kind` among `vsc`, `vsc-sat` and `nnvsc` and keep its keys,
+//! and every key is validated whichever law reads it.
+
+use super::{Config, Design, Output, Signal, Signals, Truth};
+use crate::control::nnvsc::{MuRule, NnVsc, NnVscParams};
+use crate::control::vsc::{Switching, Vsc, VscParams};
+use crate::error::{non_negative, positive, ParamError};
+use crate::rbf::Rbf;
+
+/// The parts of a sliding-mode law at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SlidingParts {
+    /// Equivalent control (12) or (24) (V).
+    pub u_eq: f64,
+    /// Switching control (13) or (25) (V).
+    pub u_sw: f64,
+    /// Tracking error e = θd − x1 (rad).
+    pub e: f64,
+    /// Switching function σ of (10) (rad/s²).
+    pub sigma: f64,
+    /// Dead-zone switching function σΔ of (27) (σ itself for the VSC).
+    pub sigma_delta: f64,
+    /// The network's estimate WᵀΦ (rad/s³); 0 for the VSC.
+    pub wphi: f64,
+    /// The lumped uncertainty of (19), Σ Δa_i x_i − Δb·u_eq + d − ξ
+    /// (rad/s³): a diagnostic filled by [`super::Controller::annotate`].
+    pub uncertainty: f64,
+    /// ‖W‖ (0 without a network; filled by [`super::Controller::annotate`]).
+    pub w_norm: f64,
+    /// The paper's w_1, the first Gaussian's weight W[1].
+    pub w_1: f64,
+    /// The paper's w_128, θ̈d's weight W[128].
+    pub w_128: f64,
+    /// Boundary layer: μ(t) (NNBVSC, SPEC §5) or the constant μ (VSC-sat).
+    pub mu: f64,
+    /// ‖E‖.
+    pub norm_e: f64,
+    /// Nominal gain b̄(t) used by the law (s⁻³V⁻¹).
+    pub b_bar: f64,
+    /// ‖Φ‖ (0 for the VSC).
+    pub phi_norm: f64,
+    /// ξ = ᾱ·EᵀĖ·sgn(σ)/‖E‖ of (19) (rad/s³); 0 for the VSC.
+    pub xi: f64,
+    /// Switching gain: k of (14) for the VSC, γ2 of (34) for the NNBVSC.
+    pub gain: f64,
+}
+
+impl Signals for SlidingParts {
+    const SIGNALS: &'static [Signal] = &[
+        Signal::new("u_eq", "u_eq_V", "V", "equivalent control (12)/(24)"),
+        Signal::new("u_sw", "u_sw_V", "V", "switching control (13)/(25)"),
+        Signal::new(
+            "sigma",
+            "sigma_rad_s2",
+            "rad/s²",
+            "switching function σ (10)",
+        ),
+        Signal::new(
+            "sigma_delta",
+            "sigma_delta_rad_s2",
+            "rad/s²",
+            "dead-zone switching function σΔ (27)",
+        ),
+        Signal::new("wphi", "wphi_rad_s3", "rad/s³", "network estimate WᵀΦ"),
+        Signal::new(
+            "uncertainty",
+            "uncertainty_rad_s3",
+            "rad/s³",
+            "lumped uncertainty of (19): Σ Δa_i x_i − Δb·u_eq + d − ξ",
+        ),
+        Signal::new("w_norm", "w_norm", "", "‖W‖"),
+        Signal::new(
+            "w_1",
+            "w_1",
+            "",
+            "the paper's w_1 (first Gaussian's weight)",
+        ),
+        Signal::new("w_128", "w_128", "", "the paper's w_128 (θ̈d's weight)"),
+        Signal::new("mu", "mu_rad_s2", "rad/s²", "boundary layer μ"),
+        Signal::new("norm_e", "norm_E", "rad", "‖E‖ of (16)"),
+        Signal::new(
+            "b_bar",
+            "b_bar_V_s3",
+            "1/(V·s³)",
+            "nominal gain b̄(t) of (9)",
+        ),
+        Signal::new("e", "", "rad", "tracking error θd − x1"),
+        Signal::new("phi_norm", "", "", "‖Φ‖ of (20)"),
+        Signal::new("xi", "", "rad/s³", "ξ of (19)"),
+        Signal::new("gain", "", "", "switching gain: k (14) or γ2 (34)"),
+    ];
+
+    fn write(&self, out: &mut [f64]) {
+        let v = [
+            self.u_eq,
+            self.u_sw,
+            self.sigma,
+            self.sigma_delta,
+            self.wphi,
+            self.uncertainty,
+            self.w_norm,
+            self.w_1,
+            self.w_128,
+            self.mu,
+            self.norm_e,
+            self.b_bar,
+            self.e,
+            self.phi_norm,
+            self.xi,
+            self.gain,
+        ];
+        out[..v.len()].copy_from_slice(&v);
+    }
+}
+
+impl SlidingParts {
+    /// The diagnostics of [`super::Controller::annotate`]: the lumped uncertainty
+    /// of (19) (less ξ) and the weight statistics of `w` (empty for the VSC).
+    #[inline]
+    pub fn annotate(out: &mut Output<SlidingParts>, w: &[f64], truth: &dyn Truth) {
+        let p = &mut out.parts;
+        p.uncertainty = truth.lumped_uncertainty(out.u, p.u_eq, p.b_bar) - p.xi;
+        p.w_norm = crate::math::norm(w);
+        p.w_1 = w.get(1).copied().unwrap_or(0.0);
+        p.w_128 = w.get(128).copied().unwrap_or(0.0);
+    }
+}
+
+/// `controller.mu_rule`'s spellings.
+#[cfg(feature = "serde")]
+impl serde::Serialize for MuRule {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+#[cfg(feature = "serde")]
+impl<'de> serde::Deserialize<'de> for MuRule {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = MuRule;
+            fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
+                f.write_str("one of `remark7`, `literal-33`, `zero`")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<MuRule, E> {
+                MuRule::parse(v)
+                    .ok_or_else(|| E::unknown_variant(v, &["remark7", "literal-33", "zero"]))
+            }
+        }
+        d.deserialize_str(V)
+    }
+}
+
+/// `[controller.rbf]`: the network's grid, width and normalising scales.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields, default)
+)]
+pub struct RbfConfig {
+    /// δ. Default 0.5.
+    pub width: f64,
+    /// Grid levels per axis. Default [−1, −0.5, 0, 0.5, 1].
+    pub levels: [f64; 5],
+    /// Normalising scales of x1, x2, x3 (rad, rad/s, rad/s²).
+    /// Default (6.25°, 12.5π °/s, 25π² °/s²) in radians.
+    pub scale: [f64; 3],
+}
+
+impl Default for RbfConfig {
+    fn default() -> Self {
+        let r = Rbf::paper();
+        Self {
+            width: r.width(),
+            levels: r.levels(),
+            scale: r.scale(),
+        }
+    }
+}
+
+impl RbfConfig {
+    /// The network (errors name `rbf.width`, `rbf.levels`, `rbf.scale`).
+    pub fn build(&self) -> Result<Rbf, ParamError> {
+        Rbf::try_new(self.levels, self.width, self.scale)
+    }
+}
+
+/// The `[controller]` table of the paper's laws (`vsc`, `vsc-sat`,
+/// `nnvsc`), every key at the paper's Fig. 2 value by default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields, default)
+)]
+pub struct SlidingConfig {
+    /// Bound the controller knows on Δa_i: α_i = bound_a·|ā_i| (VSC). Default 1.
+    pub bound_a: f64,
+    /// Bound the controller knows on Δb: β = bound_b·|b̄|. Default 0.5.
+    pub bound_b: f64,
+    /// γ1. Default 100.
+    pub gamma1: f64,
+    /// η. Default 0.25.
+    pub eta: f64,
+    /// α. Default 250.
+    pub alpha: f64,
+    /// ᾱ. Default 5.
+    pub alpha_bar: f64,
+    /// Wmax. Default 4.
+    pub w_max: f64,
+    /// ε0. Default 0.1.
+    pub eps0: f64,
+    /// ε1. Default 0.1.
+    pub eps1: f64,
+    /// ε2. Default 0.01.
+    pub eps2: f64,
+    /// h (H = h·I). Default 1.
+    pub h: f64,
+    /// Boundary-layer width of `vsc-sat` (rad/s²). Default 1.
+    pub mu: f64,
+    /// NNBVSC boundary-layer rule: `"remark7"` (default, SPEC §5),
+    /// `"literal-33"` (the printed, negative (33)) or `"zero"`.
+    pub mu_rule: MuRule,
+    /// `[controller.rbf]`.
+    pub rbf: RbfConfig,
+}
+
+impl Default for SlidingConfig {
+    fn default() -> Self {
+        let p = NnVscParams::paper();
+        Self {
+            bound_a: 1.0,
+            bound_b: p.bound_b,
+            gamma1: p.gamma1,
+            eta: p.eta,
+            alpha: p.alpha,
+            alpha_bar: p.alpha_bar,
+            w_max: p.w_max,
+            eps0: p.eps0,
+            eps1: p.eps1,
+            eps2: p.eps2,
+            h: p.h,
+            mu: 1.0,
+            mu_rule: MuRule::Remark7,
+            rbf: RbfConfig::default(),
+        }
+    }
+}
+
+impl SlidingConfig {
+    /// The NNBVSC gains.
+    pub fn nnvsc(&self) -> NnVscParams {
+        NnVscParams {
+            gamma1: self.gamma1,
+            eta: self.eta,
+            alpha: self.alpha,
+            alpha_bar: self.alpha_bar,
+            w_max: self.w_max,
+            eps0: self.eps0,
+            eps1: self.eps1,
+            eps2: self.eps2,
+            h: self.h,
+            bound_b: self.bound_b,
+            mu_rule: self.mu_rule,
+        }
+    }
+
+    /// The VSC gains, with sgn(σ) or sat(σ/μ).
+    pub fn vsc(&self, saturation: bool) -> VscParams {
+        VscParams {
+            bound_a: self.bound_a,
+            bound_b: self.bound_b,
+            switching: if saturation {
+                Switching::Saturation { mu: self.mu }
+            } else {
+                Switching::Sign
+            },
+        }
+    }
+
+    /// Checks every key, whichever law reads it.
+    pub fn validate(&self) -> Result<Rbf, ParamError> {
+        non_negative("bound_a", self.bound_a)?;
+        self.nnvsc().validate()?;
+        positive("mu", self.mu)?;
+        self.rbf.build()
+    }
+}
+
+/// `kind = "nnvsc"`: the NNBVSC of Theorem 3.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(transparent)
+)]
+pub struct NnVscConfig(pub SlidingConfig);
+
+/// `kind = "vsc"`: the traditional VSC of Theorem 1, sgn(σ).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(transparent)
+)]
+pub struct VscConfig(pub SlidingConfig);
+
+/// `kind = "vsc-sat"`: Theorem 1 with sat(σ/μ) (Remark 2).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(transparent)
+)]
+pub struct VscSatConfig(pub SlidingConfig);
+
+impl Config for NnVscConfig {
+    const KIND: &'static str = "nnvsc";
+    const USES_SURFACE: bool = true;
+    type Controller = NnVsc;
+    fn build(&self, d: &Design) -> Result<NnVsc, ParamError> {
+        let rbf = self.0.validate()?;
+        NnVsc::try_new(d.model, d.surface, self.0.nnvsc(), rbf)
+    }
+}
+
+impl Config for VscConfig {
+    const KIND: &'static str = "vsc";
+    const USES_SURFACE: bool = true;
+    type Controller = Vsc;
+    fn build(&self, d: &Design) -> Result<Vsc, ParamError> {
+        self.0.validate()?;
+        Vsc::try_new(d.model, d.surface, self.0.vsc(false))
+    }
+}
+
+impl Config for VscSatConfig {
+    const KIND: &'static str = "vsc-sat";
+    const USES_SURFACE: bool = true;
+    type Controller = Vsc;
+    fn build(&self, d: &Design) -> Result<Vsc, ParamError> {
+        self.0.validate()?;
+        Vsc::try_new(d.model, d.surface, self.0.vsc(true))
+    }
+}

@@ -1,0 +1,562 @@
+//! The closed loop as a resumable simulation: one type owns time, the
+//! integrator, the sampling of the controller and the stages around it.
+//!
+//! ```text
+//!            z(t)                       u                 u_plant
+//! reference ─────▶ controller ─────────────▶ actuator ─────────────▶ plant
+//!                      ▲                                                │ x = (θ, θ̇, θ̈)
+//!                      └───────────────── sensor ◀──────────────────────┘
+//! ```
+//!
+//! Time is `t_k = k·h`, never accumulated. Two readings of the paper's
+//! "fourth-order Runge–Kutta with a 0.01 s interval" (SPEC §7):
+//!
+//! - [`Mode::Continuous`]: the law is evaluated inside every RK4 stage and
+//!   the plant state, the actuator state and the controller state are
+//!   integrated together;
+//! - [`Mode::Sampled`]: at `t_k` the core's
+//!   [`SampledController`](ehservo_core::sampled::SampledController) — the
+//!   same loop a board runs, with its valve range and fault policy — computes
+//!   `u` and advances the controller state once by forward Euler; `u` is
+//!   held over `[t_k, t_k + h)` (zero-order hold) while the plant and the
+//!   actuator are integrated by `substeps` RK4 steps of `h/substeps`.
+//!
+//! The parameter variation is drawn at the start of each (sub)step and held
+//! over it. [`Simulation::step`] produces one sample and advances to the
+//! next; [`Simulation::run_until`] and [`Simulation::run`] repeat it. A run
+//! stops at its horizon, or early — as a result, never as NaN — when the
+//! state stops being finite, |θ| exceeds `theta_limit`, or the controller
+//! faults (a non-finite command or state update) ([`Stop`]). Nothing here
+//! does I/O.
+
+use crate::actuator::Actuator;
+use crate::plant::{Plant, UncertaintySignal, UncertaintySpec, Variation};
+use crate::sensor::Sensor;
+use ehservo_core::control::{flags, Controller, Measurement, Output, Signal, Signals, Truth};
+use ehservo_core::error::ParamError;
+use ehservo_core::math::DR;
+use ehservo_core::reference::Reference;
+use ehservo_core::rk4::{rk4_step, rk4_step_with_k1, OdeState};
+use ehservo_core::sampled::{FaultPolicy, SampledController};
+use serde::{Deserialize, Serialize};
+
+/// How the controller is coupled to the integrator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// Law inside every RK4 stage; controller state integrated with the plant.
+    Continuous,
+    /// Zero-order hold at the sample period; controller state by forward Euler.
+    Sampled,
+}
+
+impl Mode {
+    /// The scenario spelling.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Mode::Continuous => "continuous",
+            Mode::Sampled => "sampled",
+        }
+    }
+}
+
+/// The loop's settings (validated by the scenario loader).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimConfig {
+    /// Number of steps N; the horizon is `N·step`.
+    pub steps: u64,
+    /// Step h (s): the sample period in sampled mode.
+    pub step: f64,
+    /// Coupling of controller and integrator.
+    pub mode: Mode,
+    /// RK4 sub-steps of the plant per sample (sampled mode).
+    pub substeps: u32,
+    /// Divergence bound on |θ| (rad).
+    pub theta_limit: f64,
+    /// Initial x = (θ, θ̇, θ̈).
+    pub x0: [f64; 3],
+}
+
+/// Most parts a controller may log per sample.
+pub const MAX_PARTS: usize = 32;
+
+/// One logged sample at `t_k`: the true plant, the command, and the
+/// controller's parts as named signals.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Sample index k.
+    pub k: u64,
+    /// t_k (s).
+    pub t: f64,
+    /// z = (θd, θ̇d, θ̈d, θ⃛d).
+    pub z: [f64; 4],
+    /// The true x = (θ, θ̇, θ̈).
+    pub x: [f64; 3],
+    /// The controller's command u (V).
+    pub u: f64,
+    /// What the plant receives after the actuator (V).
+    pub u_plant: f64,
+    /// Tracking error e = θd − θ (rad).
+    pub e: f64,
+    /// The law's flags ([`ehservo_core::control::flags`]).
+    pub flags: u8,
+    /// The controller's signals, in the order of `values`.
+    pub signals: &'static [Signal],
+    /// Their values (the first `signals.len()`).
+    pub values: [f64; MAX_PARTS],
+}
+
+impl Default for Sample {
+    fn default() -> Self {
+        Self {
+            k: 0,
+            t: 0.0,
+            z: [0.0; 4],
+            x: [0.0; 3],
+            u: 0.0,
+            u_plant: 0.0,
+            e: 0.0,
+            flags: 0,
+            signals: &[],
+            values: [0.0; MAX_PARTS],
+        }
+    }
+}
+
+impl Sample {
+    /// θd in degrees.
+    pub fn theta_d_deg(&self) -> f64 {
+        self.z[0] / DR
+    }
+    /// θ in degrees.
+    pub fn theta_deg(&self) -> f64 {
+        self.x[0] / DR
+    }
+    /// e in degrees.
+    pub fn e_deg(&self) -> f64 {
+        self.e / DR
+    }
+    /// The index of signal `key` among this sample's signals.
+    pub fn index_of(&self, key: &str) -> Option<usize> {
+        self.signals.iter().position(|s| s.key == key)
+    }
+    /// A controller signal by key (`"sigma"`, `"wphi"`, `"p"`).
+    pub fn get(&self, key: &str) -> Option<f64> {
+        self.index_of(key).map(|i| self.values[i])
+    }
+    /// A controller signal by key, 0 when this controller has none.
+    pub fn part(&self, key: &str) -> f64 {
+        self.get(key).unwrap_or(0.0)
+    }
+    fn is_finite(&self) -> bool {
+        self.values[..self.signals.len()]
+            .iter()
+            .chain(self.x.iter())
+            .chain(self.z.iter())
+            .chain([self.u, self.u_plant, self.e].iter())
+            .all(|v| v.is_finite())
+    }
+}
+
+/// Why a run stopped before its horizon.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DivergenceReason {
+    /// A plant or controller state became NaN or infinite.
+    NonFiniteState,
+    /// |θ| exceeded the limit.
+    ThetaLimit,
+    /// The law returned a non-finite u, or a non-finite part of its law
+    /// (σ, ‖E‖, WᵀΦ, …) that would have been logged.
+    NonFiniteControl,
+}
+
+impl DivergenceReason {
+    /// A short human sentence.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            DivergenceReason::NonFiniteState => "the state became non-finite",
+            DivergenceReason::ThetaLimit => "|θ| exceeded the divergence limit",
+            DivergenceReason::NonFiniteControl => {
+                "the control law returned a non-finite value (u or one of its parts)"
+            }
+        }
+    }
+}
+
+/// The end of a diverged run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Divergence {
+    /// When (s).
+    pub t: f64,
+    /// Why.
+    pub reason: DivergenceReason,
+}
+
+/// Why a simulation stopped.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stop {
+    /// The last sample, at the horizon, was produced.
+    Horizon,
+    /// The run diverged, or the controller faulted (a non-finite command
+    /// or state update), at the time and for the reason given.
+    Diverged(Divergence),
+}
+
+/// What the loop reports besides the samples it logged.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Outcome {
+    /// Samples produced.
+    pub samples: u64,
+    /// Set when the run ended early.
+    pub diverged: Option<Divergence>,
+    /// Samples at which the valve root of (2) was clamped in the law.
+    pub valve_root_clamped: u64,
+    /// Samples at which ‖E‖ = 0 was guarded.
+    pub zero_error_norm: u64,
+    /// Samples at which the command exceeded the valve range (clamped by
+    /// the sampled loop or saturated by the actuator).
+    pub saturated: u64,
+    /// Samples at which the sampled loop refused a measurement and
+    /// commanded its safe value.
+    pub measurement_faults: u64,
+}
+
+/// The plant and actuator states, integrated together.
+#[derive(Debug, Clone, Copy)]
+struct PlantAct<S: OdeState> {
+    x: S,
+    a: [f64; 1],
+}
+
+impl<S: OdeState> OdeState for PlantAct<S> {
+    #[inline]
+    fn zero() -> Self {
+        Self {
+            x: S::zero(),
+            a: [0.0],
+        }
+    }
+    #[inline]
+    fn axpy(&mut self, a: f64, o: &Self) {
+        self.x.axpy(a, &o.x);
+        self.a.axpy(a, &o.a);
+    }
+    #[inline]
+    fn all_finite(&self) -> bool {
+        self.x.all_finite() && self.a[0].is_finite()
+    }
+}
+
+/// Plant, actuator and controller state integrated together (continuous mode).
+#[derive(Debug, Clone, Copy)]
+struct Augmented<S: OdeState, X: OdeState> {
+    pa: PlantAct<S>,
+    xi: X,
+}
+
+impl<S: OdeState, X: OdeState> OdeState for Augmented<S, X> {
+    #[inline]
+    fn zero() -> Self {
+        Self {
+            pa: PlantAct::zero(),
+            xi: X::zero(),
+        }
+    }
+    #[inline]
+    fn axpy(&mut self, a: f64, o: &Self) {
+        self.pa.axpy(a, &o.pa);
+        self.xi.axpy(a, &o.xi);
+    }
+    #[inline]
+    fn all_finite(&self) -> bool {
+        self.pa.all_finite() && self.xi.all_finite()
+    }
+}
+
+/// What the loop knows of the true plant at a sample.
+struct TruthAt<'a, P: Plant> {
+    plant: &'a P,
+    x: [f64; 3],
+    var: Variation,
+}
+
+impl<P: Plant> Truth for TruthAt<'_, P> {
+    fn lumped_uncertainty(&self, u: f64, u_eq: f64, b_bar: f64) -> f64 {
+        self.plant
+            .lumped_uncertainty(&self.x, u, u_eq, b_bar, &self.var)
+    }
+}
+
+/// Everything a simulation is built from besides its plant, controller and
+/// reference.
+#[derive(Debug, Clone, Copy)]
+pub struct Stages {
+    /// The true parameter variation.
+    pub uncertainty: UncertaintySpec,
+    /// Between controller and plant.
+    pub actuator: Actuator,
+    /// Between plant and controller.
+    pub sensor: Sensor,
+    /// The sampled loop's fault policy and valve range (sampled mode).
+    pub policy: FaultPolicy,
+}
+
+/// A closed loop that can be stepped, run to a time, and resumed.
+#[derive(Debug, Clone)]
+pub struct Simulation<P: Plant, C: Controller, R: Reference> {
+    plant: P,
+    reference: R,
+    unc: UncertaintySignal,
+    actuator: Actuator,
+    sensor: Sensor,
+    cfg: SimConfig,
+    ctrl: SampledController<C>,
+    y: Augmented<P::State, C::State>,
+    per_hold: Option<u64>,
+    k: u64,
+    stop: Option<Stop>,
+    outcome: Outcome,
+}
+
+impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
+    /// A simulation at t = 0 with x(0) = `cfg.x0` and the controller's
+    /// initial state. Fails when the sample period or the policy is invalid.
+    pub fn new(
+        plant: P,
+        ctrl: C,
+        reference: R,
+        stages: Stages,
+        cfg: SimConfig,
+    ) -> Result<Self, ParamError> {
+        assert!(
+            C::Parts::SIGNALS.len() <= MAX_PARTS,
+            "a controller logs at most {MAX_PARTS} parts"
+        );
+        let xi = ctrl.initial_state();
+        let ctrl = SampledController::with_policy(ctrl, cfg.step, stages.policy)?;
+        let unc = UncertaintySignal::new(stages.uncertainty, plant.nominal().coeffs.as_array());
+        let per_hold = unc.steps_per_hold(Self::hs(&cfg));
+        Ok(Self {
+            y: Augmented {
+                pa: PlantAct {
+                    x: plant.initial_state(cfg.x0),
+                    a: stages.actuator.initial_state(),
+                },
+                xi,
+            },
+            plant,
+            reference,
+            unc,
+            actuator: stages.actuator,
+            sensor: stages.sensor,
+            cfg,
+            ctrl,
+            per_hold,
+            k: 0,
+            stop: None,
+            outcome: Outcome::default(),
+        })
+    }
+
+    /// The step of the variation's clock: the RK4 sub-step in sampled mode.
+    fn hs(cfg: &SimConfig) -> f64 {
+        match cfg.mode {
+            Mode::Sampled => cfg.step / cfg.substeps.max(1) as f64,
+            Mode::Continuous => cfg.step,
+        }
+    }
+
+    /// The time of the next sample (s).
+    pub fn time(&self) -> f64 {
+        self.k as f64 * self.cfg.step
+    }
+
+    /// Why the run stopped, once it has.
+    pub fn stopped(&self) -> Option<Stop> {
+        self.stop
+    }
+
+    /// The counts so far.
+    pub fn outcome(&self) -> Outcome {
+        self.outcome
+    }
+
+    /// The controller.
+    pub fn controller(&self) -> &C {
+        self.ctrl.controller()
+    }
+
+    /// The controller state (the one the next sample's law will see).
+    pub fn controller_state(&self) -> &C::State {
+        match self.cfg.mode {
+            Mode::Sampled => self.ctrl.state(),
+            Mode::Continuous => &self.y.xi,
+        }
+    }
+
+    fn diverge(&mut self, t: f64, reason: DivergenceReason) -> Option<Sample> {
+        let d = Divergence { t, reason };
+        self.outcome.diverged = Some(d);
+        self.stop = Some(Stop::Diverged(d));
+        None
+    }
+
+    /// Produces the sample at `t_k` and advances to `t_{k+1}`; `None` once
+    /// the run has stopped (see [`Simulation::stopped`]).
+    pub fn step(&mut self) -> Option<Sample> {
+        if self.stop.is_some() {
+            return None;
+        }
+        let h = self.cfg.step;
+        let k = self.k;
+        let t = k as f64 * h;
+        let m = self.cfg.substeps.max(1) as u64;
+        let (j0, hs) = match self.cfg.mode {
+            Mode::Sampled => (k * m, h / m as f64),
+            Mode::Continuous => (k, h),
+        };
+        let var = self.unc.at_step(j0, hs, self.per_hold);
+        let x = self.plant.measure(&self.y.pa.x);
+        let xm = self.sensor.measure(x);
+        let z = self.reference.z(t);
+        let truth = TruthAt {
+            plant: &self.plant,
+            x,
+            var,
+        };
+        let mut dy = Augmented::<P::State, C::State>::zero();
+        let out: Output<C::Parts> = match self.cfg.mode {
+            Mode::Sampled => self
+                .ctrl
+                .step_with(t, xm, z, |c, s, o| c.annotate(s, o, &truth)),
+            Mode::Continuous => {
+                let c = self.ctrl.controller();
+                let mut o = c.law(&Measurement { t, x: xm, z }, &self.y.xi, &mut dy.xi);
+                if o.u.is_finite() {
+                    c.annotate(&self.y.xi, &mut o, &truth);
+                }
+                o
+            }
+        };
+        if out.flags & flags::VALVE_ROOT_CLAMPED != 0 {
+            self.outcome.valve_root_clamped += 1;
+        }
+        if out.flags & flags::ZERO_ERROR_NORM != 0 {
+            self.outcome.zero_error_norm += 1;
+        }
+        if out.flags & flags::MEASUREMENT_FAULT != 0 {
+            self.outcome.measurement_faults += 1;
+        }
+        if out.flags & flags::NON_FINITE_STATE != 0 {
+            return self.diverge(t, DivergenceReason::NonFiniteState);
+        }
+        if out.flags & flags::NON_FINITE_CONTROL != 0 || !out.u.is_finite() {
+            return self.diverge(t, DivergenceReason::NonFiniteControl);
+        }
+        let u = out.u;
+        if out.flags & flags::SATURATED != 0 || u.abs() > self.actuator.limit() {
+            self.outcome.saturated += 1;
+        }
+        let mut sample = Sample {
+            k,
+            t,
+            z,
+            x,
+            u,
+            u_plant: self.actuator.output(&self.y.pa.a, u),
+            e: z[0] - x[0],
+            flags: out.flags,
+            signals: C::Parts::SIGNALS,
+            values: [0.0; MAX_PARTS],
+        };
+        out.parts.write(&mut sample.values);
+        // Every logged signal must be finite (a finite u can still come with
+        // an overflowing ‖E‖ or σ): otherwise the run ends here, as a result.
+        if !sample.is_finite() {
+            return self.diverge(t, DivergenceReason::NonFiniteControl);
+        }
+        self.outcome.samples += 1;
+        if k == self.cfg.steps {
+            self.stop = Some(Stop::Horizon);
+            return Some(sample);
+        }
+
+        let (plant, act) = (&self.plant, &self.actuator);
+        match self.cfg.mode {
+            Mode::Sampled => {
+                for j in 0..m {
+                    let ts = t + j as f64 * hs;
+                    let v = if j == 0 {
+                        var
+                    } else {
+                        self.unc.at_step(j0 + j, hs, self.per_hold)
+                    };
+                    rk4_step(
+                        |tt, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+                            plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
+                            act.deriv(&s.a, u, &mut ds.a);
+                        },
+                        ts,
+                        &mut self.y.pa,
+                        hs,
+                    );
+                }
+            }
+            Mode::Continuous => {
+                plant.deriv(t, &self.y.pa.x, sample.u_plant, &var, &mut dy.pa.x);
+                act.deriv(&self.y.pa.a, u, &mut dy.pa.a);
+                let (c, sensor, reference) =
+                    (self.ctrl.controller(), &self.sensor, &self.reference);
+                let f = |tt: f64,
+                         s: &Augmented<P::State, C::State>,
+                         ds: &mut Augmented<P::State, C::State>| {
+                    let xs = sensor.measure(plant.measure(&s.pa.x));
+                    let meas = Measurement {
+                        t: tt,
+                        x: xs,
+                        z: reference.z(tt),
+                    };
+                    let o = c.law(&meas, &s.xi, &mut ds.xi);
+                    plant.deriv(tt, &s.pa.x, act.output(&s.pa.a, o.u), &var, &mut ds.pa.x);
+                    act.deriv(&s.pa.a, o.u, &mut ds.pa.a);
+                };
+                rk4_step_with_k1(f, t, &mut self.y, &dy, h);
+            }
+        }
+        self.k += 1;
+        let t_next = self.k as f64 * h;
+        if !self.y.all_finite() {
+            self.diverge(t_next, DivergenceReason::NonFiniteState);
+            return Some(sample);
+        }
+        if self.plant.measure(&self.y.pa.x)[0].abs() > self.cfg.theta_limit {
+            self.diverge(t_next, DivergenceReason::ThetaLimit);
+        }
+        Some(sample)
+    }
+
+    /// Steps until the next sample would be later than `t_end` (s) or the
+    /// run stops, handing each sample to `observe`. Returns the stop reason
+    /// if the run has stopped.
+    pub fn run_until(&mut self, t_end: f64, observe: &mut dyn FnMut(&Sample)) -> Option<Stop> {
+        let tol = 1e-9 * self.cfg.step;
+        while self.stop.is_none() && self.time() <= t_end + tol {
+            if let Some(s) = self.step() {
+                observe(&s);
+            }
+        }
+        self.stop
+    }
+
+    /// Runs to the horizon (or the earlier stop), handing each sample to
+    /// `observe`.
+    pub fn run(&mut self, observe: &mut dyn FnMut(&Sample)) -> Outcome {
+        while self.stop.is_none() {
+            if let Some(s) = self.step() {
+                observe(&s);
+            }
+        }
+        self.outcome
+    }
+}

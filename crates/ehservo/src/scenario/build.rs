@@ -1,0 +1,323 @@
+//! From a scenario to what a simulation is made of, checked once: the
+//! nominal model, the surface, the controller's design context, the stages
+//! around the plant, the loop's settings and the reference. Validation *is*
+//! this construction: a scenario is valid exactly when [`Setup::new`]
+//! succeeds, so no key is checked in one place and used unchecked in another.
+
+use super::{ControllerCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS};
+use ehservo_core::control::Design;
+use ehservo_core::error::ParamError;
+use ehservo_core::reference::Sine;
+use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
+use ehservo_core::servo::{Friction, Load, NominalModel, ServoParams};
+use ehservo_core::surface::SwitchingSurface;
+use ehservo_sim::actuator::Actuator;
+use ehservo_sim::plant::UncertaintySpec;
+use ehservo_sim::sensor::Sensor;
+use ehservo_sim::simulation::{SimConfig, Stages};
+
+/// A validated scenario, built.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// Which true plant.
+    pub plant: PlantModel,
+    /// The nominal model (physical parameters and load).
+    pub model: NominalModel,
+    /// What the controller is designed from.
+    pub design: Design,
+    /// The controller kind and its parameters.
+    pub controller: ControllerCfg,
+    /// Variation, actuator, sensor, fault policy.
+    pub stages: Stages,
+    /// The loop's settings.
+    pub sim: SimConfig,
+    /// The desired trajectory.
+    pub reference: Sine,
+    /// End of the transient for the metrics (s).
+    pub settle: f64,
+    /// Horizon (s).
+    pub horizon: f64,
+    /// Period of the reference (s).
+    pub period: f64,
+}
+
+/// A core parameter error as a key path under `prefix` and a reason.
+pub(crate) fn param_err(prefix: &str, e: ParamError) -> (String, String) {
+    let reason = if e.value.is_nan() {
+        e.reason.to_string()
+    } else {
+        format!("{} (got {})", e.reason, e.value)
+    };
+    (format!("{prefix}.{}", e.name), reason)
+}
+
+impl Setup {
+    /// Checks every key of `s` and builds. The error is the key path and
+    /// the reason of the first failure.
+    pub fn new(s: &Scenario) -> Result<Setup, (String, String)> {
+        let sim = &s.simulation;
+        let bad = |k: &str, r: String| Err((k.to_string(), r));
+        if !(sim.step.is_finite() && sim.step > 0.0) {
+            return bad(
+                "simulation.step",
+                format!("must be finite and > 0 (got {})", sim.step),
+            );
+        }
+        if !(sim.horizon.is_finite() && sim.horizon > 0.0) {
+            return bad(
+                "simulation.horizon",
+                format!("must be finite and > 0 (got {})", sim.horizon),
+            );
+        }
+        let n = sim.horizon / sim.step;
+        if n > MAX_STEPS as f64 {
+            return bad(
+                "simulation.step",
+                format!("horizon/step = {n:.3e} steps exceeds the limit of {MAX_STEPS}"),
+            );
+        }
+        if (n - n.round()).abs() > 1e-6 * n.max(1.0) || n.round() < 1.0 {
+            return bad(
+                "simulation.horizon",
+                format!(
+                    "must be a whole number of steps: {} / {} = {n}",
+                    sim.horizon, sim.step
+                ),
+            );
+        }
+        if sim.substeps == 0 || sim.substeps > 10_000 {
+            return bad(
+                "simulation.substeps",
+                format!("must be in 1..=10000 (got {})", sim.substeps),
+            );
+        }
+        // settle ≥ horizon is allowed: the windowed metrics are then absent.
+        if !(sim.settle.is_finite() && sim.settle >= 0.0) {
+            return bad(
+                "simulation.settle",
+                format!("must be finite and >= 0 (got {})", sim.settle),
+            );
+        }
+        if !(sim.theta_limit.is_finite() && sim.theta_limit > 0.0) {
+            return bad(
+                "simulation.theta_limit",
+                format!("must be finite and > 0 (got {})", sim.theta_limit),
+            );
+        }
+        if let Some(v) = sim.x0.iter().find(|v| !v.is_finite()) {
+            return bad("simulation.x0", format!("must be finite (got {v})"));
+        }
+        if sim.x0[0].abs() > sim.theta_limit {
+            return bad(
+                "simulation.x0",
+                "θ(0) is beyond simulation.theta_limit".into(),
+            );
+        }
+
+        s.plant
+            .params
+            .to_servo()
+            .validate()
+            .map_err(|e| param_err("plant.params", e))?;
+        s.load_model().validate().map_err(|e| {
+            let prefix = if matches!(e.name, "amplitude" | "wavenumber") {
+                "load"
+            } else {
+                "load.friction"
+            };
+            param_err(prefix, e)
+        })?;
+
+        let u = &s.uncertainty;
+        for (k, v) in [
+            ("uncertainty.a_bias", u.a_bias),
+            ("uncertainty.a_random", u.a_random),
+            ("uncertainty.b_bias", u.b_bias),
+            ("uncertainty.b_random", u.b_random),
+        ] {
+            if !v.is_finite() {
+                return bad(k, format!("must be finite (got {v})"));
+            }
+        }
+        if !(u.hold.is_finite() && u.hold > 0.0) {
+            return bad(
+                "uncertainty.hold",
+                format!("must be finite and > 0 (got {})", u.hold),
+            );
+        }
+        if !(u.b_reference.is_finite() && u.b_reference > 0.0) {
+            return bad(
+                "uncertainty.b_reference",
+                format!("must be finite and > 0 (got {})", u.b_reference),
+            );
+        }
+        // The true b must stay positive: 1 + b_ref·(b_bias ± b_random) > 0.
+        if 1.0 + u.b_reference * (u.b_bias - u.b_random.abs()) <= 0.0 {
+            return bad(
+                "uncertainty.b_bias",
+                "the true b = b̄·(1 + b_reference·(b_bias + b_random·r)) must stay > 0 (Assumption A1)"
+                    .into(),
+            );
+        }
+
+        let r = &s.reference;
+        if !(r.amplitude_deg.is_finite() && r.amplitude_deg >= 0.0) {
+            return bad(
+                "reference.amplitude_deg",
+                format!("must be finite and >= 0 (got {})", r.amplitude_deg),
+            );
+        }
+        if r.amplitude_deg.to_radians() >= sim.theta_limit {
+            return bad(
+                "reference.amplitude_deg",
+                "the reference reaches simulation.theta_limit: every run would count as diverged"
+                    .into(),
+            );
+        }
+        if !(r.frequency_hz.is_finite() && r.frequency_hz > 0.0) {
+            return bad(
+                "reference.frequency_hz",
+                format!("must be finite and > 0 (got {})", r.frequency_hz),
+            );
+        }
+
+        let surface = s.surface()?;
+        if !s.controller.uses_surface() && s.surface != Default::default() {
+            return bad(
+                "surface",
+                format!(
+                    "controller kind `{}` does not use a switching surface: remove [surface]",
+                    s.controller.kind()
+                ),
+            );
+        }
+        if s.output.decimate == 0 {
+            return bad("output.decimate", "must be >= 1".into());
+        }
+        let actuator = Actuator::try_new(&s.actuator).map_err(|e| param_err("actuator", e))?;
+        let sensor = Sensor::try_new(&s.sensor).map_err(|e| param_err("sensor", e))?;
+        let policy = FaultPolicy {
+            safe: match s.fault.safe_command {
+                SafeCommandCfg::HoldLast => SafeCommand::HoldLast,
+                SafeCommandCfg::Zero => SafeCommand::Zero,
+            },
+            limits: Limits {
+                x: s.fault.measurement_limit.unwrap_or([f64::INFINITY; 3]),
+                u: actuator.limit(),
+            },
+        };
+        policy.validate().map_err(|e| {
+            let (_, r) = param_err("fault", e);
+            ("fault.measurement_limit".to_string(), r)
+        })?;
+        let model = NominalModel::new(s.servo(), s.load_model());
+        let sim_cfg = s.sim_config();
+        let design = Design {
+            model,
+            surface,
+            dt: sim_cfg.step,
+        };
+        s.controller.visit(Check(&design))?;
+        Ok(Setup {
+            plant: s.plant.model,
+            model,
+            design,
+            controller: s.controller.clone(),
+            stages: Stages {
+                uncertainty: s.uncertainty_spec(),
+                actuator,
+                sensor,
+                policy,
+            },
+            sim: sim_cfg,
+            reference: s.reference(),
+            settle: s.simulation.settle,
+            horizon: s.simulation.horizon,
+            period: 1.0 / s.reference.frequency_hz,
+        })
+    }
+}
+
+/// Builds the controller once to check its parameters.
+struct Check<'a>(&'a Design);
+
+impl super::Visit for Check<'_> {
+    type Out = Result<(), (String, String)>;
+    fn visit<K: super::ControllerConfig>(self, cfg: &K) -> Self::Out {
+        cfg.build(self.0)
+            .map(|_| ())
+            .map_err(|e| param_err("controller", e))
+    }
+}
+
+impl Scenario {
+    /// The physical parameters.
+    pub fn servo(&self) -> ServoParams {
+        self.plant.params.to_servo()
+    }
+
+    /// The switching surface from `poles` or `p` (the paper's by default).
+    pub fn surface(&self) -> Result<SwitchingSurface, (String, String)> {
+        match (self.surface.poles, self.surface.p) {
+            (Some(_), Some(_)) => Err((
+                "surface".into(),
+                "give either `poles` or `p`, not both".into(),
+            )),
+            (Some(poles), None) => {
+                SwitchingSurface::from_poles(poles).map_err(|e| param_err("surface", e))
+            }
+            (None, Some(p)) => SwitchingSurface::try_new(p).map_err(|e| {
+                let (_, r) = param_err("surface", e);
+                ("surface.p".into(), r)
+            }),
+            (None, None) => Ok(SwitchingSurface::paper()),
+        }
+    }
+
+    /// The load model.
+    pub fn load_model(&self) -> Load {
+        Load {
+            amplitude: self.load.amplitude,
+            wavenumber: self.load.wavenumber,
+            friction: self.load.friction.map(|f| Friction {
+                coulomb: f.coulomb,
+                stiction: f.stiction,
+                stribeck_velocity: f.stribeck_velocity,
+                viscous: f.viscous,
+                smoothing: f.smoothing,
+            }),
+        }
+    }
+
+    /// The reference.
+    pub fn reference(&self) -> Sine {
+        Sine::from_deg_hz(self.reference.amplitude_deg, self.reference.frequency_hz)
+    }
+
+    /// The true variation.
+    pub fn uncertainty_spec(&self) -> UncertaintySpec {
+        let u = &self.uncertainty;
+        UncertaintySpec {
+            a_bias: u.a_bias,
+            a_random: u.a_random,
+            b_bias: u.b_bias,
+            b_random: u.b_random,
+            b_reference: u.b_reference,
+            seed: u.seed,
+            hold: u.hold,
+        }
+    }
+
+    /// The loop's settings.
+    pub fn sim_config(&self) -> SimConfig {
+        let s = &self.simulation;
+        SimConfig {
+            steps: (s.horizon / s.step).round() as u64,
+            step: s.step,
+            mode: s.mode,
+            substeps: s.substeps,
+            theta_limit: s.theta_limit,
+            x0: s.x0,
+        }
+    }
+}
