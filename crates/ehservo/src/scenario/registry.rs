@@ -138,6 +138,7 @@ registry! {
     Nnvsc => NnVscConfig,
     Vsc => VscConfig,
     VscSat => VscSatConfig,
+    Pid => ehservo_core::control::pid::PidConfig,
 }
 
 impl Default for ControllerCfg {

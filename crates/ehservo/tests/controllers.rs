@@ -1,0 +1,71 @@
+//! Controller kinds beyond the paper's, through the registry: each runs
+//! from a scenario file with `controller.kind` alone, logs its own parts,
+//! and refuses keys that are not its parameters.
+
+use ehservo::run::{run, Keep};
+use ehservo::scenario::Scenario;
+
+fn scenario(text: &str, set: &[&str]) -> Result<Scenario, ehservo::scenario::ScenarioError> {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    Scenario::parse_with(text, "<test>", &set)
+}
+
+/// `kind = "pid"` alone, with its gains designed from the nominal model,
+/// tracks the Fig. 2 case (100 % a bias, Δb = 0.5β, Tl = 2 sin 4θ): bounded,
+/// and e_max after the transient below 10 % of the 5° amplitude, the
+/// tracking threshold these tests use for "tracks" (the NNBVSC reaches
+/// 0.21° there, the designed PID about 0.3°).
+#[test]
+fn pid_alone_tracks_the_fig2_case_in_both_modes() {
+    for mode in [
+        vec!["controller.kind=pid"],
+        vec![
+            "controller.kind=pid",
+            "simulation.mode=continuous",
+            "simulation.step=0.001",
+        ],
+    ] {
+        let s = scenario("", &mode).unwrap();
+        let r = run(&s, Keep::Every(1)).unwrap();
+        assert!(r.outcome.diverged.is_none(), "{mode:?}");
+        let e = r.metrics.e_max_deg.unwrap();
+        assert!(e < 0.5, "{mode:?}: e_max {e}°");
+        // Its own parts, named: u = ff + p + i + d without a limit.
+        let smp = &r.trace[500];
+        let sum = ["ff", "p", "i", "d"].iter().map(|k| smp.part(k)).sum::<f64>();
+        assert!((sum - smp.u).abs() < 1e-12 * smp.u.abs().max(1.0));
+        assert!(smp.get("sigma").is_none(), "a PID has no σ");
+    }
+}
+
+/// The output limit saturates the command and back-calculation keeps the
+/// integral from winding up: with ±0.3 V (the Fig. 2 PID needs about
+/// 0.7 V) u stays within the limit, and the integral term's peak is less
+/// than half of what it reaches with the back-calculation switched off
+/// (a tracking time of 10⁶ s).
+#[test]
+fn pid_output_limit_and_anti_windup() {
+    let i_max = |tt: Option<&str>| {
+        let mut set = vec!["controller.kind=pid", "controller.u_limit=0.3"];
+        set.extend(tt);
+        let r = run(&scenario("", &set).unwrap(), Keep::Every(1)).unwrap();
+        assert!(r.trace.iter().all(|x| x.u.abs() <= 0.3));
+        r.trace.iter().map(|x| x.part("i").abs()).fold(0.0, f64::max)
+    };
+    let (with, without) = (i_max(None), i_max(Some("controller.tracking_time=1e6")));
+    assert!(with < 0.5 * without, "integral peaks {with} V vs {without} V");
+}
+
+#[test]
+fn keys_of_another_kind_are_refused_with_their_position() {
+    let e = scenario("[controller]\nkind = \"pid\"\ngamma1 = 100\n", &[]).unwrap_err();
+    assert_eq!(e.key, "controller.gamma1");
+    assert_eq!(e.line_col.map(|l| l.0), Some(3));
+    assert!(e.reason.contains("unknown field"), "{e}");
+    let e = scenario("[controller]\nkind = \"pid\"\nkp = -1\n", &[]).unwrap_err();
+    assert_eq!(e.key, "controller.kp");
+    assert!(e.reason.contains(">= 0"), "{e}");
+    let e = scenario("[controller]\nkind = \"lqr\"\n", &[]).unwrap_err();
+    assert_eq!(e.key, "controller.kind");
+    assert!(e.reason.contains("pid"), "{e}");
+}
