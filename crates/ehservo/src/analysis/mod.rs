@@ -223,8 +223,13 @@ fn theorem2(s: &Scenario, pm: &Matrix3<f64>, sp: [Pole; 3], surface: [f64; 3]) -
                 fmt_sig(bound, 3)
             ),
         },
-        _ => format!(
+        _ if paper_law(s).is_some() => format!(
             "not applicable: the traditional VSC has no α (Theorem 2 would admit 0 < α < {})",
+            fmt_sig(bound, 3)
+        ),
+        _ => format!(
+            "not applicable: controller kind `{}` has no switching surface (for the [surface] shown, Theorem 2 would admit 0 < α < {})",
+            s.controller.kind(),
             fmt_sig(bound, 3)
         ),
     };
