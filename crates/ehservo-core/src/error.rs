@@ -36,8 +36,9 @@ impl fmt::Display for ParamError {
     }
 }
 
-#[cfg(feature = "std")]
-impl std::error::Error for ParamError {}
+/// `core::error::Error`, so `?` converts it to `Box<dyn Error>` with or
+/// without `std`.
+impl core::error::Error for ParamError {}
 
 /// `Ok(v)` when `v` is finite and `> 0`, else an error naming `name`.
 pub(crate) fn positive(name: &'static str, v: f64) -> Result<f64, ParamError> {

@@ -128,9 +128,16 @@ impl UncertaintySignal {
     /// The variation over the `j`-th (sub)step of `hs` seconds (it starts
     /// at `j·hs`), with `per_hold = steps_per_hold(hs)`.
     pub fn at_step(&mut self, j: u64, hs: f64, per_hold: Option<u64>) -> Variation {
+        let i = self.interval(j, hs, per_hold);
+        self.at_interval(i)
+    }
+
+    /// The hold interval of the `j`-th (sub)step of `hs` seconds: `j / n`
+    /// in integers when a hold is `n` (sub)steps, else from the time.
+    pub fn interval(&self, j: u64, hs: f64, per_hold: Option<u64>) -> u64 {
         match per_hold {
-            Some(n) => self.at_interval(j / n),
-            None => self.at(j as f64 * hs),
+            Some(n) => j / n,
+            None => ((j as f64 * hs) / self.spec.hold + 1e-9).floor().max(0.0) as u64,
         }
     }
 
@@ -329,6 +336,28 @@ mod tests {
         let mean = vals.iter().sum::<f64>() / 200.0;
         assert!(mean.abs() < 0.15, "mean {mean}");
         assert!(vals.windows(2).any(|w| w[0] != w[1]));
+    }
+
+    /// The hold interval of a (sub)step is exact however long the run: with
+    /// h = 0.01/7 s, sub-step 699 999 958 = 7·99 999 994 starts interval
+    /// 99 999 994, which the time-based formula misses by one
+    /// (699 999 958·h/0.01 rounds just below the integer, by more than the
+    /// 1e-9 guard).
+    #[test]
+    fn hold_intervals_by_integer_index() {
+        let s = UncertaintySignal::new(UncertaintySpec::NONE, [1.0; 3]);
+        let hs = 0.01 / 7.0;
+        let n = s.steps_per_hold(hs);
+        assert_eq!(n, Some(7));
+        let j = 699_999_958;
+        assert_eq!(s.interval(j, hs, n), 99_999_994);
+        assert_eq!(s.interval(j - 1, hs, n), 99_999_993);
+        assert_eq!(s.interval(j, hs, None), 99_999_993, "the float path drifts");
+        assert_eq!(
+            s.steps_per_hold(0.003),
+            None,
+            "0.01 s is not a whole number of 3 ms"
+        );
     }
 
     /// The physical model's measured θ̈ and the third-order model's x3 have

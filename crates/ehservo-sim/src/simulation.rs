@@ -560,3 +560,198 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         self.outcome
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // bit-for-bit equality is the point
+mod tests {
+    use super::*;
+    use crate::actuator::ActuatorConfig;
+    use crate::plant::ThirdOrderPlant;
+    use ehservo_core::control::nnvsc::{NnVsc, NnVscParams};
+    use ehservo_core::prelude::{Load, NominalModel, Rbf, ServoParams, Sine, SwitchingSurface};
+
+    fn nn() -> NnVsc {
+        NnVsc::try_new(
+            NominalModel::new(ServoParams::paper(), Load::paper()),
+            SwitchingSurface::paper(),
+            NnVscParams::paper(),
+            Rbf::paper(),
+        )
+        .unwrap()
+    }
+
+    fn stages(actuator: Actuator) -> Stages {
+        Stages {
+            uncertainty: UncertaintySpec {
+                a_bias: 0.5,
+                a_random: 0.5,
+                b_bias: 0.25,
+                b_random: 0.25,
+                seed: 3,
+                ..UncertaintySpec::NONE
+            },
+            actuator,
+            sensor: Sensor::IDENTITY,
+            policy: FaultPolicy::default(),
+        }
+    }
+
+    fn cfg(mode: Mode) -> SimConfig {
+        SimConfig {
+            steps: 300,
+            step: if mode == Mode::Sampled { 0.01 } else { 0.001 },
+            mode,
+            substeps: 3,
+            theta_limit: 1.0,
+            x0: [0.0; 3],
+        }
+    }
+
+    fn sim(mode: Mode, a: Actuator) -> Simulation<ThirdOrderPlant, NnVsc, Sine> {
+        let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+        Simulation::new(plant, nn(), Sine::paper(), stages(a), cfg(mode)).unwrap()
+    }
+
+    /// Stopping at any time and resuming gives the run in one go, bit for bit.
+    #[test]
+    fn run_until_resumes_exactly() {
+        for mode in [Mode::Sampled, Mode::Continuous] {
+            let mut whole = Vec::new();
+            let out = sim(mode, Actuator::IDENTITY).run(&mut |s| whole.push(*s));
+            let mut parts = Vec::new();
+            let mut s = sim(mode, Actuator::IDENTITY);
+            let h = cfg(mode).step;
+            assert_eq!(s.run_until(0.5 * h * 300.0, &mut |x| parts.push(*x)), None);
+            assert_eq!(parts.len(), 151, "samples 0..=150");
+            assert!((s.time() - 151.0 * h).abs() < 1e-12);
+            let one = s.step().unwrap();
+            parts.push(one);
+            assert_eq!(
+                s.run_until(f64::INFINITY, &mut |x| parts.push(*x)),
+                Some(Stop::Horizon)
+            );
+            assert_eq!(s.step(), None, "a stopped simulation stays stopped");
+            assert_eq!(whole, parts, "{mode:?}");
+            assert_eq!(s.outcome(), out);
+            assert_eq!(out.samples, 301);
+        }
+    }
+
+    /// A lag of τ between command and plant: the plant sees the valve
+    /// state, which follows the command with the lag's first-order response,
+    /// integrated with the plant in both modes.
+    #[test]
+    fn actuator_lag_is_integrated_with_the_plant() {
+        let tau = 0.02;
+        let a = Actuator::try_new(&ActuatorConfig {
+            time_constant: Some(tau),
+            ..Default::default()
+        })
+        .unwrap();
+        for mode in [Mode::Sampled, Mode::Continuous] {
+            let mut trace = Vec::new();
+            sim(mode, a).run(&mut |s| trace.push(*s));
+            assert_eq!(trace[0].u_plant, 0.0, "the valve starts at rest");
+            // Over one sample the valve moves toward the command by at most
+            // |u − v|·(1 − e^(−h/τ)) plus what the command itself moved.
+            let h = cfg(mode).step;
+            for w in trace.windows(2) {
+                let dv = (w[1].u_plant - w[0].u_plant).abs();
+                let bound = (w[0].u - w[0].u_plant)
+                    .abs()
+                    .max((w[1].u - w[0].u_plant).abs())
+                    * (1.0 - (-h / tau).exp())
+                    * 1.01
+                    + 1e-12;
+                assert!(dv <= bound, "{mode:?} at t = {}: {dv} > {bound}", w[1].t);
+            }
+            // With a lag the plant sees something other than the command.
+            assert!(trace.iter().any(|s| (s.u - s.u_plant).abs() > 1e-3));
+        }
+        // Without one it sees the command exactly.
+        let mut trace = Vec::new();
+        sim(Mode::Sampled, Actuator::IDENTITY).run(&mut |s| trace.push(*s));
+        assert!(trace.iter().all(|s| s.u.to_bits() == s.u_plant.to_bits()));
+    }
+
+    /// In sampled mode the valve range is the sampled loop's: the command is
+    /// clamped and the clamps are counted.
+    #[test]
+    fn valve_range_clamps_the_sampled_command() {
+        let a = Actuator::try_new(&ActuatorConfig {
+            limit: Some(0.2),
+            ..Default::default()
+        })
+        .unwrap();
+        let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+        let mut st = stages(a);
+        st.policy.limits.u = 0.2;
+        let mut s = Simulation::new(plant, nn(), Sine::paper(), st, cfg(Mode::Sampled)).unwrap();
+        let mut max_u: f64 = 0.0;
+        let out = s.run(&mut |x| max_u = max_u.max(x.u.abs()));
+        assert!(max_u <= 0.2);
+        assert!(out.saturated > 0);
+    }
+
+    /// A plant whose state is not x: θ, θ̇ and a spool position v with
+    /// v̇ = (u − v)/τ driving θ̈ = k·v − c·θ̇. Any dimension fits.
+    #[derive(Debug, Clone, Copy)]
+    struct Spool {
+        model: NominalModel,
+    }
+
+    impl Plant for Spool {
+        type State = [f64; 4];
+        fn initial_state(&self, x0: [f64; 3]) -> [f64; 4] {
+            [x0[0], x0[1], 0.0, 0.0]
+        }
+        fn measure(&self, s: &[f64; 4]) -> [f64; 3] {
+            [s[0], s[1], 50.0 * s[2] - 10.0 * s[1]]
+        }
+        fn deriv(&self, _t: f64, s: &[f64; 4], u: f64, _v: &Variation, ds: &mut [f64; 4]) {
+            ds[0] = s[1];
+            ds[1] = 50.0 * s[2] - 10.0 * s[1];
+            ds[2] = (u - s[2]) / 0.01;
+            ds[3] = 1.0; // a clock, to show every component is integrated
+        }
+        fn nominal(&self) -> &NominalModel {
+            &self.model
+        }
+    }
+
+    #[test]
+    fn a_plant_with_its_own_state_dimension() {
+        let plant = Spool {
+            model: NominalModel::new(ServoParams::paper(), Load::none()),
+        };
+        let pid = ehservo_core::control::pid::PidConfig {
+            kp: Some(20.0),
+            ki: Some(0.0),
+            kd: Some(0.0),
+            feedforward: false,
+            ..Default::default()
+        };
+        let ctrl = ehservo_core::control::Config::build(
+            &pid,
+            &ehservo_core::control::Design {
+                model: plant.model,
+                surface: SwitchingSurface::paper(),
+                dt: 0.001,
+            },
+        )
+        .unwrap();
+        let mut s = Simulation::new(
+            plant,
+            ctrl,
+            Sine::paper(),
+            stages(Actuator::IDENTITY),
+            cfg(Mode::Continuous),
+        )
+        .unwrap();
+        let out = s.run(&mut |_| {});
+        assert!(out.diverged.is_none());
+        assert_eq!(out.samples, 301);
+        // The clock component: 300 steps of 1 ms.
+        assert!((s.y.pa.x[3] - 0.3).abs() < 1e-12);
+    }
+}

@@ -344,7 +344,13 @@ fn print_summary(s: &Scenario, r: &ehservo::run::RunResult, secs: f64) {
         sim.horizon
     );
     match r.outcome.diverged {
-        Some(d) => println!("  UNBOUNDED at t = {:.4} s: {}", d.t, d.reason.describe()),
+        Some(d) => {
+            println!("  UNBOUNDED at t = {:.4} s: {}", d.t, d.reason.describe());
+            // The hint `ehservo analyze` gives: is the scheme itself unstable?
+            if let Some(w) = ehservo::analysis::analyze(s).closed_loop.warning {
+                println!("  hint: {w}");
+            }
+        }
         None => println!("  bounded over the horizon"),
     }
     println!(

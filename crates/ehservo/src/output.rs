@@ -336,54 +336,74 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         title.push_str(&format!(" — unbounded at t = {:.3} s", d.t));
     }
     let time = "t (s)".to_string();
-    let mut d_series = vec![Series::new(
-        "Σ Δa_i x_i − Δb u_eq + d − ξ",
-        t.clone(),
-        col(&|x| x.part("uncertainty")),
-        1,
-    )
-    .dash(Dash::Dashed)];
-    if run.metrics.w_norm_max.is_some() {
-        d_series.push(Series::new("WᵀΦ", t.clone(), col(&|x| x.part("wphi")), 0));
+    let panel = |title: &str, y: &str, series: Vec<Series>| Panel {
+        title: title.into(),
+        x_label: time.clone(),
+        y_label: y.into(),
+        series,
+        log_y: false,
+    };
+    let mut u_series = vec![Series::new("u", t.clone(), col(&|x| x.u), 0)];
+    if !s.actuator.is_identity() {
+        u_series.push(Series::new("valve", t.clone(), col(&|x| x.u_plant), 1).dash(Dash::Dashed));
+    }
+    let mut panels = vec![
+        panel(
+            "(a) θd (dotted) and θ",
+            "angle (deg)",
+            vec![
+                Series::new("θd", t.clone(), col(&|x| x.theta_d_deg()), 1).dash(Dash::Dotted),
+                Series::new("θ", t.clone(), col(&|x| x.theta_deg()), 0),
+            ],
+        ),
+        panel("(b) control input u", "u (V)", u_series),
+    ];
+    let signals = run.trace.first().map(|x| x.signals).unwrap_or(&[]);
+    let has = |key: &str| signals.iter().any(|g| g.key == key);
+    if has("sigma") && has("uncertainty") {
+        // The paper's Fig. 2 panels for the sliding-mode laws.
+        let mut d_series = vec![Series::new(
+            "Σ Δa_i x_i − Δb u_eq + d − ξ",
+            t.clone(),
+            col(&|x| x.part("uncertainty")),
+            1,
+        )
+        .dash(Dash::Dashed)];
+        if run.metrics.w_norm_max.is_some() {
+            d_series.push(Series::new("WᵀΦ", t.clone(), col(&|x| x.part("wphi")), 0));
+        }
+        panels.push(panel(
+            "(c) switching function σ",
+            "σ (rad/s²)",
+            vec![Series::new("", t.clone(), col(&|x| x.part("sigma")), 0)],
+        ));
+        panels.push(panel(
+            "(d) lumped uncertainty (19) and its estimate",
+            "(rad/s³)",
+            d_series,
+        ));
+    } else {
+        // Any other law: the error, and the law's parts in volts.
+        panels.push(panel(
+            "(c) tracking error e",
+            "e (deg)",
+            vec![Series::new("", t.clone(), col(&|x| x.e_deg()), 0)],
+        ));
+        let parts: Vec<Series> = signals
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| g.unit == "V" && !g.column.is_empty())
+            .enumerate()
+            .map(|(n, (i, g))| Series::new(g.key, t.clone(), col(&|x| x.values[i]), n))
+            .collect();
+        panels.push(panel("(d) the parts of the law", "(V)", parts));
     }
     Figure {
         title,
         rows: 2,
         cols: 2,
         size: (1400, 1000),
-        panels: vec![
-            Panel {
-                title: "(a) θd (dotted) and θ".into(),
-                x_label: time.clone(),
-                y_label: "angle (deg)".into(),
-                series: vec![
-                    Series::new("θd", t.clone(), col(&|x| x.theta_d_deg()), 1).dash(Dash::Dotted),
-                    Series::new("θ", t.clone(), col(&|x| x.theta_deg()), 0),
-                ],
-                log_y: false,
-            },
-            Panel {
-                title: "(b) control input u".into(),
-                x_label: time.clone(),
-                y_label: "u (V)".into(),
-                series: vec![Series::new("", t.clone(), col(&|x| x.u), 0)],
-                log_y: false,
-            },
-            Panel {
-                title: "(c) switching function σ".into(),
-                x_label: time.clone(),
-                y_label: "σ (rad/s²)".into(),
-                series: vec![Series::new("", t.clone(), col(&|x| x.part("sigma")), 0)],
-                log_y: false,
-            },
-            Panel {
-                title: "(d) lumped uncertainty (19) and its estimate".into(),
-                x_label: time,
-                y_label: "(rad/s³)".into(),
-                series: d_series,
-                log_y: false,
-            },
-        ],
+        panels,
     }
 }
 

@@ -32,7 +32,10 @@ fn pid_alone_tracks_the_fig2_case_in_both_modes() {
         assert!(e < 0.5, "{mode:?}: e_max {e}°");
         // Its own parts, named: u = ff + p + i + d without a limit.
         let smp = &r.trace[500];
-        let sum = ["ff", "p", "i", "d"].iter().map(|k| smp.part(k)).sum::<f64>();
+        let sum = ["ff", "p", "i", "d"]
+            .iter()
+            .map(|k| smp.part(k))
+            .sum::<f64>();
         assert!((sum - smp.u).abs() < 1e-12 * smp.u.abs().max(1.0));
         assert!(smp.get("sigma").is_none(), "a PID has no σ");
     }
@@ -50,10 +53,16 @@ fn pid_output_limit_and_anti_windup() {
         set.extend(tt);
         let r = run(&scenario("", &set).unwrap(), Keep::Every(1)).unwrap();
         assert!(r.trace.iter().all(|x| x.u.abs() <= 0.3));
-        r.trace.iter().map(|x| x.part("i").abs()).fold(0.0, f64::max)
+        r.trace
+            .iter()
+            .map(|x| x.part("i").abs())
+            .fold(0.0, f64::max)
     };
     let (with, without) = (i_max(None), i_max(Some("controller.tracking_time=1e6")));
-    assert!(with < 0.5 * without, "integral peaks {with} V vs {without} V");
+    assert!(
+        with < 0.5 * without,
+        "integral peaks {with} V vs {without} V"
+    );
 }
 
 #[test]
@@ -68,4 +77,52 @@ fn keys_of_another_kind_are_refused_with_their_position() {
     let e = scenario("[controller]\nkind = \"lqr\"\n", &[]).unwrap_err();
     assert_eq!(e.key, "controller.kind");
     assert!(e.reason.contains("pid"), "{e}");
+}
+
+/// A study can switch kind: between the paper's laws the base's keys carry
+/// over; to a kind with other keys the table starts from its defaults, and
+/// the study's own `controller.*` values apply on top.
+#[test]
+fn studies_switch_kind() {
+    let base = scenario("[controller]\ngamma1 = 200\nbound_a = 0.5\n", &[]).unwrap();
+    let kind = |k: &str| ("controller.kind".to_string(), toml::Value::String(k.into()));
+    let vsc = base.with_values(&[kind("vsc")]).unwrap();
+    let c = vsc
+        .controller
+        .get::<ehservo_core::control::sliding::VscConfig>()
+        .unwrap();
+    assert_eq!((c.0.gamma1, c.0.bound_a), (200.0, 0.5));
+    let pid = base
+        .with_values(&[
+            kind("pid"),
+            ("controller.kp".into(), toml::Value::Float(5.0)),
+        ])
+        .unwrap();
+    let p = pid
+        .controller
+        .get::<ehservo_core::control::pid::PidConfig>()
+        .unwrap();
+    assert_eq!(p.kp, Some(5.0));
+    assert_eq!(p.design_pole, 30.0);
+    // A key of the old kind given by the study itself is still refused.
+    let e = base
+        .with_values(&[
+            kind("pid"),
+            ("controller.eta".into(), toml::Value::Float(0.1)),
+        ])
+        .unwrap_err();
+    assert_eq!(e.key, "controller.eta");
+}
+
+/// The README's second library example, as written there.
+#[test]
+fn readme_simulation_snippet() -> Result<(), Box<dyn std::error::Error>> {
+    let setup = ehservo::scenario::Scenario::parse("[controller]\nkind = \"pid\"\n")?.setup()?;
+    let mut p_seen = 0;
+    let (outcome, metrics) = ehservo::run::run_setup(&setup, &mut |sample| {
+        p_seen += usize::from(sample.get("p").is_some());
+    });
+    assert_eq!(p_seen as u64, outcome.samples);
+    assert!(metrics.e_max_deg.is_some());
+    Ok(())
 }

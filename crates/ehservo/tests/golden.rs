@@ -4,7 +4,8 @@
 //! same metrics, divergence and fault counts in `summary.json`, bit for bit,
 //! as the outputs captured in `tests/golden/` before the platform rework
 //! (commit 477679b). A refactoring that changes one floating-point operation
-//! on the paper's path fails here.
+//! on the paper's path fails here. `examples/pid-valve.toml` came with the
+//! PID and the actuator; its outputs were captured when it was added.
 //!
 //! To re-capture after an intended change of results (never for a
 //! refactoring): `cargo run --release -- run FILE --out DIR --no-plot`, then

@@ -125,7 +125,8 @@ fn identical_across_threads_and_shards() {
         .arg(tmp.path().join("m2"))
         .output()
         .unwrap();
-    assert_ne!(o.status.code(), Some(0));
+    // Bad input, whatever the command that found it: exit 2.
+    assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing"));
     // … and a shard of another study (another seed).
     let other = tmp.path().join("other");
@@ -137,9 +138,23 @@ fn identical_across_threads_and_shards() {
         .arg(tmp.path().join("m3"))
         .output()
         .unwrap();
-    assert_ne!(o.status.code(), Some(0));
+    assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("different studies"));
     assert!(!tmp.path().join("m3").exists());
+    // A shard directory that cannot be read is an I/O failure: exit 1.
+    let o = ehservo()
+        .arg("merge")
+        .arg(tmp.path().join("no-such-shard"))
+        .arg("--out")
+        .arg(tmp.path().join("m4"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 #[test]

@@ -152,9 +152,19 @@ impl Signals for PidParts {
     const SIGNALS: &'static [Signal] = &[
         Signal::new("p", "p_V", "V", "proportional term kp·e"),
         Signal::new("i", "i_V", "V", "integral term"),
-        Signal::new("d", "d_V", "V", "derivative term on the filtered measurement"),
+        Signal::new(
+            "d",
+            "d_V",
+            "V",
+            "derivative term on the filtered measurement",
+        ),
         Signal::new("ff", "ff_V", "V", "feedforward through the nominal model"),
-        Signal::new("u_unsat", "u_unsat_V", "V", "command before the output limit"),
+        Signal::new(
+            "u_unsat",
+            "u_unsat_V",
+            "V",
+            "command before the output limit",
+        ),
     ];
     fn write(&self, out: &mut [f64]) {
         out[..5].copy_from_slice(&[self.p, self.i, self.d, self.ff, self.u_unsat]);
@@ -314,7 +324,10 @@ mod tests {
         for ci in c {
             acc = (acc.0 * re - acc.1 * im + ci, acc.0 * im + acc.1 * re);
         }
-        assert!(acc.0.abs() < 1e-6 * scale && acc.1.abs() < 1e-6 * scale, "{acc:?}");
+        assert!(
+            acc.0.abs() < 1e-6 * scale && acc.1.abs() < 1e-6 * scale,
+            "{acc:?}"
+        );
         // Hand values (module doc): ω = 110.0/1.4 = 78.557, kd = 0.0375, kp = 26.2, ki = 310.
         assert!((w - 78.557).abs() < 1e-3);
         assert!((kd - 0.0375).abs() < 5e-4, "{kd}");
