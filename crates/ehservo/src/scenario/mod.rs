@@ -371,7 +371,7 @@ mod tests {
             .get::<ehservo_core::control::sliding::VscConfig>();
         assert_eq!(c.map(|c| c.0.gamma1), Some(200.0));
         assert_eq!(s.controller.kind(), "vsc");
-        assert_eq!(s.simulation.mode, Mode::Continuous);
+        assert_eq!(s.simulation.mode, ehservo_sim::simulation::Mode::Continuous);
         assert_eq!(s.sim_config().steps, 10_000);
         assert_eq!(s.surface().unwrap().p(), [60.0, 1100.0, 6000.0]);
     }
