@@ -2,6 +2,8 @@
 //! from a scenario file with `controller.kind` alone, logs its own parts,
 //! and refuses keys that are not its parameters.
 
+#![allow(clippy::float_cmp)] // exact values set by the test are compared exactly
+
 use ehservo::run::{run, Keep};
 use ehservo::scenario::Scenario;
 
