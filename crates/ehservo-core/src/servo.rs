@@ -34,31 +34,53 @@ use crate::math::{cos, exp, sgn, sin, sqrt, tanh};
 
 /// Physical parameters of the servo (eqs. 1–6), SI units throughout.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields, default)
+)]
 pub struct ServoParams {
     /// Supply pressure Ps (Pa).
+    #[cfg_attr(feature = "serde", serde(rename = "Ps"))]
     pub ps: f64,
     /// Effective bulk modulus βe (Pa).
     pub beta_e: f64,
     /// Total compressed volume Vt (m³).
+    #[cfg_attr(feature = "serde", serde(rename = "Vt"))]
     pub vt: f64,
     /// Total flow-pressure coefficient Kce = Kc + Ctm (m³/(s·Pa)).
+    #[cfg_attr(feature = "serde", serde(rename = "Kce"))]
     pub kce: f64,
     /// Motor volumetric displacement Dm (m³/rad).
+    #[cfg_attr(feature = "serde", serde(rename = "Dm"))]
     pub dm: f64,
     /// Total inertia of motor and load Jt (N·m·s²).
+    #[cfg_attr(feature = "serde", serde(rename = "Jt"))]
     pub jt: f64,
     /// Viscous damping of the load Bm (N·m·s).
+    #[cfg_attr(feature = "serde", serde(rename = "Bm"))]
     pub bm: f64,
     /// Servovalve gain Kv (m/V).
+    #[cfg_attr(feature = "serde", serde(rename = "Kv"))]
     pub kv: f64,
     /// Torsional spring gradient of the load G (N·m/rad).
+    #[cfg_attr(feature = "serde", serde(rename = "G"))]
     pub g: f64,
     /// Fluid mass density ρ (kg/m³).
     pub rho: f64,
     /// Discharge coefficient Cd (–).
+    #[cfg_attr(feature = "serde", serde(rename = "Cd"))]
     pub cd: f64,
     /// Area gradient Ag (m).
+    #[cfg_attr(feature = "serde", serde(rename = "Ag"))]
     pub ag: f64,
+}
+
+/// The paper's parameters.
+impl Default for ServoParams {
+    fn default() -> Self {
+        Self::paper()
+    }
 }
 
 impl ServoParams {
@@ -164,6 +186,11 @@ impl Coefficients {
 /// (`smoothing`), because the third-order model needs `Ṫl` and a true sign
 /// has an impulse for a derivative.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields, default)
+)]
 pub struct Friction {
     /// Coulomb level Tc (N·m).
     pub coulomb: f64,
@@ -175,6 +202,20 @@ pub struct Friction {
     pub viscous: f64,
     /// Regularisation velocity v0 of the sign (rad/s).
     pub smoothing: f64,
+}
+
+/// Illustrative values, not the paper's (it has no friction): Tc = 0.2,
+/// Ts = 0.3 N·m, vs = 0.05 rad/s, no extra viscous term, v0 = 0.005 rad/s.
+impl Default for Friction {
+    fn default() -> Self {
+        Self {
+            coulomb: 0.2,
+            stiction: 0.3,
+            stribeck_velocity: 0.05,
+            viscous: 0.0,
+            smoothing: 0.005,
+        }
+    }
 }
 
 impl Friction {
@@ -210,13 +251,26 @@ impl Friction {
 /// The load torque `Tl(θ, θ̇) = A·sin(k·θ) [+ friction(θ̇)]` (N·m).
 /// The paper's load is `2·sin(4θ)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields, default)
+)]
 pub struct Load {
     /// Amplitude A (N·m).
     pub amplitude: f64,
     /// Angular wavenumber k (1/rad).
     pub wavenumber: f64,
-    /// Optional friction torque.
+    /// Optional friction torque (`[load.friction]`).
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
     pub friction: Option<Friction>,
+}
+
+/// The paper's load.
+impl Default for Load {
+    fn default() -> Self {
+        Self::paper()
+    }
 }
 
 impl Load {

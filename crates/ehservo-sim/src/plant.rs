@@ -26,6 +26,7 @@ use ehservo_core::rk4::OdeState;
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
 
 /// The plant's parameters at one instant, as they differ from the nominal.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,8 +45,10 @@ impl Variation {
     };
 }
 
-/// Sizes of the variation, as fractions of the paper's bounds.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Sizes of the variation, as fractions of the paper's bounds: a scenario's
+/// `[uncertainty]` table, the Fig. 2 case by default.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct UncertaintySpec {
     /// Bias fraction of α_i = |ā_i|.
     pub a_bias: f64,
@@ -61,6 +64,18 @@ pub struct UncertaintySpec {
     pub seed: u64,
     /// Hold period of the random signal (s).
     pub hold: f64,
+}
+
+/// The paper's Fig. 2 case: Δa_i = α_i, Δb = 0.5β (SPEC §2), seed 0, held
+/// 0.01 s.
+impl Default for UncertaintySpec {
+    fn default() -> Self {
+        Self {
+            a_bias: 1.0,
+            b_bias: 0.5,
+            ..Self::NONE
+        }
+    }
 }
 
 impl UncertaintySpec {

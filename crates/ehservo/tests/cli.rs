@@ -161,7 +161,7 @@ fn bad_input_exits_2_names_the_key_and_writes_nothing() {
         ("[simulation]\nstep = 0.0\n", "simulation.step"),
         ("[simulation]\nhorizon = 10.003\n", "simulation.horizon"),
         ("[surface]\npoles = [-20.0, 30.0, -40.0]\n", "surface.poles"),
-        ("[controller]\nkind = \"pid\"\n", "controller.kind"),
+        ("[controller]\nkind = \"lqr\"\n", "controller.kind"),
         ("[controller]\ngamma = 3\n", "controller.gamma"),
         ("[simulation]\nstep = \"small\"\n", "simulation.step"),
         ("[simulation\n", "syntax"),

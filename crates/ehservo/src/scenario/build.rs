@@ -9,7 +9,7 @@ use ehservo_core::control::Design;
 use ehservo_core::error::ParamError;
 use ehservo_core::reference::Sine;
 use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
-use ehservo_core::servo::{Friction, Load, NominalModel, ServoParams};
+use ehservo_core::servo::{Load, NominalModel, ServoParams};
 use ehservo_core::surface::SwitchingSurface;
 use ehservo_sim::actuator::Actuator;
 use ehservo_sim::plant::UncertaintySpec;
@@ -116,7 +116,6 @@ impl Setup {
 
         s.plant
             .params
-            .to_servo()
             .validate()
             .map_err(|e| param_err("plant.params", e))?;
         s.load_model().validate().map_err(|e| {
@@ -253,7 +252,7 @@ impl super::Visit for Check<'_> {
 impl Scenario {
     /// The physical parameters.
     pub fn servo(&self) -> ServoParams {
-        self.plant.params.to_servo()
+        self.plant.params
     }
 
     /// The switching surface from `poles` or `p` (the paper's by default).
@@ -276,17 +275,7 @@ impl Scenario {
 
     /// The load model.
     pub fn load_model(&self) -> Load {
-        Load {
-            amplitude: self.load.amplitude,
-            wavenumber: self.load.wavenumber,
-            friction: self.load.friction.map(|f| Friction {
-                coulomb: f.coulomb,
-                stiction: f.stiction,
-                stribeck_velocity: f.stribeck_velocity,
-                viscous: f.viscous,
-                smoothing: f.smoothing,
-            }),
-        }
+        self.load
     }
 
     /// The reference.
@@ -296,16 +285,7 @@ impl Scenario {
 
     /// The true variation.
     pub fn uncertainty_spec(&self) -> UncertaintySpec {
-        let u = &self.uncertainty;
-        UncertaintySpec {
-            a_bias: u.a_bias,
-            a_random: u.a_random,
-            b_bias: u.b_bias,
-            b_random: u.b_random,
-            b_reference: u.b_reference,
-            seed: u.seed,
-            hold: u.hold,
-        }
+        self.uncertainty
     }
 
     /// The loop's settings.

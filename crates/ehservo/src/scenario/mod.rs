@@ -21,11 +21,13 @@ pub use build::Setup;
 pub use overrides::{apply_override, line_col, parse_value, set_path};
 pub use registry::{ControllerCfg, ControllerConfig, Visit, DEFAULT_KIND};
 pub use sections::{
-    FaultCfg, FrictionCfg, LoadCfg, OutputCfg, ParamsCfg, PlantCfg, PlantModel, ReferenceCfg,
-    SafeCommandCfg, SimulationCfg, SurfaceCfg, UncertaintyCfg,
+    FaultCfg, OutputCfg, PlantCfg, PlantModel, ReferenceCfg, SafeCommandCfg, SimulationCfg,
+    SurfaceCfg,
 };
 
+use ehservo_core::servo::Load;
 use ehservo_sim::actuator::ActuatorConfig;
+use ehservo_sim::plant::UncertaintySpec;
 use ehservo_sim::sensor::SensorConfig;
 use overrides::{clean_path, first_line, locate};
 use serde::{Deserialize, Serialize};
@@ -73,10 +75,12 @@ pub struct Scenario {
     pub simulation: SimulationCfg,
     /// Model and physical parameters.
     pub plant: PlantCfg,
-    /// Load torque.
-    pub load: LoadCfg,
-    /// True parameter variation.
-    pub uncertainty: UncertaintyCfg,
+    /// Load torque: `Tl = amplitude·sin(wavenumber·θ)`, optional `[load.friction]`.
+    pub load: Load,
+    /// True parameter variation: Δa_i = |ā_i|·(a_bias + a_random·r_i),
+    /// Δb = b_reference·b̄·(b_bias + b_random·r_b), r uniform on [−1, 1]
+    /// held over `hold`.
+    pub uncertainty: UncertaintySpec,
     /// Desired trajectory.
     pub reference: ReferenceCfg,
     /// Switching surface.
