@@ -31,7 +31,7 @@ impl fmt::Display for ParamError {
         if self.value.is_nan() {
             write!(f, "{}: {}", self.name, self.reason)
         } else {
-            write!(f, "{}: {} (got {})", self.name, self.reason, self.value)
+            write!(f, "{}: {} (got {:?})", self.name, self.reason, self.value)
         }
     }
 }

@@ -16,6 +16,7 @@
 
 pub mod analysis;
 pub mod error;
+pub mod input;
 pub mod output;
 pub mod plot;
 pub mod reproduce;

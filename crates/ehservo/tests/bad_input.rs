@@ -17,7 +17,7 @@ fn every_bad_file_is_rejected_clearly() {
         .collect();
     files.sort();
     for p in files {
-        let text = std::fs::read_to_string(&p).unwrap();
+        let text = String::from_utf8_lossy(&std::fs::read(&p).unwrap()).into_owned();
         let expect = text
             .lines()
             .next()
@@ -51,7 +51,7 @@ fn every_bad_file_is_rejected_clearly() {
         assert!(!out.exists(), "{name}: output written for bad input");
         n += 1;
     }
-    assert!(n >= 30, "the corpus has {n} files");
+    assert!(n >= 120, "the corpus has {n} files");
     // Nothing was left behind in the parent either (no staging directories).
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
 }

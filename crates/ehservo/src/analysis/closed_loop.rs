@@ -223,15 +223,17 @@ pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> 
         out.verdict = "not applicable: the traditional VSC switches with sgn(σ), so the loop is discontinuous and a linear (RK4 or sampled-map) stability check does not apply; its sampled behaviour is measured by `ehservo reproduce`'s breaking-point search".into();
         return out;
     };
+    // A parameter extreme enough to overflow the loop matrix: not computed.
     let eig = |v: &Truth| -> Vec<Complex<f64>> {
-        loop_matrix(&abar, v, &dd, gs, p)
-            .complex_eigenvalues()
-            .iter()
-            .copied()
-            .collect()
+        super::linalg::eigenvalues4(&loop_matrix(&abar, v, &dd, gs, p)).unwrap_or_default()
     };
     let fast_of = |ev: &[Complex<f64>]| ev.iter().map(|z| z.re).fold(f64::INFINITY, f64::min);
     let ev_bias = eig(&bias);
+    if ev_bias.is_empty() || corners.iter().any(|v| eig(v).is_empty()) {
+        out.check = "none".into();
+        out.verdict = "not computed: the linearised loop's matrix is not finite (parameters beyond the range where it can be represented)".into();
+        return out;
+    }
     let mut eigs: Vec<Pole> = ev_bias.iter().map(|z| Pole::from(*z)).collect();
     sort_poles(&mut eigs);
     let fast = fast_of(&ev_bias);
@@ -382,10 +384,9 @@ fn sampled_radius(
     // ∫e+ = ∫e + h·e = ∫e − h·x1.
     mm[(3, 0)] = -h;
     mm[(3, 3)] = 1.0;
-    mm.complex_eigenvalues()
-        .iter()
-        .map(|z| z.norm())
-        .fold(0.0, f64::max)
+    super::linalg::eigenvalues4(&mm)
+        .map(|ev| ev.iter().map(|z| z.norm()).fold(0.0, f64::max))
+        .unwrap_or(f64::INFINITY)
 }
 
 #[cfg(test)]

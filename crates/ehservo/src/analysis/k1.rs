@@ -11,7 +11,7 @@ use serde::Serialize;
 pub const K1_TOLERANCE: f64 = 1e-9;
 
 fn norm2(m: &Matrix3<f64>) -> f64 {
-    m.singular_values().max()
+    super::linalg::norm2_3(m)
 }
 
 type CMat = Matrix3<Complex<f64>>;
@@ -101,7 +101,9 @@ pub struct K1 {
 /// g(t) = ‖exp((P + K2 I)t)‖₂ = e^(K2 t)·‖exp(Pt)‖₂ with nalgebra's
 /// matrix exponential.
 pub fn k1_profile(p: &Matrix3<f64>, k2: f64, t: f64) -> f64 {
-    norm2(&((p + Matrix3::identity() * k2) * t).exp())
+    super::linalg::expm3(&((p + Matrix3::identity() * k2) * t))
+        .map(|e| norm2(&e))
+        .unwrap_or(f64::NAN)
 }
 
 /// Golden-section search for the maximum of `f` on [a, b].

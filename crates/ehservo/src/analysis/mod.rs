@@ -111,6 +111,7 @@ use serde::Serialize;
 mod closed_loop;
 mod diagnostics;
 mod k1;
+mod linalg;
 mod poles;
 mod report;
 mod weights;
@@ -178,7 +179,8 @@ fn fmt_sig(x: f64, n: usize) -> String {
 fn theorem2(s: &Scenario, pm: &Matrix3<f64>, sp: [Pole; 3], surface: [f64; 3]) -> SurfaceAnalysis {
     // A repeated root comes out of the eigenvalue solver split by
     // ~sqrt(ε)·|λ|; the mean of the cluster is accurate to ~ε.
-    let scale = sp.iter().map(|q| q.wn).fold(1.0, f64::max);
+    // Relative to the poles' own size: slow distinct poles are not a cluster.
+    let scale = sp.iter().map(|q| q.wn).fold(0.0, f64::max);
     let cluster: Vec<f64> = sp
         .iter()
         .filter(|q| {
@@ -283,7 +285,16 @@ pub fn analyze(s: &Scenario) -> Analysis {
         .map(|x| x.p())
         .unwrap_or([90.0, 2600.0, 24000.0]);
     let pm = p_matrix(surface);
-    let sp = cubic_roots(surface[0], surface[1], surface[2]);
+    // Poles the user gave are exact; the computed roots of p stand in only
+    // when p was given (and agree with given poles to round-off otherwise).
+    let sp = match s.surface.poles {
+        Some(given) => {
+            let mut q = given.map(|r| Pole::from(nalgebra::Complex::new(r, 0.0)));
+            poles::sort_poles(&mut q);
+            q
+        }
+        None => cubic_roots(surface[0], surface[1], surface[2]),
+    };
     Analysis {
         a_nominal: a,
         b_at_rest: model.b_at_rest(),

@@ -33,12 +33,72 @@ pub(super) fn sort_poles(poles: &mut [Pole]) {
     poles.sort_by(|a, b| b.re.total_cmp(&a.re).then(b.im.total_cmp(&a.im)));
 }
 
-/// Roots of `s³ + c2·s² + c1·s + c0`, as the eigenvalues of its companion
-/// matrix, sorted by real part then imaginary part (descending).
+/// Roots of `s³ + c2·s² + c1·s + c0`, sorted by real part then imaginary
+/// part (descending); NaN poles when a coefficient is not finite or the
+/// roots cannot be computed.
+///
+/// The companion matrix of a fast polynomial is badly scaled (for poles of
+/// order 10⁴, c0 ~ 10¹²): its eigenvalues then come out shifted, or as a
+/// false complex pair. So the polynomial is first balanced — with
+/// κ = max(|c2|, |c1|^½, |c0|^⅓), the roots of `s'³ + (c2/κ)s'² +
+/// (c1/κ²)s' + c0/κ³` are O(1) and `s = κ·s'` — then each root is polished
+/// by Newton's method on the original polynomial, keeping a step only when
+/// it lowers the residual relative to the polynomial's scale.
 pub fn cubic_roots(c2: f64, c1: f64, c0: f64) -> [Pole; 3] {
-    let m = Matrix3::new(0.0, 1.0, 0.0, 0.0, 0.0, 1.0, -c0, -c1, -c2);
-    let ev = m.complex_eigenvalues();
-    let mut poles = [Pole::from(ev[0]), Pole::from(ev[1]), Pole::from(ev[2])];
+    let nan = Pole::from(Complex::new(f64::NAN, f64::NAN));
+    if !(c2.is_finite() && c1.is_finite() && c0.is_finite()) {
+        return [nan; 3];
+    }
+    let k = c2.abs().max(c1.abs().sqrt()).max(c0.abs().cbrt());
+    if k == 0.0 {
+        return [Pole::from(Complex::new(0.0, 0.0)); 3];
+    }
+    let m = Matrix3::new(
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        -c0 / (k * k * k),
+        -c1 / (k * k),
+        -c2 / k,
+    );
+    let Some(ev) = super::linalg::eigenvalues3(&m) else {
+        return [nan; 3];
+    };
+    let c = [1.0, c2, c1, c0];
+    let poly = |z: Complex<f64>| {
+        c.iter()
+            .fold(Complex::new(0.0, 0.0), |acc, &ci| acc * z + ci)
+    };
+    let dpoly = |z: Complex<f64>| Complex::new(3.0, 0.0) * z * z + z * (2.0 * c2) + c1;
+    let mut roots: Vec<Complex<f64>> = ev.iter().map(|z| z * k).collect();
+    for r in roots.iter_mut() {
+        for _ in 0..8 {
+            let (f, d) = (poly(*r), dpoly(*r));
+            if d.norm() == 0.0 {
+                break;
+            }
+            let next = *r - f / d;
+            if !(next.re.is_finite() && next.im.is_finite()) || poly(next).norm() >= f.norm() {
+                break;
+            }
+            *r = next;
+        }
+    }
+    // A real cubic's roots are real or conjugate pairs: a pair whose
+    // imaginary parts are round-off of the root's size is real.
+    for r in roots.iter_mut() {
+        if r.im.abs() <= 1e-12 * r.norm() {
+            r.im = 0.0;
+        }
+    }
+    let mut poles = [
+        Pole::from(roots[0]),
+        Pole::from(roots[1]),
+        Pole::from(roots[2]),
+    ];
     sort_poles(&mut poles);
     poles
 }
@@ -57,6 +117,25 @@ pub fn p_matrix(p: [f64; 3]) -> Matrix3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Poles far from 1, fast and slow: (s + a)(s + 2a)(s + 3a) has
+    /// c2 = 6a, c1 = 11a², c0 = 6a³; the roots must come back as −a, −2a,
+    /// −3a to a relative 1e-9, real, for a from 1e-6 to 1e6 (the unbalanced
+    /// companion matrix shifts them from about 1e4 on).
+    #[test]
+    fn fast_and_slow_distinct_poles_come_back_exactly() {
+        for e in -6..=6 {
+            let a = 10f64.powi(e);
+            let p = cubic_roots(6.0 * a, 11.0 * a * a, 6.0 * a * a * a);
+            for (pole, want) in p.iter().zip([-a, -2.0 * a, -3.0 * a]) {
+                assert!(
+                    (pole.re - want).abs() <= 1e-9 * a && pole.im == 0.0,
+                    "a = {a}: {p:?}"
+                );
+            }
+        }
+        assert!(cubic_roots(f64::INFINITY, 1.0, 1.0)[0].re.is_nan());
+    }
     use ehservo_core::servo::ServoParams;
 
     /// The paper prints the poles 0, −84.9902 ± j76.0061 (Section IV); SPEC

@@ -117,10 +117,18 @@ pub struct Manifest {
 impl Manifest {
     /// Reads and checks a manifest.
     pub fn load(path: &Path) -> Result<Manifest> {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let m: Manifest =
-            toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        let bad = |m: String| crate::error::InputError(format!("{}{m}", path.display()));
+        let text = crate::input::read_text(path).map_err(|r| bad(format!(": the manifest {r}")))?;
+        // One line: where, and toml's message without its snippet.
+        let m: Manifest = toml::from_str(&text).map_err(|e| {
+            let at = e
+                .span()
+                .map(|s| crate::scenario::line_col(&text, s.start))
+                .map(|(l, c)| format!(":{l}:{c}"))
+                .unwrap_or_default();
+            let msg = e.message().lines().next().unwrap_or("").trim().to_string();
+            bad(format!("{at}: {msg}"))
+        })?;
         m.check()
             .with_context(|| format!("checking {}", path.display()))?;
         Ok(m)

@@ -16,6 +16,13 @@ use ehservo_sim::plant::UncertaintySpec;
 use ehservo_sim::sensor::Sensor;
 use ehservo_sim::simulation::{SimConfig, Stages};
 
+/// Most evaluations (law or plant RK4 steps) one run may ask for: 4·10⁸,
+/// about a minute or two of computing.
+pub const MAX_WORK: f64 = 4.0e8;
+
+/// Most draws of the random variation one run may ask for (horizon/hold).
+pub const MAX_DRAWS: f64 = 1.0e8;
+
 /// A validated scenario, built.
 #[derive(Debug, Clone)]
 pub struct Setup {
@@ -46,7 +53,7 @@ pub(crate) fn param_err(prefix: &str, e: ParamError) -> (String, String) {
     let reason = if e.value.is_nan() {
         e.reason.to_string()
     } else {
-        format!("{} (got {})", e.reason, e.value)
+        format!("{} (got {:?})", e.reason, e.value)
     };
     (format!("{prefix}.{}", e.name), reason)
 }
@@ -60,13 +67,13 @@ impl Setup {
         if !(sim.step.is_finite() && sim.step > 0.0) {
             return bad(
                 "simulation.step",
-                format!("must be finite and > 0 (got {})", sim.step),
+                format!("must be finite and > 0 (got {:?})", sim.step),
             );
         }
         if !(sim.horizon.is_finite() && sim.horizon > 0.0) {
             return bad(
                 "simulation.horizon",
-                format!("must be finite and > 0 (got {})", sim.horizon),
+                format!("must be finite and > 0 (got {:?})", sim.horizon),
             );
         }
         let n = sim.horizon / sim.step;
@@ -91,17 +98,33 @@ impl Setup {
                 format!("must be in 1..=10000 (got {})", sim.substeps),
             );
         }
+        // The work, bounded up front: plant RK4 steps (four law evaluations
+        // each in continuous mode; one law evaluation per sample in sampled).
+        let steps = n.round();
+        let work = match sim.mode {
+            ehservo_sim::simulation::Mode::Sampled => steps * (1.0 + sim.substeps as f64),
+            ehservo_sim::simulation::Mode::Continuous => 4.0 * steps,
+        };
+        if work > MAX_WORK {
+            return bad(
+                "simulation.substeps",
+                format!(
+                    "{steps:.3e} steps × {} sub-steps is about {work:.2e} evaluations, more than the limit of {MAX_WORK:.0e} (minutes of computing): lower the horizon or the sub-steps",
+                    sim.substeps
+                ),
+            );
+        }
         // settle ≥ horizon is allowed: the windowed metrics are then absent.
         if !(sim.settle.is_finite() && sim.settle >= 0.0) {
             return bad(
                 "simulation.settle",
-                format!("must be finite and >= 0 (got {})", sim.settle),
+                format!("must be finite and >= 0 (got {:?})", sim.settle),
             );
         }
         if !(sim.theta_limit.is_finite() && sim.theta_limit > 0.0) {
             return bad(
                 "simulation.theta_limit",
-                format!("must be finite and > 0 (got {})", sim.theta_limit),
+                format!("must be finite and > 0 (got {:?})", sim.theta_limit),
             );
         }
         if let Some(v) = sim.x0.iter().find(|v| !v.is_finite()) {
@@ -141,13 +164,23 @@ impl Setup {
         if !(u.hold.is_finite() && u.hold > 0.0) {
             return bad(
                 "uncertainty.hold",
-                format!("must be finite and > 0 (got {})", u.hold),
+                format!("must be finite and > 0 (got {:?})", u.hold),
+            );
+        }
+        let draws = sim.horizon / u.hold;
+        if (u.a_random != 0.0 || u.b_random != 0.0) && draws > MAX_DRAWS {
+            return bad(
+                "uncertainty.hold",
+                format!(
+                    "a random variation held {:?} s over {:?} s is {draws:.2e} draws, more than the limit of {MAX_DRAWS:.0e}",
+                    u.hold, sim.horizon
+                ),
             );
         }
         if !(u.b_reference.is_finite() && u.b_reference > 0.0) {
             return bad(
                 "uncertainty.b_reference",
-                format!("must be finite and > 0 (got {})", u.b_reference),
+                format!("must be finite and > 0 (got {:?})", u.b_reference),
             );
         }
         // The true b must stay positive: 1 + b_ref·(b_bias ± b_random) > 0.
@@ -163,7 +196,7 @@ impl Setup {
         if !(r.amplitude_deg.is_finite() && r.amplitude_deg >= 0.0) {
             return bad(
                 "reference.amplitude_deg",
-                format!("must be finite and >= 0 (got {})", r.amplitude_deg),
+                format!("must be finite and >= 0 (got {:?})", r.amplitude_deg),
             );
         }
         if r.amplitude_deg.to_radians() >= sim.theta_limit {
@@ -176,7 +209,7 @@ impl Setup {
         if !(r.frequency_hz.is_finite() && r.frequency_hz > 0.0) {
             return bad(
                 "reference.frequency_hz",
-                format!("must be finite and > 0 (got {})", r.frequency_hz),
+                format!("must be finite and > 0 (got {:?})", r.frequency_hz),
             );
         }
 

@@ -91,10 +91,8 @@ pub struct Scenario {
     #[serde(skip_serializing_if = "ActuatorConfig::is_identity")]
     pub actuator: ActuatorConfig,
     /// What the controller measures (exact unless given).
-    #[serde(skip_serializing_if = "SensorConfig::is_identity")]
     pub sensor: SensorConfig,
     /// The sampled loop's response to a bad measurement.
-    #[serde(skip_serializing_if = "FaultCfg::is_default")]
     pub fault: FaultCfg,
     /// Output options.
     pub output: OutputCfg,
@@ -109,11 +107,11 @@ impl Scenario {
     /// Reads, parses, overrides and validates a scenario file.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scenario, ScenarioError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
+        let text = crate::input::read_text(path).map_err(|reason| ScenarioError {
             file: file.clone(),
             key: String::new(),
             line_col: None,
-            reason: format!("cannot read the scenario file: {e}"),
+            reason: format!("the scenario file {reason}"),
         })?;
         let mut s = Self::parse_with(&text, &file, overrides)?;
         if s.name.is_empty() {
@@ -160,6 +158,17 @@ impl Scenario {
             let lc = inner.span().map(|s| line_col(text, s.start));
             err(key, lc, first_line(inner.message()))
         })?;
+        // serde reads a fixed-size array from the first elements of a longer
+        // one: compare every array of the file with what was read.
+        if let (Ok(raw), Ok(typed)) = (
+            toml::from_str::<toml::Table>(text),
+            toml::Table::try_from(&scenario),
+        ) {
+            if let Some((key, reason)) = array_lengths(&raw, &typed, "") {
+                let lc = locate(text, &key);
+                return Err(err(key, lc, reason));
+            }
+        }
         let scenario = if overrides.is_empty() {
             scenario
         } else {
@@ -302,6 +311,23 @@ impl Scenario {
         s.validate().map_err(|(k, r)| fail(k, r))?;
         Ok(s)
     }
+}
+
+/// The first array of `raw` whose length differs from the same key's in
+/// `typed`: its key path and the reason.
+fn array_lengths(raw: &toml::Table, typed: &toml::Table, prefix: &str) -> Option<(String, String)> {
+    raw.iter().find_map(|(k, v)| {
+        let key = format!("{prefix}{k}");
+        match (v, typed.get(k)?) {
+            (toml::Value::Array(a), toml::Value::Array(b)) if a.len() != b.len() => {
+                Some((key, format!("expected {} values, got {}", b.len(), a.len())))
+            }
+            (toml::Value::Table(a), toml::Value::Table(b)) => {
+                array_lengths(a, b, &format!("{key}."))
+            }
+            _ => None,
+        }
+    })
 }
 
 /// The precise error of a `[controller]` table that did not deserialise:

@@ -62,6 +62,9 @@ pub fn parse_value(raw: &str) -> toml::Value {
     }
 }
 
+/// Deepest key path accepted by [`set_path`].
+pub const MAX_KEY_DEPTH: usize = 8;
+
 /// Sets `path` (dotted) to `value` in a TOML document, creating tables on
 /// the way. Errors name the path and the reason.
 pub fn set_path(
@@ -74,6 +77,17 @@ pub fn set_path(
         return Err((path.to_string(), "empty key in key.path=value".into()));
     }
     let parts: Vec<&str> = path.split('.').map(str::trim).collect();
+    // No scenario or study key is deeper than four levels; a deep path
+    // would only build deeply nested tables (and recursion) for nothing.
+    if parts.len() > MAX_KEY_DEPTH {
+        return Err((
+            format!("{}…", parts[..MAX_KEY_DEPTH].join(".")),
+            format!(
+                "a key path of {} levels: no key is deeper than {MAX_KEY_DEPTH}",
+                parts.len()
+            ),
+        ));
+    }
     let mut cur = table;
     for (i, part) in parts.iter().enumerate() {
         if i + 1 == parts.len() {
