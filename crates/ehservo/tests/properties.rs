@@ -102,3 +102,70 @@ fn summaries_are_deterministic() {
     let c = serde_json::to_string(&summary(&s2, &run(&s2, Keep::Nothing).unwrap())).unwrap();
     assert_ne!(a, c);
 }
+
+/// Parameters from 1e-300 to 1e300: the analysis overflows its matrices
+/// there. Whatever the validator accepts must be analysed and run to an
+/// end — not hang — within a bound proportional to its size: the
+/// simulation's work is bounded at validation (steps × sub-steps, random
+/// draws), and the analysis's iterations are bounded. Each case runs in a
+/// thread with a generous 60 s deadline (a hang, not a slow machine, is
+/// what this catches: a case takes milliseconds).
+fn extreme() -> impl Strategy<Value = String> {
+    (-300i32..300, prop::bool::ANY).prop_map(|(e, neg)| {
+        let v = 10f64.powi(e);
+        format!("{}", if neg { -v } else { v })
+    })
+}
+
+const EXTREME_KEYS: [&str; 14] = [
+    "plant.params.Jt",
+    "plant.params.Dm",
+    "plant.params.Vt",
+    "plant.params.beta_e",
+    "plant.params.Kv",
+    "plant.params.Bm",
+    "plant.params.G",
+    "load.amplitude",
+    "load.wavenumber",
+    "controller.gamma1",
+    "controller.alpha",
+    "uncertainty.a_bias",
+    "uncertainty.b_reference",
+    "reference.frequency_hz",
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
+
+    #[test]
+    fn accepted_scenarios_end_whatever_the_magnitudes(
+        sets in proptest::collection::vec((0..EXTREME_KEYS.len(), extreme()), 1..4),
+        poles in prop::option::of((-6i32..6).prop_map(|e| 10f64.powi(e))),
+    ) {
+        let mut overrides: Vec<String> =
+            sets.iter().map(|(k, v)| format!("{}={v}", EXTREME_KEYS[*k])).collect();
+        if let Some(a) = poles {
+            overrides.push(format!("surface.poles=[{}, {}, {}]", -a, -2.0 * a, -3.0 * a));
+        }
+        overrides.push("simulation.horizon=0.2".into());
+        overrides.push("simulation.settle=0.1".into());
+        let Ok(s) = Scenario::parse_with("", "prop.toml", &overrides) else {
+            return Ok(());
+        };
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let a = ehservo::analysis::analyze(&s);
+            let r = run(&s, Keep::Every(1)).unwrap();
+            let json = serde_json::to_string(&summary(&s, &r)).unwrap();
+            tx.send((a.open_loop_poles, json)).ok();
+        });
+        let got = rx.recv_timeout(std::time::Duration::from_secs(60));
+        prop_assert!(got.is_ok(), "no end within 60 s: {overrides:?}");
+        let (_, json) = got.unwrap();
+        prop_assert!(!json.contains("NaN"), "{json}");
+        // Distinct poles are never called repeated, however slow or fast.
+        if poles.is_some() {
+            prop_assert!(!json.contains("repeated dominant pole"), "{json}");
+        }
+    }
+}

@@ -45,7 +45,8 @@ pub fn sylvester_terms(p: &Matrix3<f64>, poles: &[Pole; 3]) -> Option<[CMat; 3]>
         }
         z
     });
-    let scale = poles.iter().map(|q| q.wn).fold(1.0, f64::max);
+    // Relative to the poles' own size (slow distinct poles are not repeated).
+    let scale = poles.iter().map(|q| q.wn).fold(0.0, f64::max);
     for i in 0..3 {
         for j in i + 1..3 {
             if (l[i] - l[j]).norm() <= 1e-4 * scale {
@@ -162,7 +163,8 @@ pub(super) fn golden_max(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> (f64
 ///    cannot be sharper than the arithmetic).
 pub fn k1(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
     let dominant = poles[0].re;
-    let scale = poles.iter().map(|q| q.wn).fold(1.0, f64::max);
+    // Relative to the poles' own size (slow distinct poles are not repeated).
+    let scale = poles.iter().map(|q| q.wn).fold(0.0, f64::max);
     // Eigenvalues of a repeated root come out split by ~sqrt(ε)·|λ|; anything
     // within 1e-4 of the scale is taken as repeated (a near-repeated pair
     // would give a K1 of order 1/gap anyway).
