@@ -157,6 +157,77 @@ fn identical_across_threads_and_shards() {
     );
 }
 
+/// Values at the edges of the floats (γ1 up to 1.7e308, η drawn over the
+/// whole positive range): results.csv holds short, finite numbers only,
+/// and shards merge to the whole run's bytes.
+#[test]
+fn extreme_values_stay_short_finite_and_shardable() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = tmp.path().join("edge.toml");
+    std::fs::write(
+        &s,
+        format!(
+            r#"name = "edge"
+base = "{}"
+seed = 3
+set = ["simulation.horizon=0.5", "simulation.settle=0.25"]
+
+[[axis]]
+key = "controller.gamma1"
+values = [100.0, 1e300, 1.7e308]
+
+[monte_carlo]
+runs = 3
+[[monte_carlo.draw]]
+key = "controller.eta"
+dist = "loguniform"
+low = 1e-300
+high = 1.7976931348623157e308
+"#,
+            paper("fig2.toml")
+        ),
+    )
+    .unwrap();
+    let whole = tmp.path().join("whole");
+    sweep(&s, &whole, &[]);
+    let bytes = std::fs::read(whole.join("results.csv")).unwrap();
+    let text = String::from_utf8(bytes.clone()).unwrap();
+    assert_eq!(text.lines().count(), 10, "{text}");
+    assert!(text.contains(",1e300,"), "{text}");
+    for line in text.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        // run, γ1, η, seed, the metrics (the error cell is last and empty).
+        for c in &cells[..cells.len() - 1] {
+            assert!(c.len() <= 24, "a long cell {c} in {line}");
+            if let Ok(x) = c.parse::<f64>() {
+                assert!(x.is_finite(), "{c} in {line}");
+            }
+        }
+    }
+    let shards: Vec<PathBuf> = (0..2)
+        .map(|k| tmp.path().join(format!("shard{k}")))
+        .collect();
+    for (k, d) in shards.iter().enumerate() {
+        sweep(&s, d, &["--shard", &format!("{k}/2")]);
+    }
+    let merged = tmp.path().join("merged");
+    let o = ehservo()
+        .arg("merge")
+        .args(&shards)
+        .arg("--out")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("9 runs"));
+    assert_eq!(bytes, std::fs::read(merged.join("results.csv")).unwrap());
+}
+
 #[test]
 fn shipped_studies_parse_and_bad_studies_exit_2() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/studies");

@@ -28,11 +28,16 @@ impl Stream {
 impl Draw {
     fn sample(&self, s: &mut Stream) -> toml::Value {
         let (lo, hi) = (self.low.unwrap_or(0.0), self.high.unwrap_or(1.0));
+        // The plan checked that the bounds and their width are finite; the
+        // clamp keeps rounding (at the top of the range, or in exp∘ln) from
+        // stepping outside them, so a draw is always finite.
         match self.dist {
-            Dist::Uniform => toml::Value::Float(lo + (hi - lo) * s.next()),
-            Dist::Loguniform => {
-                toml::Value::Float((lo.ln() + (hi.ln() - lo.ln()) * s.next()).exp())
-            }
+            Dist::Uniform => toml::Value::Float((lo + (hi - lo) * s.next()).clamp(lo, hi)),
+            Dist::Loguniform => toml::Value::Float(
+                (lo.ln() + (hi.ln() - lo.ln()) * s.next())
+                    .exp()
+                    .clamp(lo, hi),
+            ),
             Dist::Normal => {
                 // Box–Muller from two uniforms (1 − u keeps the log finite).
                 let (u1, u2) = (1.0 - s.next(), s.next());
@@ -65,11 +70,7 @@ pub struct Plan {
 impl Plan {
     /// The varied columns of results.csv, in order: axes, then drawn keys.
     pub fn columns(&self) -> Vec<String> {
-        let mut c: Vec<String> = self.axes.iter().map(|(a, _)| a.column()).collect();
-        if let Some(mc) = &self.study.monte_carlo {
-            c.extend(mc.draw.iter().map(|d| d.key.clone()));
-        }
-        c
+        self.study.columns()
     }
 
     /// The values of run `i`: (column values, scenario overrides, seed).
@@ -108,10 +109,16 @@ impl Plan {
 
     /// The run indices of shard `k` of `n` (contiguous).
     pub fn shard_range(&self, k: u64, n: u64) -> std::ops::Range<u64> {
-        let lo = (self.runs as u128 * k as u128 / n as u128) as u64;
-        let hi = (self.runs as u128 * (k + 1) as u128 / n as u128) as u64;
-        lo..hi
+        shard_range(self.runs, k, n)
     }
+}
+
+/// The run indices of shard `k` of `n` (contiguous) of `runs` runs
+/// (`k < n`).
+pub(super) fn shard_range(runs: u64, k: u64, n: u64) -> std::ops::Range<u64> {
+    let lo = (runs as u128 * k as u128 / n as u128) as u64;
+    let hi = (runs as u128 * (k as u128 + 1) / n as u128) as u64;
+    lo..hi
 }
 
 /// Parses `K/N` (0 ≤ K < N).
@@ -225,5 +232,40 @@ sd = 0.01
             (m - 0.25).abs() < 0.003 && (sd - 0.01).abs() < 0.002,
             "{m} {sd}"
         );
+    }
+
+    #[test]
+    fn draws_at_the_edges_of_the_floats_stay_finite() {
+        // The widest ranges the plan accepts: every draw is finite and
+        // inside its range.
+        let p = plan(
+            r#"name = "t"
+base = "x"
+[monte_carlo]
+runs = 2000
+[[monte_carlo.draw]]
+key = "controller.eta"
+dist = "uniform"
+low = -8.9e307
+high = 8.9e307
+[[monte_carlo.draw]]
+key = "controller.gamma1"
+dist = "loguniform"
+low = 5e-324
+high = 1.7976931348623157e308
+[[monte_carlo.draw]]
+key = "uncertainty.a_bias"
+dist = "normal"
+mean = 0.0
+sd = 1.9e307
+"#,
+        );
+        for i in 0..p.runs {
+            let v: Vec<f64> = p.run_values(i).0.iter().filter_map(as_f64).collect();
+            assert_eq!(v.len(), 3);
+            assert!(v.iter().all(|x| x.is_finite()), "run {i}: {v:?}");
+            assert!((-8.9e307..=8.9e307).contains(&v[0]), "{v:?}");
+            assert!(v[1] > 0.0, "{v:?}");
+        }
     }
 }

@@ -9,29 +9,56 @@ use serde::{Deserialize, Serialize};
 /// The metric columns of results.csv, in order.
 pub const METRIC_COLUMNS: [&str; 13] = Metrics::NAMES;
 
+/// A number as a cell: the shortest decimal that reads back to the same
+/// f64, with an exponent for very large or small magnitudes (`1e308`, not
+/// 309 digits); empty if it is not finite (the plan and the metrics never
+/// give one, and results.csv never holds NaN or ∞).
+pub(crate) fn number_cell(f: f64) -> String {
+    if f.is_finite() {
+        format!("{f:?}")
+    } else {
+        String::new()
+    }
+}
+
 fn cell(v: &toml::Value) -> String {
     match v {
         toml::Value::String(s) => s.clone(),
-        toml::Value::Float(f) => format!("{f}"),
+        toml::Value::Float(f) => number_cell(*f),
         other => other.to_string(),
     }
+}
+
+/// A metric's cell: `true`/`false` for `diverged`, an integer for
+/// `samples`, a number otherwise, empty when undefined.
+fn metric_cell(m: &Metrics, name: &str) -> String {
+    match name {
+        "diverged" => m.diverged.to_string(),
+        "samples" => m.samples.to_string(),
+        _ => m.get(name).map(number_cell).unwrap_or_default(),
+    }
+}
+
+/// The header of results.csv for a study's varied columns.
+pub(crate) fn header(columns: Vec<String>) -> Vec<String> {
+    let mut head: Vec<String> = vec!["run".into()];
+    head.extend(columns);
+    head.push("seed".into());
+    head.extend(METRIC_COLUMNS.iter().map(|s| s.to_string()));
+    head.push("error".into());
+    head
 }
 
 /// results.csv (header + rows in run order).
 pub fn results_csv(plan: &Plan, rows: &[RunRow]) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let mut head: Vec<String> = vec!["run".into()];
-    head.extend(plan.columns());
-    head.push("seed".into());
-    head.extend(METRIC_COLUMNS.iter().map(|s| s.to_string()));
-    head.push("error".into());
-    w.write_record(&head)?;
+    w.write_record(header(plan.columns()))?;
     for r in rows {
         let mut rec: Vec<String> = vec![r.index.to_string()];
         rec.extend(r.values.iter().map(cell));
         rec.push(r.seed.to_string());
         match &r.metrics {
-            Some(m) => rec.extend(METRIC_COLUMNS.iter().map(|k| m.cell(k))),
+            Some(m) => rec.extend(METRIC_COLUMNS.iter().map(|k| metric_cell(m, k))),
             None => rec.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len())),
         }
         rec.push(r.error.clone().unwrap_or_default());
@@ -65,5 +92,26 @@ pub fn as_f64(v: &toml::Value) -> Option<f64> {
         toml::Value::Float(f) => Some(*f),
         toml::Value::Integer(i) => Some(*i as f64),
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_short_and_finite() {
+        assert_eq!(number_cell(1e308), "1e308");
+        assert_eq!(number_cell(-1.5e-300), "-1.5e-300");
+        assert_eq!(number_cell(0.25), "0.25");
+        assert_eq!(number_cell(100.0), "100.0");
+        assert_eq!(number_cell(0.1 + 0.2), "0.30000000000000004");
+        assert_eq!(number_cell(f64::MAX).parse::<f64>(), Ok(f64::MAX));
+        for x in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert_eq!(number_cell(x), "");
+        }
+        assert_eq!(cell(&toml::Value::Float(1e300)), "1e300");
+        assert_eq!(cell(&toml::Value::Integer(3)), "3");
+        assert_eq!(cell(&toml::Value::String("vsc".into())), "vsc");
     }
 }

@@ -144,6 +144,41 @@ pub struct Study {
 /// Largest number of runs a study may ask for.
 pub const MAX_RUNS: u64 = 2_000_000;
 
+/// The largest |z| a normal draw can reach: Box–Muller from u1 ≥ 2⁻⁵³
+/// gives |z| ≤ √(−2 ln 2⁻⁵³) ≈ 8.57, rounded up.
+const NORMAL_Z_MAX: f64 = 9.0;
+
+/// A value for a message: floats in the shortest form that reads back
+/// (`1e308`, not 309 digits).
+fn show(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(f) => format!("{f:?}"),
+        toml::Value::Array(a) => format!("[{}]", a.iter().map(show).collect::<Vec<_>>().join(", ")),
+        other => other.to_string(),
+    }
+}
+
+/// Whether every number in a value (and in its arrays and tables) is finite.
+fn all_finite(v: &toml::Value) -> bool {
+    match v {
+        toml::Value::Float(f) => f.is_finite(),
+        toml::Value::Array(a) => a.iter().all(all_finite),
+        toml::Value::Table(t) => t.values().all(all_finite),
+        _ => true,
+    }
+}
+
+impl Study {
+    /// The varied columns of results.csv, in order: axes, then drawn keys.
+    pub fn columns(&self) -> Vec<String> {
+        let mut c: Vec<String> = self.axis.iter().map(Axis::column).collect();
+        if let Some(mc) = &self.monte_carlo {
+            c.extend(mc.draw.iter().map(|d| d.key.clone()));
+        }
+        c
+    }
+}
+
 impl Axis {
     /// The keys this axis sets.
     pub fn keys(&self) -> Vec<String> {
@@ -159,14 +194,17 @@ impl Axis {
             .unwrap_or_else(|| self.keys().first().cloned().unwrap_or_default())
     }
 
-    /// The values, expanded.
-    pub fn expand(&self) -> Result<Vec<toml::Value>, String> {
+    /// How many values the axis has, computed without expanding it: a
+    /// range that is not finite, whose width `to − from` overflows, or
+    /// whose count exceeds [`MAX_RUNS`] is an error, so nothing is ever
+    /// allocated or indexed from an overflowed count.
+    pub fn count(&self) -> Result<u64, String> {
         match &self.values {
             AxisValues::List(v) => {
                 if v.is_empty() {
                     return Err("`values` is empty".into());
                 }
-                Ok(v.clone())
+                Ok(v.len() as u64)
             }
             AxisValues::Step { from, to, step } => {
                 if !(from.is_finite()
@@ -176,63 +214,170 @@ impl Axis {
                     && to >= from)
                 {
                     return Err(format!(
-                        "needs finite from ≤ to and step > 0 (got {from}, {to}, {step})"
+                        "needs finite from ≤ to and step > 0 (got {from:?}, {to:?}, {step:?})"
                     ));
                 }
-                let n = ((to - from) / step + 1e-9).floor() as u64 + 1;
-                if n > MAX_RUNS {
-                    return Err(format!("{n} values is too many"));
+                let width = to - from;
+                if !width.is_finite() {
+                    return Err(format!(
+                        "the width to − from = {to:?} − {from:?} overflows a float"
+                    ));
                 }
-                // from + k·step, never accumulated.
-                Ok((0..n)
-                    .map(|k| toml::Value::Float(from + k as f64 * step))
-                    .collect())
+                // The count as a float first: a huge quotient must not
+                // saturate (or wrap) an integer. (Never NaN: width ≥ 0 and
+                // step > 0 are finite; ∞ is caught here.)
+                let q = (width / step + 1e-9).floor();
+                if q >= MAX_RUNS as f64 {
+                    return Err(format!(
+                        "from {from:?} to {to:?} by {step:?} is more than {MAX_RUNS} values (the run limit)"
+                    ));
+                }
+                Ok(q as u64 + 1)
             }
             AxisValues::Count { from, to, n, scale } => {
                 if *n < 2 || !from.is_finite() || !to.is_finite() {
                     return Err(format!("needs finite from, to and n ≥ 2 (got n = {n})"));
                 }
-                if *scale == Scale::Log && (*from <= 0.0 || *to <= 0.0) {
-                    return Err("a log scale needs from, to > 0".into());
+                if u64::from(*n) > MAX_RUNS {
+                    return Err(format!(
+                        "n = {n} values is more than {MAX_RUNS} (the run limit)"
+                    ));
                 }
-                Ok((0..*n)
-                    .map(|k| {
-                        let f = k as f64 / (*n - 1) as f64;
-                        toml::Value::Float(match scale {
-                            Scale::Linear => from + f * (to - from),
-                            Scale::Log => (from.ln() + f * (to.ln() - from.ln())).exp(),
-                        })
-                    })
-                    .collect())
+                match scale {
+                    Scale::Log if *from <= 0.0 || *to <= 0.0 => {
+                        return Err(format!(
+                            "a log scale needs from, to > 0 (got {from:?}, {to:?})"
+                        ))
+                    }
+                    Scale::Linear if !(to - from).is_finite() => {
+                        return Err(format!(
+                            "the width to − from = {to:?} − {from:?} overflows a float"
+                        ))
+                    }
+                    _ => {}
+                }
+                Ok(u64::from(*n))
             }
         }
+    }
+
+    /// The values, expanded (after [`Axis::count`] has bounded their
+    /// number); every number among them is finite.
+    pub fn expand(&self) -> Result<Vec<toml::Value>, String> {
+        let n = self.count()?;
+        let vals: Vec<toml::Value> = match &self.values {
+            AxisValues::List(v) => v.clone(),
+            // from + k·step, never accumulated.
+            AxisValues::Step { from, step, .. } => (0..n)
+                .map(|k| toml::Value::Float(from + k as f64 * step))
+                .collect(),
+            // The ends exactly as written, the values between them kept
+            // inside [from, to] (exp∘ln of a `to` near the largest float
+            // could round to ∞).
+            AxisValues::Count {
+                from, to, scale, ..
+            } => (0..n)
+                .map(|k| {
+                    let f = k as f64 / (n - 1) as f64;
+                    toml::Value::Float(match k {
+                        0 => *from,
+                        _ if k == n - 1 => *to,
+                        _ => match scale {
+                            Scale::Linear => from + f * (to - from),
+                            Scale::Log => (from.ln() + f * (to.ln() - from.ln())).exp(),
+                        }
+                        .clamp(from.min(*to), from.max(*to)),
+                    })
+                })
+                .collect(),
+        };
+        if let Some((k, v)) = vals.iter().enumerate().find(|(_, v)| !all_finite(v)) {
+            return Err(format!("value {k} ({}) is not a finite number", show(v)));
+        }
+        Ok(vals)
     }
 }
 
 impl Draw {
+    /// Checks the parameters: finite, in their domain, only those of the
+    /// distribution, and such that no draw can overflow to ±∞ or NaN.
     fn check(&self) -> Result<(), String> {
         let ok = |v: Option<f64>| v.is_some_and(f64::is_finite);
+        let name = match self.dist {
+            Dist::Uniform => "uniform",
+            Dist::Loguniform => "loguniform",
+            Dist::Normal => "normal",
+            Dist::Choice => "choice",
+        };
+        let given = [
+            ("low", self.low.is_some()),
+            ("high", self.high.is_some()),
+            ("mean", self.mean.is_some()),
+            ("sd", self.sd.is_some()),
+            ("values", !self.values.is_empty()),
+        ];
+        let wanted: &[&str] = match self.dist {
+            Dist::Uniform | Dist::Loguniform => &["low", "high"],
+            Dist::Normal => &["mean", "sd"],
+            Dist::Choice => &["values"],
+        };
+        if let Some((k, _)) = given.iter().find(|(k, g)| *g && !wanted.contains(k)) {
+            return Err(format!(
+                "`{k}` does not apply to a {name} draw (it takes {})",
+                wanted.join(", ")
+            ));
+        }
         match self.dist {
             Dist::Uniform | Dist::Loguniform => {
                 if !(ok(self.low) && ok(self.high) && self.low < self.high) {
                     return Err("needs finite low < high".into());
                 }
-                if self.dist == Dist::Loguniform && self.low.unwrap_or(0.0) <= 0.0 {
+                let (lo, hi) = (self.low.unwrap_or(0.0), self.high.unwrap_or(1.0));
+                if self.dist == Dist::Loguniform && lo <= 0.0 {
                     return Err("loguniform needs low > 0".into());
+                }
+                if !(hi - lo).is_finite() {
+                    return Err(format!(
+                        "the width high − low = {hi:?} − {lo:?} overflows a float"
+                    ));
                 }
             }
             Dist::Normal => {
                 if !(ok(self.mean) && ok(self.sd) && self.sd.unwrap_or(-1.0) >= 0.0) {
                     return Err("needs finite mean and sd ≥ 0".into());
                 }
+                let (m, sd) = (self.mean.unwrap_or(0.0), self.sd.unwrap_or(0.0));
+                if !(m.abs() + NORMAL_Z_MAX * sd).is_finite() {
+                    return Err(format!(
+                        "draws of mean ± {NORMAL_Z_MAX:?}·sd (mean {m:?}, sd {sd:?}) overflow a float"
+                    ));
+                }
             }
             Dist::Choice => {
                 if self.values.is_empty() {
                     return Err("needs a non-empty `values`".into());
                 }
+                if let Some(v) = self.values.iter().find(|v| !all_finite(v)) {
+                    return Err(format!("value {} is not a finite number", show(v)));
+                }
             }
         }
         Ok(())
+    }
+
+    /// Values to try on the base scenario, as an axis's values are tried:
+    /// the middle of a range (its ends may be open, or outside a key's
+    /// domain only at the edge), the mean, or every choice.
+    fn probes(&self) -> Vec<toml::Value> {
+        let (lo, hi) = (self.low.unwrap_or(0.0), self.high.unwrap_or(1.0));
+        match self.dist {
+            Dist::Uniform => vec![toml::Value::Float(lo + (hi - lo) / 2.0)],
+            Dist::Loguniform => vec![toml::Value::Float(
+                ((lo.ln() + hi.ln()) / 2.0).exp().clamp(lo, hi),
+            )],
+            Dist::Normal => vec![toml::Value::Float(self.mean.unwrap_or(0.0))],
+            Dist::Choice => self.values.clone(),
+        }
     }
 }
 
@@ -295,26 +440,109 @@ impl Plan {
 
     pub(super) fn build(study: Study, base: Scenario, file: &str) -> Result<Plan, StudyError> {
         let bad = |key: String, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
-        let mut axes = Vec::new();
-        let mut grid: u64 = 1;
-        let mut columns: Vec<String> = Vec::new();
+
+        // First the size, from the ranges alone: every axis's count and
+        // their product with the replicates, in checked arithmetic, against
+        // the run limit — before anything is expanded or allocated.
+        let mut counts = Vec::new();
         for (i, a) in study.axis.iter().enumerate() {
             if a.keys().is_empty() {
                 return Err(bad(format!("axis[{i}]"), "needs `key` or `keys`".into()));
             }
+            counts.push(a.count().map_err(|r| bad(format!("axis[{i}].values"), r))?);
+        }
+        let replicates = match &study.monte_carlo {
+            Some(mc) if mc.runs == 0 => {
+                return Err(bad("monte_carlo.runs".into(), "must be ≥ 1".into()))
+            }
+            Some(mc) => u64::from(mc.runs),
+            None => 1,
+        };
+        let within = |acc: u64, n: &u64| acc.checked_mul(*n).filter(|r| *r <= MAX_RUNS);
+        let grid = counts.iter().try_fold(1u64, within);
+        let Some(runs) = grid.and_then(|g| within(g, &replicates)) else {
+            let mut shape: Vec<String> = Vec::new();
+            if !counts.is_empty() {
+                let c: Vec<String> = counts.iter().map(u64::to_string).collect();
+                shape.push(format!("{} values", c.join(" × ")));
+            }
+            if study.monte_carlo.is_some() {
+                shape.push(format!("{replicates} replicates"));
+            }
+            return Err(bad(
+                if grid.is_some() {
+                    "monte_carlo.runs"
+                } else {
+                    "axis"
+                }
+                .into(),
+                format!(
+                    "{} is more than the limit of {MAX_RUNS} runs",
+                    shape.join(" × ")
+                ),
+            ));
+        };
+
+        // Columns must be distinct and not those results.csv writes itself;
+        // a key may be set by one axis or draw only (else one would
+        // silently override the other).
+        let mut columns: Vec<String> = ["run", "seed", "error"]
+            .iter()
+            .chain(super::METRIC_COLUMNS.iter())
+            .map(|c| c.to_string())
+            .collect();
+        let reserved = columns.len();
+        let mut owners: Vec<(String, String)> = Vec::new();
+        if study.monte_carlo.is_some() {
+            owners.push((
+                "uncertainty.seed".into(),
+                "the run seed of a Monte Carlo study".into(),
+            ));
+        }
+        let mut claim = |who: String, column: String, keys: Vec<String>| {
+            if let Some(at) = columns.iter().position(|c| *c == column) {
+                return Err(bad(
+                    who,
+                    if at < reserved {
+                        format!("column `{column}` is one results.csv writes itself: give it another `name`")
+                    } else {
+                        format!("column `{column}` appears twice")
+                    },
+                ));
+            }
+            columns.push(column);
+            for k in keys {
+                let norm = k.split('.').map(str::trim).collect::<Vec<_>>().join(".");
+                if let Some((_, owner)) = owners.iter().find(|(o, _)| *o == norm) {
+                    return Err(bad(who, format!("`{k}` is also set by {owner}")));
+                }
+                owners.push((norm, who.clone()));
+            }
+            Ok(())
+        };
+        for (i, a) in study.axis.iter().enumerate() {
+            claim(format!("axis[{i}]"), a.column(), a.keys())?;
+        }
+        for (j, d) in study
+            .monte_carlo
+            .iter()
+            .flat_map(|mc| mc.draw.iter())
+            .enumerate()
+        {
+            claim(
+                format!("monte_carlo.draw[{j}]"),
+                d.key.clone(),
+                vec![d.key.clone()],
+            )?;
+        }
+
+        // Then the values: finite, and each giving a valid scenario (first
+        // and last suffice for ranges; lists are checked whole).
+        let mut axes = Vec::new();
+        for (i, a) in study.axis.iter().enumerate() {
             let vals = a
                 .expand()
                 .map_err(|r| bad(format!("axis[{i}].values"), r))?;
-            grid = grid.saturating_mul(vals.len() as u64);
-            if columns.contains(&a.column()) {
-                return Err(bad(
-                    format!("axis[{i}]"),
-                    format!("column `{}` appears twice", a.column()),
-                ));
-            }
-            columns.push(a.column());
-            // Every value must give a valid scenario (first and last suffice
-            // for ranges; lists are checked whole).
             let probe: Vec<&toml::Value> = match a.values {
                 AxisValues::List(_) => vals.iter().collect(),
                 _ => vec![&vals[0], &vals[vals.len() - 1]],
@@ -323,41 +551,29 @@ impl Plan {
                 let set: Vec<(String, toml::Value)> =
                     a.keys().into_iter().map(|k| (k, v.clone())).collect();
                 base.with_values(&set)
-                    .map_err(|e| bad(format!("axis[{i}]"), format!("value {v}: {e}")))?;
+                    .map_err(|e| bad(format!("axis[{i}]"), format!("value {}: {e}", show(v))))?;
             }
-        }
-        let replicates = match &study.monte_carlo {
-            Some(mc) => {
-                if mc.runs == 0 {
-                    return Err(bad("monte_carlo.runs".into(), "must be ≥ 1".into()));
-                }
-                for (j, d) in mc.draw.iter().enumerate() {
-                    d.check()
-                        .map_err(|r| bad(format!("monte_carlo.draw[{j}]"), r))?;
-                    if columns.contains(&d.key) {
-                        return Err(bad(
-                            format!("monte_carlo.draw[{j}]"),
-                            format!("`{}` is also an axis", d.key),
-                        ));
-                    }
-                    columns.push(d.key.clone());
-                }
-                mc.runs as u64
-            }
-            None => 1,
-        };
-        let runs = grid.saturating_mul(replicates);
-        if runs > MAX_RUNS {
-            return Err(bad(
-                "axis".into(),
-                format!("{runs} runs exceed the limit of {MAX_RUNS}"),
-            ));
-        }
-        for (i, a) in study.axis.iter().enumerate() {
-            let vals = a
-                .expand()
-                .map_err(|r| bad(format!("axis[{i}].values"), r))?;
             axes.push((a.clone(), vals));
+        }
+        // Draws likewise: parameters that cannot overflow, and a key the
+        // scenario knows (a typo would otherwise make every run invalid).
+        for (j, d) in study
+            .monte_carlo
+            .iter()
+            .flat_map(|mc| mc.draw.iter())
+            .enumerate()
+        {
+            d.check()
+                .map_err(|r| bad(format!("monte_carlo.draw[{j}]"), r))?;
+            for v in d.probes() {
+                base.with_values(&[(d.key.clone(), v.clone())])
+                    .map_err(|e| {
+                        bad(
+                            format!("monte_carlo.draw[{j}]"),
+                            format!("value {}: {e}", show(&v)),
+                        )
+                    })?;
+            }
         }
         Ok(Plan {
             study,
@@ -391,5 +607,123 @@ values = [-1.0]
         .unwrap();
         let e = Plan::build(study, Scenario::parse("").unwrap(), "t.toml").unwrap_err();
         assert!(e.0.contains("axis[0]") && e.0.contains("gamma1"), "{e}");
+    }
+
+    fn build(text: &str) -> Result<Plan, StudyError> {
+        let study: Study = toml::from_str(text).unwrap();
+        Plan::build(study, Scenario::parse("").unwrap(), "t.toml")
+    }
+
+    #[test]
+    fn sizes_are_checked_before_anything_is_expanded() {
+        let axis = |values: &str| -> Axis {
+            toml::from_str(&format!("key = \"controller.eta\"\nvalues = {values}")).unwrap()
+        };
+        // Counts that overflow a float or an integer, or exceed the limit.
+        for v in [
+            "{ from = 0.0, to = 1e300, step = 1e-300 }",
+            "{ from = -1e308, to = 1e308, step = 1.0 }",
+            "{ from = 0.0, to = 1.0, step = 5e-324 }",
+            "{ from = 0.0, to = 1.0, n = 4294967295 }",
+            "{ from = -1e308, to = 1e308, n = 3 }",
+        ] {
+            assert!(axis(v).count().is_err(), "{v}");
+            assert!(axis(v).expand().is_err(), "{v}");
+        }
+        // The count is the number of values expanded.
+        for v in [
+            "{ from = 0.0, to = 3.0, step = 0.025 }",
+            "{ from = 0.0, to = 1.0, step = 0.3 }",
+            "{ from = 2.0, to = 2.0, step = 1.0 }",
+            "{ from = 1e-300, to = 1e300, n = 7, scale = \"log\" }",
+            "{ from = 5e-324, to = 1.7976931348623157e308, n = 5, scale = \"log\" }",
+            "{ from = -8.9e307, to = 8.9e307, n = 5 }",
+            "{ from = 1.0, to = 0.0, n = 4 }",
+            "[1.0, 2.0]",
+        ] {
+            let a = axis(v);
+            let vals = a.expand().unwrap();
+            assert_eq!(a.count().unwrap(), vals.len() as u64, "{v}");
+            if let AxisValues::Count { from, to, .. } = a.values {
+                // The ends as written, the rest between them.
+                let x: Vec<f64> = vals.iter().filter_map(toml::Value::as_float).collect();
+                assert_eq!((x[0], x[x.len() - 1]), (from, to), "{v}");
+                assert!(
+                    x.iter().all(|x| (from.min(to)..=from.max(to)).contains(x)),
+                    "{v}"
+                );
+            }
+        }
+        // Each axis within the limit, their product not: refused from the
+        // counts (2000³ values would be 8·10⁹ runs).
+        let e = build(
+            r#"name = "t"
+base = "x"
+[[axis]]
+key = "controller.gamma1"
+values = { from = 1.0, to = 2.0, n = 2000 }
+[[axis]]
+key = "controller.eta"
+values = { from = 0.0, to = 1.0, n = 2000 }
+[[axis]]
+key = "uncertainty.a_bias"
+values = { from = 0.0, to = 1.0, n = 2000 }
+"#,
+        )
+        .unwrap_err();
+        assert!(e.0.contains("2000 × 2000 × 2000 values"), "{e}");
+        // Replicates that take a grid within the limit over it.
+        let e = build(
+            r#"name = "t"
+base = "x"
+[[axis]]
+key = "controller.eta"
+values = { from = 0.0, to = 1.0, n = 2000000 }
+[monte_carlo]
+runs = 4294967295
+"#,
+        )
+        .unwrap_err();
+        assert!(e.0.contains("`monte_carlo.runs`"), "{e}");
+    }
+
+    #[test]
+    fn draws_are_checked_like_axes() {
+        for (draw, needle) in [
+            // A typo: every run would have been invalid.
+            (
+                "key = \"controller.gama1\"\ndist = \"uniform\"\nlow = 1.0\nhigh = 2.0",
+                "gama1",
+            ),
+            (
+                "key = \"controller.eta\"\ndist = \"uniform\"\nlow = -1e308\nhigh = 1e308",
+                "overflows",
+            ),
+            (
+                "key = \"controller.eta\"\ndist = \"normal\"\nmean = 1.0\nsd = 1e308",
+                "overflow",
+            ),
+            (
+                "key = \"controller.eta\"\ndist = \"normal\"\nmean = 1.0\nsd = 0.1\nlow = 0.0",
+                "`low` does not apply",
+            ),
+            (
+                "key = \"controller.eta\"\ndist = \"choice\"\nvalues = [0.1, nan]",
+                "finite",
+            ),
+            (
+                "key = \"controller.kind\"\ndist = \"choice\"\nvalues = [\"vsc\", \"vcs\"]",
+                "vcs",
+            ),
+        ] {
+            let e = build(&format!(
+                "name = \"t\"\nbase = \"x\"\n[monte_carlo]\nruns = 2\n[[monte_carlo.draw]]\n{draw}\n"
+            ))
+            .unwrap_err();
+            assert!(
+                e.0.contains("monte_carlo.draw[0]") && e.0.contains(needle),
+                "{needle}: {e}"
+            );
+        }
     }
 }
