@@ -405,8 +405,8 @@ impl Plan {
                 format!("{file}{at}: `{key}`: {reason}")
             })
         };
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| bad("", None, format!("cannot read the study file: {e}")))?;
+        let text = crate::input::read_text(path)
+            .map_err(|r| bad("", None, format!("the study file {r}")))?;
         let de = toml::Deserializer::parse(&text).map_err(|e| {
             let lc = e
                 .span()
