@@ -21,6 +21,7 @@ pub mod plot;
 pub mod reproduce;
 pub mod run;
 pub mod scenario;
+pub mod signals;
 pub mod study;
 
 pub use ehservo_sim::{actuator, metrics, plant, sensor, simulation};
