@@ -22,6 +22,7 @@ pub mod plot;
 pub mod reproduce;
 pub mod run;
 pub mod scenario;
+pub mod signals;
 pub mod study;
 
 pub use ehservo_sim::{actuator, metrics, plant, sensor, simulation};

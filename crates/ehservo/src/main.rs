@@ -1,13 +1,67 @@
 //! The `ehservo` command line.
+//!
+//! Exit codes:
+//! - 0: done;
+//! - 1: the machine failed: a file that cannot be read or written, a full
+//!   disk, standard output that cannot be written (`> /dev/full`: one line,
+//!   `error: writing to stdout: …`) or that was closed by its reader
+//!   (`| head -1`, `| true`: no message at all, the reader has gone);
+//! - 2: bad input (a scenario, a flag, an output folder that is not ours);
+//! - 130: interrupted by `SIGINT`, `SIGTERM` or `SIGHUP`; the staging
+//!   folders of the outputs being written are removed, the previous outputs
+//!   stay as they were ([`ehservo::signals`]).
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use ehservo::output;
 use ehservo::run::{run, Keep};
 use ehservo::scenario::Scenario;
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
+
+/// Most worker threads `--threads` accepts.
+const MAX_THREADS: usize = 1024;
+
+/// A failed write to standard output, kept apart from other I/O errors: a
+/// closed pipe ends the command quietly.
+#[derive(Debug)]
+struct StdoutError(std::io::Error);
+
+impl std::fmt::Display for StdoutError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "writing to stdout: {}", self.0)
+    }
+}
+
+impl std::error::Error for StdoutError {}
+
+/// `writeln!` to the command's output, returning a [`StdoutError`] from the
+/// enclosing function when it fails (where `println!` would panic).
+macro_rules! out {
+    ($w:expr) => {
+        writeln!($w).map_err(StdoutError)?
+    };
+    ($w:expr, $($arg:tt)*) => {
+        writeln!($w, $($arg)*).map_err(StdoutError)?
+    };
+}
+
+/// `write!` to the command's output, like [`out!`] without the newline.
+macro_rules! put {
+    ($w:expr, $($arg:tt)*) => {
+        write!($w, $($arg)*).map_err(StdoutError)?
+    };
+}
+
+/// A line on standard error; if even that fails there is nowhere left to
+/// say so.
+macro_rules! note {
+    ($($arg:tt)*) => {
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    };
+}
 
 /// Simulate and control electrohydraulic servo systems (Hwang's NNBVSC).
 #[derive(Parser)]
@@ -80,7 +134,7 @@ enum Command {
         /// Run only the K-th of N contiguous slices (K from 0), e.g. --shard 0/4.
         #[arg(long, value_name = "K/N")]
         shard: Option<String>,
-        /// Worker threads (default: every core).
+        /// Worker threads, 1 to 1024 (default: every core).
         #[arg(long)]
         threads: Option<usize>,
         /// No progress bar, no summary.
@@ -104,21 +158,65 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match dispatch(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // --help and --version go to stdout (and follow its rules),
+            // usage errors to stderr (exit 2 whatever becomes of them).
+            let printed = e.print().and_then(|()| std::io::stdout().flush());
+            return match printed {
+                Err(io) if !e.use_stderr() => {
+                    if io.kind() != std::io::ErrorKind::BrokenPipe {
+                        note!("error: writing to stdout: {io}");
+                    }
+                    ExitCode::from(1)
+                }
+                _ => ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2)),
+            };
+        }
+    };
+    // Without it a signal still ends the process, but leaves the staging
+    // folders; that is all a failure here costs.
+    if let Err(e) = ehservo::signals::install() {
+        note!("warning: no handler for Ctrl-C and SIGTERM: {e}");
+    }
+    let stdout = std::io::stdout();
+    let mut w = stdout.lock();
+    let done = dispatch(cli, &mut w).and_then(|()| Ok(w.flush().map_err(StdoutError)?));
+    match done {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if closed_stdout(&e) => ExitCode::from(1),
+        Err(e) => {
+            note!("error: {e:#}");
             ExitCode::from(ehservo::error::exit_code(&e))
         }
     }
+}
+
+/// Whether the error is standard output closed by its reader.
+fn closed_stdout(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<StdoutError>()
+            .is_some_and(|s| s.0.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// The scenario's name as the folder of its default output, `out/<name>`:
+/// one plain name, never a path that leads elsewhere.
+fn default_out(name: &str) -> Result<PathBuf> {
+    if name.is_empty() || name == "." || name.contains("..") || name.contains(['/', '\\', '\0']) {
+        ehservo::bad_input!(
+            "`name` = {name:?}: must be a plain name without '/' or '..' to be used as the output folder; pass --out"
+        );
+    }
+    Ok(PathBuf::from("out").join(name))
 }
 
 fn load(path: &std::path::Path, set: &[String]) -> Result<Scenario> {
     Ok(Scenario::load(path, set)?)
 }
 
-fn dispatch(cli: Cli) -> Result<()> {
+fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
     match cli.command {
         Command::Run {
             scenario,
@@ -128,11 +226,14 @@ fn dispatch(cli: Cli) -> Result<()> {
             quiet,
         } => {
             let s = load(&scenario, &set)?;
-            let dir = out.unwrap_or_else(|| PathBuf::from("out").join(&s.name));
+            let dir = match out {
+                Some(d) => d,
+                None => default_out(&s.name)?,
+            };
             let start = Instant::now();
             let rows = s.sim_config().steps / s.output.decimate.max(1) as u64 + 1;
             if rows > 2_000_000 && !quiet {
-                eprintln!(
+                note!(
                     "note: trace.csv will have {rows} rows (about {} MB); set output.decimate to thin it",
                     rows * 300 / 1_000_000
                 );
@@ -140,12 +241,12 @@ fn dispatch(cli: Cli) -> Result<()> {
             let (r, files) = output::run_to_dir(&dir, &s, s.output.plot && !no_plot)?;
             let elapsed = start.elapsed();
             if !quiet {
-                print_summary(&s, &r, elapsed.as_secs_f64());
+                print_summary(w, &s, &r, elapsed.as_secs_f64())?;
                 let names: Vec<String> = files
                     .iter()
                     .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
                     .collect();
-                println!("wrote {}/{{{}}}", dir.display(), names.join(", "));
+                out!(w, "wrote {}/{{{}}}", dir.display(), names.join(", "));
             }
             Ok(())
         }
@@ -175,19 +276,19 @@ fn dispatch(cli: Cli) -> Result<()> {
                     "diagnostics": diag.as_ref().and_then(|d| d.0.clone()),
                     "diverged_at_s": diag.as_ref().and_then(|d| d.1.map(|x| x.t)),
                 });
-                println!("{}", serde_json::to_string_pretty(&v)?);
+                out!(w, "{}", serde_json::to_string_pretty(&v)?);
             } else {
-                println!("{} ({})\n", s.name, scenario.display());
-                print!("{}", a.to_text());
+                out!(w, "{} ({})\n", s.name, scenario.display());
+                put!(w, "{}", a.to_text());
                 match diag {
                     Some((Some(d), div)) => {
-                        println!();
-                        print!("{}", d.to_text());
+                        out!(w);
+                        put!(w, "{}", d.to_text());
                         if let Some(dv) = div {
-                            println!("  (the run was unbounded at t = {:.4} s)", dv.t);
+                            out!(w, "  (the run was unbounded at t = {:.4} s)", dv.t);
                         }
                     }
-                    Some((None, _)) => println!("\n(--run: condition 4) concerns the NNBVSC only)"),
+                    Some((None, _)) => out!(w, "\n(--run: condition 4) concerns the NNBVSC only)"),
                     None => {}
                 }
             }
@@ -195,8 +296,8 @@ fn dispatch(cli: Cli) -> Result<()> {
         }
         Command::Check { scenario, set } => {
             let s = load(&scenario, &set)?;
-            print!("{}", s.to_toml());
-            eprintln!(
+            put!(w, "{}", s.to_toml());
+            note!(
                 "{}: ok ({} steps)",
                 scenario.display(),
                 s.sim_config().steps
@@ -216,6 +317,9 @@ fn dispatch(cli: Cli) -> Result<()> {
                     manifest.display()
                 );
             }
+            // Minutes of runs are not spent before finding the output
+            // folder refused or unwritable.
+            output::probe_destination(&out)?;
             let opts = ehservo::reproduce::Options {
                 paper_dir,
                 out: out.clone(),
@@ -226,7 +330,8 @@ fn dispatch(cli: Cli) -> Result<()> {
             let start = Instant::now();
             let rep = ehservo::reproduce::reproduce(&opts)?;
             if !quiet {
-                println!(
+                out!(
+                    w,
                     "reproduced {} claims under {} readings in {:.1} s; figures use `{}`:",
                     rep.claims.len(),
                     rep.agreements.len(),
@@ -234,9 +339,13 @@ fn dispatch(cli: Cli) -> Result<()> {
                     rep.primary_reading
                 );
                 for (r, n) in &rep.agreements {
-                    println!("  {r:<18} {n:>2} / {} claims agree", rep.claims.len());
+                    out!(w, "  {r:<18} {n:>2} / {} claims agree", rep.claims.len());
                 }
-                println!("wrote {}/report.md, report.html, figures/", out.display());
+                out!(
+                    w,
+                    "wrote {}/report.md, report.html, figures/",
+                    out.display()
+                );
             }
             Ok(())
         }
@@ -249,6 +358,11 @@ fn dispatch(cli: Cli) -> Result<()> {
             no_plot,
         } => {
             use std::io::IsTerminal;
+            if let Some(t) = threads {
+                if !(1..=MAX_THREADS).contains(&t) {
+                    ehservo::bad_input!("--threads {t}: must be between 1 and {MAX_THREADS}");
+                }
+            }
             let plan = ehservo::study::Plan::load(&study)?;
             let shard = match shard {
                 Some(s) => Some(
@@ -257,9 +371,9 @@ fn dispatch(cli: Cli) -> Result<()> {
                 ),
                 None => None,
             };
-            if threads == Some(0) {
-                ehservo::bad_input!("--threads: must be ≥ 1");
-            }
+            // Hours of runs are not spent before finding the output
+            // folder refused or unwritable.
+            output::probe_destination(&out)?;
             let opts = ehservo::study::SweepOptions {
                 out: out.clone(),
                 shard,
@@ -275,7 +389,8 @@ fn dispatch(cli: Cli) -> Result<()> {
                     .filter(|r| r.metrics.is_some_and(|m| m.diverged))
                     .count();
                 let invalid = rows.iter().filter(|r| r.error.is_some()).count();
-                println!(
+                out!(
+                    w,
                     "{}: {} runs{} in {:.2} s ({} unbounded{}); wrote {}/results.csv",
                     plan.study.name,
                     rows.len(),
@@ -297,7 +412,8 @@ fn dispatch(cli: Cli) -> Result<()> {
         }
         Command::Merge { dirs, out } => {
             let n = ehservo::study::merge(&dirs, &out)?;
-            println!(
+            out!(
+                w,
                 "merged {} shard(s), {n} runs, into {}/results.csv",
                 dirs.len(),
                 out.display()
@@ -310,7 +426,7 @@ fn dispatch(cli: Cli) -> Result<()> {
                 description: "The paper's Fig. 2 case (every default).".into(),
                 ..Scenario::default()
             };
-            print!("{}", s.to_toml());
+            put!(w, "{}", s.to_toml());
             Ok(())
         }
     }
@@ -323,10 +439,16 @@ fn fmt_opt(v: Option<f64>, digits: usize, unit: &str) -> String {
     }
 }
 
-fn print_summary(s: &Scenario, r: &ehservo::run::RunResult, secs: f64) {
+fn print_summary(
+    w: &mut impl Write,
+    s: &Scenario,
+    r: &ehservo::run::RunResult,
+    secs: f64,
+) -> Result<()> {
     let m = &r.metrics;
     let sim = &s.simulation;
-    println!(
+    out!(
+        w,
         "{}: {} on the {} plant, {} (h = {} s{}), horizon {} s",
         s.name,
         s.controller.kind(),
@@ -345,37 +467,60 @@ fn print_summary(s: &Scenario, r: &ehservo::run::RunResult, secs: f64) {
     );
     match r.outcome.diverged {
         Some(d) => {
-            println!("  UNBOUNDED at t = {:.4} s: {}", d.t, d.reason.describe());
+            out!(
+                w,
+                "  UNBOUNDED at t = {:.4} s: {}",
+                d.t,
+                d.reason.describe()
+            );
             // The hint `ehservo analyze` gives: is the scheme itself unstable?
-            if let Some(w) = ehservo::analysis::analyze(s).closed_loop.warning {
-                println!("  hint: {w}");
+            if let Some(warning) = ehservo::analysis::analyze(s).closed_loop.warning {
+                out!(w, "  hint: {warning}");
             }
         }
-        None => println!("  bounded over the horizon"),
+        None => out!(w, "  bounded over the horizon"),
     }
-    println!(
+    out!(
+        w,
         "  e_max   (t ≥ {} s)  {}",
         sim.settle,
         fmt_opt(m.e_max_deg, 4, "°")
     );
-    println!("  e_final (last period) {}", fmt_opt(m.e_final_deg, 4, "°"));
-    println!(
+    out!(
+        w,
+        "  e_final (last period) {}",
+        fmt_opt(m.e_final_deg, 4, "°")
+    );
+    out!(
+        w,
         "  e_rms   (t ≥ {} s)  {}",
         sim.settle,
         fmt_opt(m.e_rms_deg, 4, "°")
     );
-    println!("  u_max                 {}", fmt_opt(m.u_max, 3, " V"));
-    println!("  chattering c[u]       {}", fmt_opt(m.chattering, 4, ""));
+    out!(w, "  u_max                 {}", fmt_opt(m.u_max, 3, " V"));
+    out!(
+        w,
+        "  chattering c[u]       {}",
+        fmt_opt(m.chattering, 4, "")
+    );
     if m.w_norm_max.is_some() {
-        println!(
+        out!(
+            w,
             "  ‖W‖ max / final       {} / {}",
             fmt_opt(m.w_norm_max, 3, ""),
             fmt_opt(m.w_norm_final, 3, "")
         );
-        println!(
+        out!(
+            w,
             "  dead-zone share       {}",
             fmt_opt(m.dead_zone_fraction.map(|f| 100.0 * f), 1, " %")
         );
     }
-    println!("  {} samples simulated in {:.1} ms", m.samples, secs * 1e3);
+    out!(
+        w,
+        "  {} samples simulated in {:.1} ms",
+        m.samples,
+        secs * 1e3
+    );
+    Ok(())
 }

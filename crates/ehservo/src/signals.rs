@@ -1,0 +1,109 @@
+//! What an interrupted process leaves behind: nothing.
+//!
+//! Every [`Staging`](crate::output::Staging) directory that is alive (made,
+//! not yet committed or dropped) is listed here, with the parent folders it
+//! had to create. The command line calls [`install`] once: on `SIGINT`,
+//! `SIGTERM` or `SIGHUP` (Ctrl-C, a cluster's time limit, a closed
+//! terminal) the handler removes every listed directory and ends the process
+//! with [`EXIT_CODE`]. A commit holds the list's lock while it moves the
+//! output into place, so a signal that arrives then waits for the commit to
+//! finish: the output folder is either the old one or the new one, whole.
+
+use std::path::PathBuf;
+use std::sync::{Mutex, MutexGuard};
+
+/// The exit code after a signal, whichever of `SIGINT`, `SIGTERM` or
+/// `SIGHUP` it was (the handler is not told which): 130, the shells'
+/// "interrupted".
+pub const EXIT_CODE: i32 = 130;
+
+/// A live staging directory and the folders made for it, deepest first.
+#[derive(Debug)]
+struct Entry {
+    id: u64,
+    tmp: PathBuf,
+    created: Vec<PathBuf>,
+}
+
+/// The live staging directories.
+#[derive(Debug)]
+pub(crate) struct Registry {
+    next: u64,
+    live: Vec<Entry>,
+}
+
+static REGISTRY: Mutex<Registry> = Mutex::new(Registry {
+    next: 0,
+    live: Vec::new(),
+});
+
+/// The registry, locked (a panic elsewhere does not make it unusable).
+pub(crate) fn registry() -> MutexGuard<'static, Registry> {
+    REGISTRY.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl Registry {
+    /// Lists `tmp` (and the parents `created` for it, deepest first);
+    /// returns the key for [`Registry::remove`].
+    pub(crate) fn add(&mut self, tmp: PathBuf, created: Vec<PathBuf>) -> u64 {
+        self.next += 1;
+        self.live.push(Entry {
+            id: self.next,
+            tmp,
+            created,
+        });
+        self.next
+    }
+
+    /// Takes an entry off the list (after a commit, or after its own
+    /// cleanup).
+    pub(crate) fn remove(&mut self, id: u64) {
+        self.live.retain(|e| e.id != id);
+    }
+
+    /// Removes every listed directory from the disk and empties the list.
+    fn clean_all(&mut self) {
+        for e in self.live.drain(..) {
+            remove_tree(&e.tmp);
+            remove_created(&e.created);
+        }
+    }
+}
+
+/// Removes a directory tree; retried because a thread still writing into it
+/// may add an entry between the listing and the final `rmdir`.
+pub(crate) fn remove_tree(dir: &std::path::Path) {
+    for _ in 0..5 {
+        match std::fs::remove_dir_all(dir) {
+            Ok(()) => return,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return,
+            Err(_) => {}
+        }
+    }
+}
+
+/// Removes folders made for a staging directory, deepest first, each only
+/// while empty (someone else may have put something there meanwhile).
+pub(crate) fn remove_created(created: &[PathBuf]) {
+    for d in created {
+        if std::fs::remove_dir(d).is_err() {
+            break;
+        }
+    }
+}
+
+/// Installs the handler for `SIGINT`, `SIGTERM` and `SIGHUP`: remove every
+/// live staging directory, then exit with [`EXIT_CODE`]. Call once, early.
+pub fn install() -> Result<(), ctrlc::Error> {
+    ctrlc::set_handler(|| {
+        // Waits for a commit in progress; never released: the process ends.
+        let mut reg = registry();
+        reg.clean_all();
+        std::process::exit(EXIT_CODE);
+    })
+}
+
+/// How many staging directories are alive (for tests).
+pub fn live_staging_dirs() -> usize {
+    registry().live.len()
+}
