@@ -1,5 +1,5 @@
-//! Scenario text → parse, validate, and (when small enough) run: never a
-//! panic, never a NaN in the metrics.
+//! Scenario text → parse, validate, analyse and (when small enough) run:
+//! never a panic, never a hang, never a NaN in the metrics or the summary.
 #![no_main]
 
 use ehservo::run::{run, Keep};
@@ -9,6 +9,8 @@ use libfuzzer_sys::fuzz_target;
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
     if let Ok(s) = Scenario::parse_with(&text, "fuzz.toml", &[]) {
+        // The analysis is in every summary.json: it must end, whatever the values.
+        let _ = ehservo::analysis::analyze(&s);
         if s.sim_config().steps * s.simulation.substeps as u64 <= 2000 {
             let r = run(&s, Keep::Every(1)).expect("a validated scenario runs");
             let m = r.metrics;
@@ -17,7 +19,10 @@ fuzz_target!(|data: &[u8]| {
             }
             for smp in &r.trace {
                 assert!(smp.u.is_finite() && smp.x.iter().all(|v| v.is_finite()));
+                assert!(smp.values.iter().all(|v| v.is_finite()));
             }
+            let json = serde_json::to_string(&ehservo::output::summary(&s, &r)).unwrap();
+            assert!(!json.contains("NaN"));
         }
     }
 });
