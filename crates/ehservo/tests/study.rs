@@ -141,7 +141,7 @@ fn identical_across_threads_and_shards() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("different studies"));
     assert!(!tmp.path().join("m3").exists());
-    // A shard directory that cannot be read is an I/O failure: exit 1.
+    // A shard folder that is not there is a wrong argument: bad input, exit 2.
     let o = ehservo()
         .arg("merge")
         .arg(tmp.path().join("no-such-shard"))
@@ -151,7 +151,7 @@ fn identical_across_threads_and_shards() {
         .unwrap();
     assert_eq!(
         o.status.code(),
-        Some(1),
+        Some(2),
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );

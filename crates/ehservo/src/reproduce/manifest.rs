@@ -114,20 +114,36 @@ pub struct Manifest {
     pub sensitivity: Vec<Sensitivity>,
 }
 
+/// Most seeds one sensitivity study may ask for.
+pub const MAX_SEEDS: u32 = 1000;
+
 impl Manifest {
     /// Reads and checks a manifest.
     pub fn load(path: &Path) -> Result<Manifest> {
         let bad = |m: String| crate::error::InputError(format!("{}{m}", path.display()));
         let text = crate::input::read_text(path).map_err(|r| bad(format!(": the manifest {r}")))?;
-        // One line: where, and toml's message without its snippet.
-        let m: Manifest = toml::from_str(&text).map_err(|e| {
-            let at = e
-                .span()
-                .map(|s| crate::scenario::line_col(&text, s.start))
+        // One line: where, the key, and toml's message without its snippet.
+        let at = |span: Option<std::ops::Range<usize>>| {
+            span.map(|s| crate::scenario::line_col(&text, s.start))
                 .map(|(l, c)| format!(":{l}:{c}"))
-                .unwrap_or_default();
-            let msg = e.message().lines().next().unwrap_or("").trim().to_string();
-            bad(format!("{at}: {msg}"))
+                .unwrap_or_default()
+        };
+        let first = |m: &str| m.lines().next().unwrap_or("").trim().to_string();
+        let de = toml::Deserializer::parse(&text)
+            .map_err(|e| bad(format!("{}: {}", at(e.span()), first(e.message()))))?;
+        let m: Manifest = serde_path_to_error::deserialize(de).map_err(|e| {
+            let key = e.path().to_string();
+            let inner = e.into_inner();
+            let key = if key == "." || key == "?" {
+                String::new()
+            } else {
+                format!(" `{key}`:")
+            };
+            bad(format!(
+                "{}:{key} {}",
+                at(inner.span()),
+                first(inner.message())
+            ))
         })?;
         m.check()
             .with_context(|| format!("checking {}", path.display()))?;
@@ -183,6 +199,13 @@ impl Manifest {
             }
         }
         for s in &self.sensitivity {
+            if s.seeds.is_some_and(|n| n > MAX_SEEDS) {
+                crate::bad_input!(
+                    "sensitivity `{}`: seeds = {} is more than the limit of {MAX_SEEDS}",
+                    s.id,
+                    s.seeds.unwrap_or(0)
+                );
+            }
             for c in &s.cases {
                 if !cases.contains(c.as_str()) {
                     crate::bad_input!("sensitivity `{}`: unknown case `{c}`", s.id);

@@ -213,7 +213,10 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         .iter()
         .find(|(ri, ci, _)| *ri == primary_idx && manifest.case[*ci].id == "fig2")
         .map(|(_, _, s)| -> Result<_> {
-            let r = run(s, Keep::Every(1))?;
+            let stride = (s.sim_config().steps + 1)
+                .div_ceil(crate::output::MAX_KEPT)
+                .max(1);
+            let r = run(s, Keep::Every(stride as u32))?;
             Ok(crate::analysis::diagnostics(s, &r.trace))
         })
         .transpose()?

@@ -148,8 +148,12 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     let mut records: Vec<(PathBuf, StudyRecord)> = Vec::new();
     for d in dirs {
         let p = d.join("study.json");
-        let text =
-            std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+        // A shard folder without its study.json is a wrong argument, like a
+        // scenario file that is not there: bad input.
+        let text = match crate::input::read_text(&p) {
+            Ok(t) => t,
+            Err(r) => crate::bad_input!("{}: not a shard output: study.json {r}", d.display()),
+        };
         let r: StudyRecord = match serde_json::from_str(&text) {
             Ok(r) => r,
             Err(e) => crate::bad_input!("{}: not a study record: {e}", p.display()),
