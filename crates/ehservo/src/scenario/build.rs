@@ -295,9 +295,17 @@ impl Scenario {
                 "surface".into(),
                 "give either `poles` or `p`, not both".into(),
             )),
-            (Some(poles), None) => {
-                SwitchingSurface::from_poles(poles).map_err(|e| param_err("surface", e))
-            }
+            (Some(poles), None) => SwitchingSurface::from_poles(poles).map_err(|e| {
+                // The poles are what the user set: name them, and the
+                // coefficient they gave if that is what failed.
+                let (_, r) = param_err("surface", e);
+                let r = if matches!(e.name, "p1" | "p2" | "p3") {
+                    format!("these poles give {} out of range: {r}", e.name)
+                } else {
+                    r
+                };
+                ("surface.poles".to_string(), r)
+            }),
             (None, Some(p)) => SwitchingSurface::try_new(p).map_err(|e| {
                 let (_, r) = param_err("surface", e);
                 ("surface.p".into(), r)
