@@ -18,7 +18,7 @@ fn shards() -> &'static (PathBuf, PathBuf, PathBuf) {
         std::fs::write(
             &study,
             format!(
-                "base = {base:?}\nseed = 3\nset = [\"simulation.horizon=0.2\", \"simulation.settle=0.1\"]\n\
+                "name = \"fz\"\nbase = {base:?}\nseed = 3\nset = [\"simulation.horizon=0.2\", \"simulation.settle=0.1\"]\n\
                  [[axis]]\nkey = \"controller.gamma1\"\nvalues = [50.0, 100.0, 150.0, 200.0]\n"
             ),
         )
