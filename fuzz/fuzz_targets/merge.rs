@@ -41,6 +41,17 @@ fn shards() -> &'static (PathBuf, PathBuf, PathBuf) {
     })
 }
 
+/// Retries a file operation that libFuzzer's SIGALRM (its -timeout timer)
+/// interrupted with EINTR: the harness's own set-up, not the code under test.
+fn retry<T>(mut f: impl FnMut() -> std::io::Result<T>) -> T {
+    loop {
+        match f() {
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            r => return r.unwrap(),
+        }
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     let (dir, a, b) = shards();
     if data.is_empty() {
@@ -48,13 +59,13 @@ fuzz_target!(|data: &[u8]| {
     }
     let m = dir.join(format!("mangled-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&m);
-    std::fs::create_dir_all(&m).unwrap();
+    retry(|| std::fs::create_dir_all(&m));
     for f in ["study.json", "results.csv"] {
-        std::fs::copy(b.join(f), m.join(f)).unwrap();
+        retry(|| std::fs::copy(b.join(f), m.join(f)));
     }
     // The first byte picks the file; the rest replaces it.
     let target = if data[0] % 2 == 0 { "study.json" } else { "results.csv" };
-    std::fs::write(m.join(target), &data[1..]).unwrap();
+    retry(|| std::fs::write(m.join(target), &data[1..]));
     let out = dir.join("merged");
     let _ = std::fs::remove_dir_all(&out);
     if let Ok(n) = ehservo::study::merge(&[a.clone(), m.clone()], &out) {
