@@ -266,6 +266,15 @@ impl Scenario {
     /// and a TOML value), validated. Cheaper than re-parsing text: used by
     /// sweeps for every run.
     pub fn with_values(&self, values: &[(String, toml::Value)]) -> Result<Scenario, ScenarioError> {
+        self.with_values_built(values).map(|(s, _)| s)
+    }
+
+    /// As [`Scenario::with_values`], also returning the [`Setup`] its
+    /// validation built, so that a sweep runs it without building it again.
+    pub fn with_values_built(
+        &self,
+        values: &[(String, toml::Value)],
+    ) -> Result<(Scenario, Setup), ScenarioError> {
         let fail = |key: String, reason: String| ScenarioError {
             file: self.name.clone(),
             key,
@@ -308,8 +317,8 @@ impl Scenario {
                     _ => fail(key, first_line(&e.into_inner().to_string())),
                 }
             })?;
-        s.validate().map_err(|(k, r)| fail(k, r))?;
-        Ok(s)
+        let setup = Setup::new(&s).map_err(|(k, r)| fail(k, r))?;
+        Ok((s, setup))
     }
 }
 

@@ -4,7 +4,6 @@
 use super::{plots, results_csv, Plan, StudyRecord};
 use crate::metrics::Metrics;
 use crate::output::{write_atomic, Staging, SOFTWARE};
-use crate::run::{run, Keep};
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -37,22 +36,14 @@ pub fn execute(
             .into_par_iter()
             .map(|i| {
                 let (values, sets, seed) = plan.run_values(i);
-                let row = match plan.base.with_values(&sets) {
-                    Ok(s) => match run(&s, Keep::Nothing) {
-                        Ok(r) => RunRow {
-                            index: i,
-                            values,
-                            seed,
-                            metrics: Some(r.metrics),
-                            error: None,
-                        },
-                        Err(e) => RunRow {
-                            index: i,
-                            values,
-                            seed,
-                            metrics: None,
-                            error: Some(e.to_string()),
-                        },
+                let row = match plan.base.with_values_built(&sets) {
+                    // Validation built the Setup: run it, not the scenario again.
+                    Ok((_, setup)) => RunRow {
+                        index: i,
+                        values,
+                        seed,
+                        metrics: Some(crate::run::run_setup(&setup, &mut |_| {}).1),
+                        error: None,
                     },
                     Err(e) => RunRow {
                         index: i,
