@@ -1,6 +1,7 @@
 //! No heap allocation in a control step, nor in a simulation step.
 //!
-//! A counting global allocator wraps the system one; the counter is read
+//! A counting global allocator wraps the system one; the counter, one per
+//! thread (the test harness's own threads may allocate meanwhile), is read
 //! around the calls under test. (This file is its own test binary, so the
 //! allocator is installed only here.)
 
@@ -9,22 +10,35 @@
 #![allow(unsafe_code)]
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 struct Counting;
 
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    /// Allocations made by this thread.
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count() {
+    // try_with: a thread being torn down has no counter left to bump.
+    let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+}
+
+/// Allocations made so far by the calling thread.
+fn allocs() -> usize {
+    COUNT.with(Cell::get)
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         System.alloc(l)
     }
     unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
         System.dealloc(p, l)
     }
     unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         System.realloc(p, l, n)
     }
 }
@@ -53,7 +67,7 @@ fn control_and_simulation_steps_do_not_allocate() {
     let reference = Sine::paper();
     let mut ctl = SampledController::new(nn, 1e-3).unwrap();
 
-    let before = ALLOCS.load(Ordering::SeqCst);
+    let before = allocs();
     let mut acc = 0.0;
     for k in 0..1000 {
         let t = k as f64 * 1e-3;
@@ -71,11 +85,7 @@ fn control_and_simulation_steps_do_not_allocate() {
         acc += o.u;
     }
     assert!(acc.is_finite());
-    assert_eq!(
-        ALLOCS.load(Ordering::SeqCst) - before,
-        0,
-        "a control step allocated"
-    );
+    assert_eq!(allocs() - before, 0, "a control step allocated");
 
     // The whole closed loop, both modes, with a non-allocating observer.
     for mode in [Mode::Sampled, Mode::Continuous] {
@@ -99,9 +109,9 @@ fn control_and_simulation_steps_do_not_allocate() {
         };
         let mut sim = Simulation::new(plant, nn, reference, stages, cfg).unwrap();
         let mut sum = 0.0;
-        let before = ALLOCS.load(Ordering::SeqCst);
+        let before = allocs();
         let out = sim.run(&mut |s| sum += s.u);
-        let n = ALLOCS.load(Ordering::SeqCst) - before;
+        let n = allocs() - before;
         assert!(out.diverged.is_none() && sum.is_finite());
         assert_eq!(n, 0, "{mode:?}: {n} allocations in 2000 simulation steps");
     }
