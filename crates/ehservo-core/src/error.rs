@@ -2,6 +2,8 @@
 
 use core::fmt;
 
+use crate::math::Real;
+
 /// A parameter rejected at construction. `Copy`, allocation-free, and it
 /// names the parameter and the reason, so that a board can report it and a
 /// scenario loader can map it back to its key.
@@ -41,28 +43,28 @@ impl fmt::Display for ParamError {
 impl core::error::Error for ParamError {}
 
 /// `Ok(v)` when `v` is finite and `> 0`, else an error naming `name`.
-pub(crate) fn positive(name: &'static str, v: f64) -> Result<f64, ParamError> {
-    if v.is_finite() && v > 0.0 {
+pub(crate) fn positive<T: Real>(name: &'static str, v: T) -> Result<T, ParamError> {
+    if v.is_finite() && v > T::ZERO {
         Ok(v)
     } else {
-        Err(ParamError::new(name, "must be finite and > 0", v))
+        Err(ParamError::new(name, "must be finite and > 0", v.to_f64()))
     }
 }
 
 /// `Ok(v)` when `v` is finite and `>= 0`, else an error naming `name`.
-pub(crate) fn non_negative(name: &'static str, v: f64) -> Result<f64, ParamError> {
-    if v.is_finite() && v >= 0.0 {
+pub(crate) fn non_negative<T: Real>(name: &'static str, v: T) -> Result<T, ParamError> {
+    if v.is_finite() && v >= T::ZERO {
         Ok(v)
     } else {
-        Err(ParamError::new(name, "must be finite and >= 0", v))
+        Err(ParamError::new(name, "must be finite and >= 0", v.to_f64()))
     }
 }
 
 /// `Ok(v)` when `v` is finite.
-pub(crate) fn finite(name: &'static str, v: f64) -> Result<f64, ParamError> {
+pub(crate) fn finite<T: Real>(name: &'static str, v: T) -> Result<T, ParamError> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(ParamError::new(name, "must be finite", v))
+        Err(ParamError::new(name, "must be finite", v.to_f64()))
     }
 }

@@ -41,6 +41,7 @@
 pub mod control;
 pub mod error;
 pub mod math;
+pub mod onboard;
 pub mod rbf;
 pub mod reference;
 pub mod rk4;

@@ -20,7 +20,7 @@
 //! exponentials. [`Rbf::phi_direct`] keeps the textbook form for tests.
 
 use crate::error::{positive, ParamError};
-use crate::math::{exp, DR};
+use crate::math::{exp, Real, DR};
 
 /// Number of Gaussian kernels (5³).
 pub const N_KERNELS: usize = 125;
@@ -31,13 +31,13 @@ pub const N_LEVELS: usize = 5;
 
 /// The network's fixed configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Rbf {
-    levels: [f64; N_LEVELS],
-    width: f64,
-    scale: [f64; 3],
-    inv_scale: [f64; 3],
-    inv_width_sq: f64,
-    spacing: Option<Spacing>,
+pub struct Rbf<T = f64> {
+    levels: [T; N_LEVELS],
+    width: T,
+    scale: [T; 3],
+    inv_scale: [T; 3],
+    inv_width_sq: T,
+    spacing: Option<Spacing<T>>,
 }
 
 /// Equally spaced, increasing levels `L[i] = L[0] + i·Δ`. Expand each
@@ -51,23 +51,26 @@ pub struct Rbf {
 /// few ulp of the factors near 1 (the centre of the grid would cost ~4 ulp
 /// more at the outer levels).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Spacing {
-    first: f64,
-    inv_step: f64,
-    q_coef: f64,
+struct Spacing<T> {
+    first: T,
+    inv_step: T,
+    q_coef: T,
     /// `C_|j|` for j = −4..=4.
-    c: [f64; 2 * N_LEVELS - 1],
+    c: [T; 2 * N_LEVELS - 1],
 }
 
 /// The two-exponential form is used only while every factor it multiplies
-/// lies in [e^−300, e^300] (`d²/δ² ≤ 300`, `4·2|Δd|/δ² ≤ 300` for q⁴,
-/// `16Δ²/δ² ≤ 300` for C_4): nothing overflows, so no `0·∞ = NaN`; results
-/// below e^−708 underflow to (sub)normals or 0 as the direct form's do.
-/// Outside, and for NaN or infinite inputs, the five direct exponentials
-/// are taken.
-const SPACED_MAX: f64 = 300.0;
+/// lies in [e^−S, e^S] with S = [`Real::EXP_SPAN`] (300 for f64, 80 for
+/// f32) (`d²/δ² ≤ S`, `4·2|Δd|/δ² ≤ S` for q⁴, `16Δ²/δ² ≤ S` for C_4):
+/// nothing overflows, so no `0·∞ = NaN`; results below the type's smallest
+/// normal underflow to (sub)normals or 0 as the direct form's do. Outside,
+/// and for NaN or infinite inputs, the five direct exponentials are taken.
+#[inline(always)]
+fn spaced_max<T: Real>() -> T {
+    T::EXP_SPAN
+}
 
-impl Rbf {
+impl Rbf<f64> {
     /// The paper's network: levels {−1, −0.5, 0, 0.5, 1}, δ = 0.5,
     /// scales (6.25·dr, 12.5π·dr, 25π²·dr).
     pub fn paper() -> Self {
@@ -80,14 +83,20 @@ impl Rbf {
         let pi = core::f64::consts::PI;
         [6.25 * DR, 12.5 * pi * DR, 25.0 * pi * pi * DR]
     }
+}
+
+impl<T: Real> Rbf<T> {
+    /// The same network in another float type (its derived constants
+    /// recomputed in `U`); fails only if a value does not survive the cast
+    /// (a width or scale that rounds to 0 or ∞).
+    pub fn cast<U: Real>(&self) -> Result<Rbf<U>, ParamError> {
+        let c = |v: T| U::of(v.to_f64());
+        Rbf::try_new(self.levels.map(c), c(self.width), self.scale.map(c))
+    }
 
     /// A network on the grid `levels`³ with width δ = `width` and
     /// normalising scales `scale`.
-    pub fn try_new(
-        levels: [f64; N_LEVELS],
-        width: f64,
-        scale: [f64; 3],
-    ) -> Result<Self, ParamError> {
+    pub fn try_new(levels: [T; N_LEVELS], width: T, scale: [T; 3]) -> Result<Self, ParamError> {
         for &l in &levels {
             crate::error::finite("rbf.levels", l)?;
         }
@@ -95,12 +104,12 @@ impl Rbf {
         for &s in &scale {
             positive("rbf.scale", s)?;
         }
-        let inv_width_sq = 1.0 / (width * width);
+        let inv_width_sq = T::ONE / (width * width);
         Ok(Self {
             levels,
             width,
             scale,
-            inv_scale: [1.0 / scale[0], 1.0 / scale[1], 1.0 / scale[2]],
+            inv_scale: [T::ONE / scale[0], T::ONE / scale[1], T::ONE / scale[2]],
             inv_width_sq,
             spacing: Self::spacing(&levels, inv_width_sq),
         })
@@ -108,53 +117,57 @@ impl Rbf {
 
     /// The equal-spacing constants, if the levels are increasing and
     /// equally spaced (to the last bit) and the constants are in the range
-    /// of [`SPACED_MAX`].
+    /// of [`Real::EXP_SPAN`].
     #[allow(clippy::float_cmp)] // equal spacing to the last bit is the point
-    fn spacing(levels: &[f64; N_LEVELS], k: f64) -> Option<Spacing> {
+    fn spacing(levels: &[T; N_LEVELS], k: T) -> Option<Spacing<T>> {
         let first = levels[0];
         let step = levels[1] - levels[0];
         let equal = levels
             .iter()
             .enumerate()
-            .all(|(i, &l)| l == first + i as f64 * step);
-        let q_coef = 2.0 * step * k;
+            .all(|(i, &l)| l == first + T::of_usize(i) * step);
+        let q_coef = T::of(2.0) * step * k;
         let a1 = step * step * k;
         // (k and the levels are finite, so a1 is finite or +∞.)
-        if !equal || step <= 0.0 || !k.is_finite() || !q_coef.is_finite() || 16.0 * a1 > SPACED_MAX
+        if !equal
+            || step <= T::ZERO
+            || !k.is_finite()
+            || !q_coef.is_finite()
+            || T::of(16.0) * a1 > spaced_max()
         {
             return None;
         }
-        let mut c = [1.0; 2 * N_LEVELS - 1];
+        let mut c = [T::ONE; 2 * N_LEVELS - 1];
         for (i, ci) in c.iter_mut().enumerate() {
             let j = i.abs_diff(N_LEVELS - 1);
-            *ci = exp(-((j * j) as f64) * a1);
+            *ci = exp(-T::of_usize(j * j) * a1);
         }
         Some(Spacing {
             first,
-            inv_step: 1.0 / step,
+            inv_step: T::ONE / step,
             q_coef,
             c,
         })
     }
 
     /// The grid levels.
-    pub fn levels(&self) -> [f64; N_LEVELS] {
+    pub fn levels(&self) -> [T; N_LEVELS] {
         self.levels
     }
 
     /// δ.
-    pub fn width(&self) -> f64 {
+    pub fn width(&self) -> T {
         self.width
     }
 
     /// The normalising scales.
-    pub fn scale(&self) -> [f64; 3] {
+    pub fn scale(&self) -> [T; 3] {
         self.scale
     }
 
     /// Centre `j` (0-based, 0..125) in normalised coordinates; the first
     /// component varies slowest: `j = 25·i1 + 5·i2 + i3`.
-    pub fn centre(&self, j: usize) -> [f64; 3] {
+    pub fn centre(&self, j: usize) -> [T; 3] {
         [
             self.levels[j / 25],
             self.levels[(j / 5) % 5],
@@ -165,7 +178,7 @@ impl Rbf {
     /// The per-axis factors `g[k][i] = exp(−(x̃k − L[i])²/δ²)`: the kernel
     /// `j = 25·i1 + 5·i2 + i3` is `g[0][i1]·g[1][i2]·g[2][i3]`.
     #[inline]
-    pub(crate) fn gaussians(&self, x: &[f64; 3]) -> [[f64; N_LEVELS]; 3] {
+    pub(crate) fn gaussians(&self, x: &[T; 3]) -> [[T; N_LEVELS]; 3] {
         let xt = [
             x[0] * self.inv_scale[0],
             x[1] * self.inv_scale[1],
@@ -176,7 +189,7 @@ impl Rbf {
                 return g;
             }
         }
-        let mut g = [[0.0; N_LEVELS]; 3];
+        let mut g = [[T::ZERO; N_LEVELS]; 3];
         for (gk, &xk) in g.iter_mut().zip(&xt) {
             for (gi, &l) in gk.iter_mut().zip(&self.levels) {
                 let d = xk - l;
@@ -187,26 +200,28 @@ impl Rbf {
     }
 
     /// The factors by [`Spacing`], or `None` when an axis is outside the
-    /// range of [`SPACED_MAX`] (or NaN). Four exponentials: the nearest
+    /// range of [`Real::EXP_SPAN`] (or NaN). Four exponentials: the nearest
     /// kernel `G = exp(−‖x̃ − c_m‖²/δ²)` (computed as [`Rbf::phi_direct`]
     /// does, so it is that kernel to the bit) and one `q` per axis; the
     /// factors are `G·h1[i]`, `h2[i]`, `h3[i]` with `h[m + j] = C_|j|·q^j`,
     /// the ratio of each level's factor to the nearest one's (≤ 1).
     #[inline]
-    fn gaussians_spaced(&self, sp: &Spacing, xt: &[f64; 3]) -> Option<[[f64; N_LEVELS]; 3]> {
+    fn gaussians_spaced(&self, sp: &Spacing<T>, xt: &[T; 3]) -> Option<[[T; N_LEVELS]; 3]> {
         const TOP: usize = N_LEVELS - 1;
         let mut m = [0; 3];
-        let mut dist2 = 0.0;
-        let mut arg_q = [0.0; 3];
+        let mut dist2 = T::ZERO;
+        let mut arg_q = [T::ZERO; 3];
         for k in 0..3 {
             // Nearest level: the number of midpoints at or below x̃ (NaN → 0;
             // the range check below then fails).
-            let r = (xt[k] - sp.first) * sp.inv_step + 0.5;
-            m[k] = (1..N_LEVELS).map(|i| usize::from(r >= i as f64)).sum();
+            let r = (xt[k] - sp.first) * sp.inv_step + T::of(0.5);
+            m[k] = (1..N_LEVELS)
+                .map(|i| usize::from(r >= T::of_usize(i)))
+                .sum();
             let d = xt[k] - self.levels[m[k]];
             arg_q[k] = sp.q_coef * d;
-            let in_range =
-                d * d * self.inv_width_sq <= SPACED_MAX && arg_q[k].abs() <= 0.25 * SPACED_MAX;
+            let in_range = d * d * self.inv_width_sq <= spaced_max()
+                && arg_q[k].abs() <= T::of(0.25) * spaced_max();
             if !in_range {
                 return None; // (also for NaN)
             }
@@ -215,12 +230,12 @@ impl Rbf {
         // The four exponentials back to back: independent, so they overlap.
         let big_g = exp(-dist2 * self.inv_width_sq);
         let q = [exp(arg_q[0]), exp(arg_q[1]), exp(arg_q[2])];
-        let mut g = [[0.0; N_LEVELS]; 3];
+        let mut g = [[T::ZERO; N_LEVELS]; 3];
         for k in 0..3 {
-            let (q, qi) = (q[k], 1.0 / q[k]);
+            let (q, qi) = (q[k], T::ONE / q[k]);
             let (q2, qi2) = (q * q, qi * qi);
             // q^j for j = −4..=4; the window j = i − m, i = 0..5.
-            let p = [qi2 * qi2, qi2 * qi, qi2, qi, 1.0, q, q2, q2 * q, q2 * q2];
+            let p = [qi2 * qi2, qi2 * qi, qi2, qi, T::ONE, q, q2, q2 * q, q2 * q2];
             let w = TOP - m[k];
             let (c, p) = (&sp.c[w..w + N_LEVELS], &p[w..w + N_LEVELS]);
             for ((gi, &ci), &pi) in g[k].iter_mut().zip(c).zip(p) {
@@ -237,12 +252,12 @@ impl Rbf {
     /// sum of squares factors as `Π_k Σ_i g[k][i]²` (it is a sum over the
     /// 5³ products `g1·g2·g3`), so it costs 15 squares, not 125.
     #[inline]
-    pub(crate) fn norm_from(g: &[[f64; N_LEVELS]; 3], z: &[f64; 4]) -> f64 {
-        let sq = |gk: &[f64; N_LEVELS]| {
+    pub(crate) fn norm_from(g: &[[T; N_LEVELS]; 3], z: &[T; 4]) -> T {
+        let sq = |gk: &[T; N_LEVELS]| {
             (gk[0] * gk[0] + gk[1] * gk[1]) + (gk[2] * gk[2] + gk[3] * gk[3]) + gk[4] * gk[4]
         };
-        let mut sum_sq = 1.0 + sq(&g[0]) * sq(&g[1]) * sq(&g[2]);
-        for zi in z {
+        let mut sum_sq = T::ONE + sq(&g[0]) * sq(&g[1]) * sq(&g[2]);
+        for &zi in z {
             sum_sq += zi * zi;
         }
         crate::math::sqrt(sum_sq)
@@ -250,7 +265,7 @@ impl Rbf {
 
     /// Fills `out` with Φ(x, z) and returns ‖Φ‖.
     #[inline]
-    pub fn phi(&self, x: &[f64; 3], z: &[f64; 4], out: &mut [f64; N_PHI]) -> f64 {
+    pub fn phi(&self, x: &[T; 3], z: &[T; 4], out: &mut [T; N_PHI]) -> T {
         let g = self.gaussians(x);
         Self::fill_phi(&g, z, out);
         Self::norm_from(&g, z)
@@ -258,8 +273,8 @@ impl Rbf {
 
     /// Φ from the per-axis factors and z.
     #[inline]
-    fn fill_phi(g: &[[f64; N_LEVELS]; 3], z: &[f64; 4], out: &mut [f64; N_PHI]) {
-        out[0] = 1.0;
+    fn fill_phi(g: &[[T; N_LEVELS]; 3], z: &[T; 4], out: &mut [T; N_PHI]) {
+        out[0] = T::ONE;
         for (i1, &g1) in g[0].iter().enumerate() {
             for (i2, &g2) in g[1].iter().enumerate() {
                 let g12 = g1 * g2;
@@ -274,11 +289,11 @@ impl Rbf {
 
     /// Φ by the textbook formula `exp(−‖x̃ − cj‖²/δ²)`, one exponential per
     /// kernel. For tests and for readers; [`Rbf::phi`] is the one to use.
-    pub fn phi_direct(&self, x: &[f64; 3], z: &[f64; 4], out: &mut [f64; N_PHI]) {
-        out[0] = 1.0;
+    pub fn phi_direct(&self, x: &[T; 3], z: &[T; 4], out: &mut [T; N_PHI]) {
+        out[0] = T::ONE;
         for j in 0..N_KERNELS {
             let c = self.centre(j);
-            let mut d2 = 0.0;
+            let mut d2 = T::ZERO;
             for k in 0..3 {
                 let d = x[k] * self.inv_scale[k] - c[k];
                 d2 += d * d;

@@ -4,42 +4,52 @@
 //! leading term of (12) and (24), and the last four entries of Φ in (20)).
 //! The paper's reference is `θd(t) = 5°·sin(2πt)`.
 
-use crate::math::{cos, sin, DR};
+use crate::math::{Real, DR};
 
 /// A trajectory known with its first three derivatives.
-pub trait Reference {
+pub trait Reference<T = f64> {
     /// `z(t) = [θd, θ̇d, θ̈d, θ⃛d]` (rad, rad/s, rad/s², rad/s³).
-    fn z(&self, t: f64) -> [f64; 4];
+    fn z(&self, t: T) -> [T; 4];
 }
 
 /// `θd(t) = A·sin(ω·t)`, differentiated analytically.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sine {
+pub struct Sine<T = f64> {
     /// Amplitude A (rad).
-    pub amplitude: f64,
+    pub amplitude: T,
     /// Angular frequency ω (rad/s).
-    pub omega: f64,
+    pub omega: T,
 }
 
-impl Sine {
+impl<T: Real> Sine<T> {
     /// From an amplitude in degrees and a frequency in hertz.
-    pub fn from_deg_hz(amplitude_deg: f64, frequency_hz: f64) -> Self {
+    pub fn from_deg_hz(amplitude_deg: T, frequency_hz: T) -> Self {
         Self {
-            amplitude: amplitude_deg * DR,
-            omega: 2.0 * core::f64::consts::PI * frequency_hz,
+            amplitude: amplitude_deg * T::of(DR),
+            omega: T::of(2.0) * T::PI * frequency_hz,
         }
     }
 
+    /// The same reference in another float type.
+    pub fn cast<U: Real>(&self) -> Sine<U> {
+        Sine {
+            amplitude: U::of(self.amplitude.to_f64()),
+            omega: U::of(self.omega.to_f64()),
+        }
+    }
+}
+
+impl Sine<f64> {
     /// The paper's `5°·sin(2πt)`.
     pub fn paper() -> Self {
         Self::from_deg_hz(5.0, 1.0)
     }
 }
 
-impl Reference for Sine {
+impl<T: Real> Reference<T> for Sine<T> {
     #[inline]
-    fn z(&self, t: f64) -> [f64; 4] {
-        let (s, c) = (sin(self.omega * t), cos(self.omega * t));
+    fn z(&self, t: T) -> [T; 4] {
+        let (s, c) = (self.omega * t).sin_cos();
         let a = self.amplitude;
         let w = self.omega;
         [a * s, a * w * c, -a * w * w * s, -a * w * w * w * c]

@@ -13,12 +13,14 @@
 //! `f(t, y, dy)` that writes into `dy` (as ode_solvers' `System`). The
 //! caller owns time: it passes `t` and never accumulates it.
 
+use crate::math::Real;
+
 /// A state RK4 can integrate: copyable, with `self += a·other`.
-pub trait OdeState: Copy {
+pub trait OdeState<T: Real = f64>: Copy {
     /// The zero state.
     fn zero() -> Self;
     /// `self ← self + a·other`.
-    fn axpy(&mut self, a: f64, other: &Self);
+    fn axpy(&mut self, a: T, other: &Self);
     /// Every component is finite.
     fn all_finite(&self) -> bool;
     /// `self ← self + a·other` only if every component of the result is
@@ -26,7 +28,7 @@ pub trait OdeState: Copy {
     /// The default copies the state; implementations may check first and
     /// write second instead.
     #[inline]
-    fn axpy_finite(&mut self, a: f64, other: &Self) -> bool {
+    fn axpy_finite(&mut self, a: T, other: &Self) -> bool {
         let mut next = *self;
         next.axpy(a, other);
         if next.all_finite() {
@@ -42,34 +44,34 @@ pub trait OdeState: Copy {
 /// a finite v and NaN otherwise, so the lane sums are NaN exactly when some
 /// result is not finite (branch-free, eight lanes).
 #[inline]
-pub fn axpy_results_finite(s: &[f64], a: f64, o: &[f64]) -> bool {
-    let mut lane = [0.0; 8];
+pub fn axpy_results_finite<T: Real>(s: &[T], a: T, o: &[T]) -> bool {
+    let mut lane = [T::ZERO; 8];
     let n = s.len().min(o.len());
     let (sc, oc) = (s[..n].chunks_exact(8), o[..n].chunks_exact(8));
     let (sr, or) = (sc.remainder(), oc.remainder());
     for (cs, co) in sc.zip(oc) {
         for ((l, x), y) in lane.iter_mut().zip(cs).zip(co) {
-            *l += 0.0 * (x + a * y);
+            *l += T::ZERO * (*x + a * *y);
         }
     }
-    let mut sum = 0.0;
+    let mut sum = T::ZERO;
     for (x, y) in sr.iter().zip(or) {
-        sum += 0.0 * (x + a * y);
+        sum += T::ZERO * (*x + a * *y);
     }
     for l in lane {
         sum += l;
     }
-    sum == 0.0
+    sum == T::ZERO
 }
 
-impl<const N: usize> OdeState for [f64; N] {
+impl<T: Real, const N: usize> OdeState<T> for [T; N] {
     #[inline]
     fn zero() -> Self {
-        [0.0; N]
+        [T::ZERO; N]
     }
     #[inline]
-    fn axpy(&mut self, a: f64, other: &Self) {
-        for (s, o) in self.iter_mut().zip(other.iter()) {
+    fn axpy(&mut self, a: T, other: &Self) {
+        for (s, &o) in self.iter_mut().zip(other.iter()) {
             *s += a * o;
         }
     }
@@ -78,7 +80,7 @@ impl<const N: usize> OdeState for [f64; N] {
         self.iter().all(|v| v.is_finite())
     }
     #[inline]
-    fn axpy_finite(&mut self, a: f64, other: &Self) -> bool {
+    fn axpy_finite(&mut self, a: T, other: &Self) -> bool {
         if axpy_results_finite(self, a, other) {
             self.axpy(a, other);
             true
@@ -90,7 +92,7 @@ impl<const N: usize> OdeState for [f64; N] {
 
 /// One RK4 step of size `h` from `(t, y)`, in place.
 #[inline]
-pub fn rk4_step<S: OdeState, F: FnMut(f64, &S, &mut S)>(mut f: F, t: f64, y: &mut S, h: f64) {
+pub fn rk4_step<T: Real, S: OdeState<T>, F: FnMut(T, &S, &mut S)>(mut f: F, t: T, y: &mut S, h: T) {
     let mut k1 = S::zero();
     f(t, y, &mut k1);
     rk4_step_with_k1(f, t, y, &k1, h);
@@ -99,14 +101,14 @@ pub fn rk4_step<S: OdeState, F: FnMut(f64, &S, &mut S)>(mut f: F, t: f64, y: &mu
 /// One RK4 step when the first stage `k1 = f(t, y)` is already known (the
 /// simulator evaluates it together with the logged control law).
 #[inline]
-pub fn rk4_step_with_k1<S: OdeState, F: FnMut(f64, &S, &mut S)>(
+pub fn rk4_step_with_k1<T: Real, S: OdeState<T>, F: FnMut(T, &S, &mut S)>(
     mut f: F,
-    t: f64,
+    t: T,
     y: &mut S,
     k1: &S,
-    h: f64,
+    h: T,
 ) {
-    let half = 0.5 * h;
+    let half = T::of(0.5) * h;
     let mut k2 = S::zero();
     let mut k3 = S::zero();
     let mut k4 = S::zero();
@@ -119,10 +121,10 @@ pub fn rk4_step_with_k1<S: OdeState, F: FnMut(f64, &S, &mut S)>(
     ys = *y;
     ys.axpy(h, &k3);
     f(t + h, &ys, &mut k4);
-    let sixth = h / 6.0;
+    let sixth = h / T::of(6.0);
     y.axpy(sixth, k1);
-    y.axpy(2.0 * sixth, &k2);
-    y.axpy(2.0 * sixth, &k3);
+    y.axpy(T::of(2.0) * sixth, &k2);
+    y.axpy(T::of(2.0) * sixth, &k3);
     y.axpy(sixth, &k4);
 }
 

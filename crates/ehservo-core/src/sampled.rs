@@ -22,6 +22,7 @@
 
 use crate::control::{flags, Controller, Measurement, Output};
 use crate::error::{positive, ParamError};
+use crate::math::Real;
 use crate::rk4::OdeState;
 
 /// What to command when a step cannot be trusted.
@@ -35,31 +36,39 @@ pub enum SafeCommand {
 
 /// Plausibility limits and the valve's range.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Limits {
+pub struct Limits<T = f64> {
     /// |θ|, |θ̇|, |θ̈| beyond these are sensor faults (rad, rad/s, rad/s²).
-    pub x: [f64; 3],
+    pub x: [T; 3],
     /// The valve's command range ±u (V).
-    pub u: f64,
+    pub u: T,
 }
 
-impl Limits {
+impl<T: Real> Limits<T> {
     /// No limits at all (the simulator's default).
-    pub const NONE: Limits = Limits {
-        x: [f64::INFINITY; 3],
-        u: f64::INFINITY,
+    pub const NONE: Self = Limits {
+        x: [T::INFINITY; 3],
+        u: T::INFINITY,
     };
+
+    /// The same limits in another float type.
+    pub fn cast<U: Real>(&self) -> Limits<U> {
+        Limits {
+            x: self.x.map(|v| U::of(v.to_f64())),
+            u: U::of(self.u.to_f64()),
+        }
+    }
 }
 
 /// How [`SampledController::step`] treats faults.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FaultPolicy {
+pub struct FaultPolicy<T = f64> {
     /// The command on a bad step.
     pub safe: SafeCommand,
     /// Plausibility limits and valve range.
-    pub limits: Limits,
+    pub limits: Limits<T>,
 }
 
-impl Default for FaultPolicy {
+impl<T: Real> Default for FaultPolicy<T> {
     fn default() -> Self {
         Self {
             safe: SafeCommand::HoldLast,
@@ -68,19 +77,23 @@ impl Default for FaultPolicy {
     }
 }
 
-impl FaultPolicy {
+impl<T: Real> FaultPolicy<T> {
     /// Checks the limits (positive; infinity allowed).
     pub fn validate(&self) -> Result<(), ParamError> {
         for &l in &self.limits.x {
-            if l.is_nan() || l <= 0.0 {
-                return Err(ParamError::new("limits.x", "must be > 0 (or infinite)", l));
+            if l.is_nan() || l <= T::ZERO {
+                return Err(ParamError::new(
+                    "limits.x",
+                    "must be > 0 (or infinite)",
+                    l.to_f64(),
+                ));
             }
         }
-        if self.limits.u.is_nan() || self.limits.u <= 0.0 {
+        if self.limits.u.is_nan() || self.limits.u <= T::ZERO {
             return Err(ParamError::new(
                 "limits.u",
                 "must be > 0 (or infinite)",
-                self.limits.u,
+                self.limits.u.to_f64(),
             ));
         }
         Ok(())
@@ -89,25 +102,25 @@ impl FaultPolicy {
 
 /// A controller with its state, a fixed sample period and a fault policy.
 #[derive(Debug, Clone)]
-pub struct SampledController<C: Controller> {
+pub struct SampledController<C: Controller<T>, T: Real = f64> {
     ctrl: C,
     state: C::State,
-    dt: f64,
-    policy: FaultPolicy,
-    last_u: f64,
+    dt: T,
+    policy: FaultPolicy<T>,
+    last_u: T,
     faults: u64,
     saturations: u64,
 }
 
-impl<C: Controller> SampledController<C> {
+impl<T: Real, C: Controller<T>> SampledController<C, T> {
     /// Wraps `ctrl` with its initial state, sample period `dt` (s) and the
     /// default policy (hold the last command, no limits).
-    pub fn new(ctrl: C, dt: f64) -> Result<Self, ParamError> {
+    pub fn new(ctrl: C, dt: T) -> Result<Self, ParamError> {
         Self::with_policy(ctrl, dt, FaultPolicy::default())
     }
 
     /// As [`SampledController::new`] with a fault policy.
-    pub fn with_policy(ctrl: C, dt: f64, policy: FaultPolicy) -> Result<Self, ParamError> {
+    pub fn with_policy(ctrl: C, dt: T, policy: FaultPolicy<T>) -> Result<Self, ParamError> {
         positive("dt", dt)?;
         policy.validate()?;
         Ok(Self {
@@ -115,17 +128,17 @@ impl<C: Controller> SampledController<C> {
             ctrl,
             dt,
             policy,
-            last_u: 0.0,
+            last_u: T::ZERO,
             faults: 0,
             saturations: 0,
         })
     }
 
-    fn safe_output(&mut self, fault: u8) -> Output<C::Parts> {
+    fn safe_output(&mut self, fault: u8) -> Output<C::Parts, T> {
         self.faults += 1;
         let u = match self.policy.safe {
             SafeCommand::HoldLast => self.last_u,
-            SafeCommand::Zero => 0.0,
+            SafeCommand::Zero => T::ZERO,
         };
         Output {
             u,
@@ -139,7 +152,7 @@ impl<C: Controller> SampledController<C> {
     /// only after a good step. Always returns a finite `u` within the valve
     /// range.
     #[inline]
-    pub fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> Output<C::Parts> {
+    pub fn step(&mut self, t: T, x: [T; 3], z: [T; 4]) -> Output<C::Parts, T> {
         self.step_with(t, x, z, |_, _, _| {})
     }
 
@@ -150,16 +163,16 @@ impl<C: Controller> SampledController<C> {
     #[inline]
     pub fn step_with(
         &mut self,
-        t: f64,
-        x: [f64; 3],
-        z: [f64; 4],
-        inspect: impl FnOnce(&C, &C::State, &mut Output<C::Parts>),
-    ) -> Output<C::Parts> {
+        t: T,
+        x: [T; 3],
+        z: [T; 4],
+        inspect: impl FnOnce(&C, &C::State, &mut Output<C::Parts, T>),
+    ) -> Output<C::Parts, T> {
         let lim = &self.policy.limits;
         let bad_x = x
             .iter()
             .zip(lim.x.iter())
-            .any(|(v, l)| !v.is_finite() || v.abs() > *l);
+            .any(|(&v, &l)| !v.is_finite() || v.abs() > l);
         if bad_x || !t.is_finite() || z.iter().any(|v| !v.is_finite()) {
             return self.safe_output(flags::MEASUREMENT_FAULT);
         }
@@ -190,7 +203,7 @@ impl<C: Controller> SampledController<C> {
     /// Back to the initial state (∫e = 0, W = 0), last command 0, counters 0.
     pub fn reset(&mut self) {
         self.state = self.ctrl.initial_state();
-        self.last_u = 0.0;
+        self.last_u = T::ZERO;
         self.faults = 0;
         self.saturations = 0;
     }
@@ -206,12 +219,12 @@ impl<C: Controller> SampledController<C> {
     }
 
     /// The sample period (s).
-    pub fn dt(&self) -> f64 {
+    pub fn dt(&self) -> T {
         self.dt
     }
 
     /// The fault policy.
-    pub fn policy(&self) -> &FaultPolicy {
+    pub fn policy(&self) -> &FaultPolicy<T> {
         &self.policy
     }
 

@@ -30,7 +30,7 @@
 //! never NaN) and the clamp is reported to the caller.
 
 use crate::error::{non_negative, positive, ParamError};
-use crate::math::{cos, exp, sgn, sin, sqrt, tanh};
+use crate::math::{cos, exp, sgn, sin, sqrt, tanh, Real};
 
 /// Physical parameters of the servo (eqs. 1–6), SI units throughout.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,51 +39,51 @@ use crate::math::{cos, exp, sgn, sin, sqrt, tanh};
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
-pub struct ServoParams {
+pub struct ServoParams<T: Real = f64> {
     /// Supply pressure Ps (Pa).
     #[cfg_attr(feature = "serde", serde(rename = "Ps"))]
-    pub ps: f64,
+    pub ps: T,
     /// Effective bulk modulus βe (Pa).
-    pub beta_e: f64,
+    pub beta_e: T,
     /// Total compressed volume Vt (m³).
     #[cfg_attr(feature = "serde", serde(rename = "Vt"))]
-    pub vt: f64,
+    pub vt: T,
     /// Total flow-pressure coefficient Kce = Kc + Ctm (m³/(s·Pa)).
     #[cfg_attr(feature = "serde", serde(rename = "Kce"))]
-    pub kce: f64,
+    pub kce: T,
     /// Motor volumetric displacement Dm (m³/rad).
     #[cfg_attr(feature = "serde", serde(rename = "Dm"))]
-    pub dm: f64,
+    pub dm: T,
     /// Total inertia of motor and load Jt (N·m·s²).
     #[cfg_attr(feature = "serde", serde(rename = "Jt"))]
-    pub jt: f64,
+    pub jt: T,
     /// Viscous damping of the load Bm (N·m·s).
     #[cfg_attr(feature = "serde", serde(rename = "Bm"))]
-    pub bm: f64,
+    pub bm: T,
     /// Servovalve gain Kv (m/V).
     #[cfg_attr(feature = "serde", serde(rename = "Kv"))]
-    pub kv: f64,
+    pub kv: T,
     /// Torsional spring gradient of the load G (N·m/rad).
     #[cfg_attr(feature = "serde", serde(rename = "G"))]
-    pub g: f64,
+    pub g: T,
     /// Fluid mass density ρ (kg/m³).
-    pub rho: f64,
+    pub rho: T,
     /// Discharge coefficient Cd (–).
     #[cfg_attr(feature = "serde", serde(rename = "Cd"))]
-    pub cd: f64,
+    pub cd: T,
     /// Area gradient Ag (m).
     #[cfg_attr(feature = "serde", serde(rename = "Ag"))]
-    pub ag: f64,
+    pub ag: T,
 }
 
 /// The paper's parameters.
-impl Default for ServoParams {
+impl<T: Real> Default for ServoParams<T> {
     fn default() -> Self {
-        Self::paper()
+        ServoParams::paper().cast()
     }
 }
 
-impl ServoParams {
+impl ServoParams<f64> {
     /// The paper's Section IV parameters, converted to SI (MPa → Pa; the
     /// printed Kce = 2.376e-6 m³/(s·MPa) is 2.376e-12 m³/(s·Pa)).
     pub const fn paper() -> Self {
@@ -100,6 +100,27 @@ impl ServoParams {
             rho: 850.0,
             cd: 0.67,
             ag: 3.385e-7,
+        }
+    }
+}
+
+impl<T: Real> ServoParams<T> {
+    /// The same parameters in another float type.
+    pub fn cast<U: Real>(&self) -> ServoParams<U> {
+        let c = |v: T| U::of(v.to_f64());
+        ServoParams {
+            ps: c(self.ps),
+            beta_e: c(self.beta_e),
+            vt: c(self.vt),
+            kce: c(self.kce),
+            dm: c(self.dm),
+            jt: c(self.jt),
+            bm: c(self.bm),
+            kv: c(self.kv),
+            g: c(self.g),
+            rho: c(self.rho),
+            cd: c(self.cd),
+            ag: c(self.ag),
         }
     }
 
@@ -122,12 +143,13 @@ impl ServoParams {
     }
 
     /// The coefficients a1, a2, a3 of (9).
-    pub fn coefficients(&self) -> Coefficients {
-        let k = 4.0 * self.beta_e / (self.vt * self.jt);
+    pub fn coefficients(&self) -> Coefficients<T> {
+        let four = T::of(4.0);
+        let k = four * self.beta_e / (self.vt * self.jt);
         Coefficients {
             a1: k * self.kce * self.g,
             a2: self.g / self.jt + k * self.dm * self.dm + k * self.kce * self.bm,
-            a3: self.bm / self.jt + 4.0 * self.beta_e * self.kce / self.vt,
+            a3: self.bm / self.jt + four * self.beta_e * self.kce / self.vt,
         }
     }
 
@@ -135,42 +157,42 @@ impl ServoParams {
     /// direction `s = sgn(xv)`. Returns `(Kg, clamped)`, `clamped` when the
     /// root's argument was negative and set to 0.
     #[inline]
-    pub fn flow_gain(&self, pl: f64, s: f64) -> (f64, bool) {
+    pub fn flow_gain(&self, pl: T, s: T) -> (T, bool) {
         let arg = self.ps - s * pl;
-        if arg >= 0.0 {
+        if arg >= T::ZERO {
             (self.cd * self.ag * sqrt(arg / self.rho), false)
         } else {
-            (0.0, true)
+            (T::ZERO, true)
         }
     }
 
     /// The factor `4βe·Dm·Kv/(Vt·Jt)` with `b = factor · Kg`.
     #[inline]
-    pub fn b_per_kg(&self) -> f64 {
-        4.0 * self.beta_e * self.dm * self.kv / (self.vt * self.jt)
+    pub fn b_per_kg(&self) -> T {
+        T::of(4.0) * self.beta_e * self.dm * self.kv / (self.vt * self.jt)
     }
 
     /// The factor `4βe·Kce/(Vt·Jt)` of `Tl` in `d`.
     #[inline]
-    pub fn d_per_torque(&self) -> f64 {
-        4.0 * self.beta_e * self.kce / (self.vt * self.jt)
+    pub fn d_per_torque(&self) -> T {
+        T::of(4.0) * self.beta_e * self.kce / (self.vt * self.jt)
     }
 }
 
 /// The coefficients of the third-order model (8).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Coefficients {
+pub struct Coefficients<T: Real = f64> {
     /// a1 (s⁻³).
-    pub a1: f64,
+    pub a1: T,
     /// a2 (s⁻²).
-    pub a2: f64,
+    pub a2: T,
     /// a3 (s⁻¹).
-    pub a3: f64,
+    pub a3: T,
 }
 
-impl Coefficients {
+impl<T: Real> Coefficients<T> {
     /// As an array `[a1, a2, a3]`.
-    pub fn as_array(&self) -> [f64; 3] {
+    pub fn as_array(&self) -> [T; 3] {
         [self.a1, self.a2, self.a3]
     }
 }
@@ -191,34 +213,46 @@ impl Coefficients {
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
-pub struct Friction {
+pub struct Friction<T: Real = f64> {
     /// Coulomb level Tc (N·m).
-    pub coulomb: f64,
+    pub coulomb: T,
     /// Break-away (static) level Ts ≥ Tc (N·m).
-    pub stiction: f64,
+    pub stiction: T,
     /// Stribeck velocity vs (rad/s).
-    pub stribeck_velocity: f64,
+    pub stribeck_velocity: T,
     /// Extra viscous coefficient Bv (N·m·s), on top of the plant's Bm.
-    pub viscous: f64,
+    pub viscous: T,
     /// Regularisation velocity v0 of the sign (rad/s).
-    pub smoothing: f64,
+    pub smoothing: T,
 }
 
 /// Illustrative values, not the paper's (it has no friction): Tc = 0.2,
 /// Ts = 0.3 N·m, vs = 0.05 rad/s, no extra viscous term, v0 = 0.005 rad/s.
-impl Default for Friction {
+impl<T: Real> Default for Friction<T> {
     fn default() -> Self {
         Self {
-            coulomb: 0.2,
-            stiction: 0.3,
-            stribeck_velocity: 0.05,
-            viscous: 0.0,
-            smoothing: 0.005,
+            coulomb: T::of(0.2),
+            stiction: T::of(0.3),
+            stribeck_velocity: T::of(0.05),
+            viscous: T::ZERO,
+            smoothing: T::of(0.005),
         }
     }
 }
 
-impl Friction {
+impl<T: Real> Friction<T> {
+    /// The same parameters in another float type.
+    pub fn cast<U: Real>(&self) -> Friction<U> {
+        let c = |v: T| U::of(v.to_f64());
+        Friction {
+            coulomb: c(self.coulomb),
+            stiction: c(self.stiction),
+            stribeck_velocity: c(self.stribeck_velocity),
+            viscous: c(self.viscous),
+            smoothing: c(self.smoothing),
+        }
+    }
+
     /// Checks the friction parameters.
     pub fn validate(&self) -> Result<(), ParamError> {
         non_negative("coulomb", self.coulomb)?;
@@ -231,7 +265,7 @@ impl Friction {
 
     /// Friction torque at shaft speed `v`.
     #[inline]
-    pub fn torque(&self, v: f64) -> f64 {
+    pub fn torque(&self, v: T) -> T {
         let r = v / self.stribeck_velocity;
         tanh(v / self.smoothing) * (self.coulomb + (self.stiction - self.coulomb) * exp(-r * r))
             + self.viscous * v
@@ -239,12 +273,14 @@ impl Friction {
 
     /// dTf/dv at shaft speed `v` (so that `Ṫf = dTf/dv · θ̈`).
     #[inline]
-    pub fn slope(&self, v: f64) -> f64 {
+    pub fn slope(&self, v: T) -> T {
         let th = tanh(v / self.smoothing);
         let r = v / self.stribeck_velocity;
         let g = self.coulomb + (self.stiction - self.coulomb) * exp(-r * r);
-        let dg = (self.stiction - self.coulomb) * exp(-r * r) * (-2.0 * r / self.stribeck_velocity);
-        (1.0 - th * th) / self.smoothing * g + th * dg + self.viscous
+        let dg = (self.stiction - self.coulomb)
+            * exp(-r * r)
+            * (T::of(-2.0) * r / self.stribeck_velocity);
+        (T::ONE - th * th) / self.smoothing * g + th * dg + self.viscous
     }
 }
 
@@ -256,24 +292,24 @@ impl Friction {
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
-pub struct Load {
+pub struct Load<T: Real = f64> {
     /// Amplitude A (N·m).
-    pub amplitude: f64,
+    pub amplitude: T,
     /// Angular wavenumber k (1/rad).
-    pub wavenumber: f64,
+    pub wavenumber: T,
     /// Optional friction torque (`[load.friction]`).
     #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
-    pub friction: Option<Friction>,
+    pub friction: Option<Friction<T>>,
 }
 
 /// The paper's load.
-impl Default for Load {
+impl<T: Real> Default for Load<T> {
     fn default() -> Self {
-        Self::paper()
+        Load::paper().cast()
     }
 }
 
-impl Load {
+impl Load<f64> {
     /// The paper's `Tl = 2·sin(4θm)` N·m, no friction.
     pub const fn paper() -> Self {
         Self {
@@ -291,6 +327,17 @@ impl Load {
             friction: None,
         }
     }
+}
+
+impl<T: Real> Load<T> {
+    /// The same load in another float type.
+    pub fn cast<U: Real>(&self) -> Load<U> {
+        Load {
+            amplitude: U::of(self.amplitude.to_f64()),
+            wavenumber: U::of(self.wavenumber.to_f64()),
+            friction: self.friction.map(|f| f.cast()),
+        }
+    }
 
     /// Checks the load parameters.
     pub fn validate(&self) -> Result<(), ParamError> {
@@ -304,7 +351,7 @@ impl Load {
 
     /// `Tl(θ, θ̇)`.
     #[inline]
-    pub fn torque(&self, theta: f64, theta_dot: f64) -> f64 {
+    pub fn torque(&self, theta: T, theta_dot: T) -> T {
         let mut t = self.amplitude * sin(self.wavenumber * theta);
         if let Some(f) = &self.friction {
             t += f.torque(theta_dot);
@@ -314,7 +361,7 @@ impl Load {
 
     /// `Ṫl = A·k·cos(kθ)·θ̇ + dTf/dθ̇·θ̈`.
     #[inline]
-    pub fn torque_rate(&self, theta: f64, theta_dot: f64, theta_ddot: f64) -> f64 {
+    pub fn torque_rate(&self, theta: T, theta_dot: T, theta_ddot: T) -> T {
         let mut r = self.amplitude * self.wavenumber * cos(self.wavenumber * theta) * theta_dot;
         if let Some(f) = &self.friction {
             r += f.slope(theta_dot) * theta_ddot;
@@ -327,21 +374,21 @@ impl Load {
 /// coefficients ā_i, and the load model. It evaluates the nominal gain
 /// `b̄(t)` and load term `d(t)` at a measured state (SPEC §2).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NominalModel {
+pub struct NominalModel<T: Real = f64> {
     /// Physical parameters.
-    pub params: ServoParams,
+    pub params: ServoParams<T>,
     /// ā1, ā2, ā3.
-    pub coeffs: Coefficients,
+    pub coeffs: Coefficients<T>,
     /// The load model.
-    pub load: Load,
-    b_per_kg: f64,
-    d_per_torque: f64,
+    pub load: Load<T>,
+    b_per_kg: T,
+    d_per_torque: T,
 }
 
-impl NominalModel {
+impl<T: Real> NominalModel<T> {
     /// Builds the model (parameters are assumed validated; see
     /// [`NominalModel::try_new`]).
-    pub fn new(params: ServoParams, load: Load) -> Self {
+    pub fn new(params: ServoParams<T>, load: Load<T>) -> Self {
         Self {
             params,
             coeffs: params.coefficients(),
@@ -351,8 +398,14 @@ impl NominalModel {
         }
     }
 
+    /// The same model in another float type (its derived factors
+    /// recomputed in `U` from the cast parameters).
+    pub fn cast<U: Real>(&self) -> NominalModel<U> {
+        NominalModel::new(self.params.cast(), self.load.cast())
+    }
+
     /// Builds the model after validating parameters and load.
-    pub fn try_new(params: ServoParams, load: Load) -> Result<Self, ParamError> {
+    pub fn try_new(params: ServoParams<T>, load: Load<T>) -> Result<Self, ParamError> {
         params.validate()?;
         load.validate()?;
         Ok(Self::new(params, load))
@@ -361,7 +414,7 @@ impl NominalModel {
     /// Load pressure from the torque balance (4):
     /// `Pl = (Jt·x3 + Bm·x2 + G·x1 + Tl)/Dm`.
     #[inline]
-    pub fn load_pressure(&self, x: &[f64; 3]) -> f64 {
+    pub fn load_pressure(&self, x: &[T; 3]) -> T {
         let p = &self.params;
         (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + self.load.torque(x[0], x[1])) / p.dm
     }
@@ -369,7 +422,7 @@ impl NominalModel {
     /// `b(t)` of (9) at state `x` with valve direction `s = sgn(u)`.
     /// Returns `(b, clamped)` (see the module doc on the valve root).
     #[inline]
-    pub fn b(&self, x: &[f64; 3], s: f64) -> (f64, bool) {
+    pub fn b(&self, x: &[T; 3], s: T) -> (T, bool) {
         let (kg, clamped) = self.params.flow_gain(self.load_pressure(x), sgn(s));
         (self.b_per_kg * kg, clamped)
     }
@@ -379,7 +432,7 @@ impl NominalModel {
     /// when the valve root was clamped or b fell below the floor. Returns
     /// `(b̄, floored)`.
     #[inline]
-    pub fn gain_for(&self, x: &[f64; 3], v: f64, floor: f64) -> (f64, bool) {
+    pub fn gain_for(&self, x: &[T; 3], v: T, floor: T) -> (T, bool) {
         let (b, clamped) = self.b(x, sgn(v));
         if clamped || b < floor {
             (b.max(floor), true)
@@ -389,13 +442,13 @@ impl NominalModel {
     }
 
     /// `b` at zero load pressure: `4βe·Dm·Kv·Cd·Ag·sqrt(Ps/ρ)/(Vt·Jt)`.
-    pub fn b_at_rest(&self) -> f64 {
-        self.b_per_kg * self.params.flow_gain(0.0, 0.0).0
+    pub fn b_at_rest(&self) -> T {
+        self.b_per_kg * self.params.flow_gain(T::ZERO, T::ZERO).0
     }
 
     /// `d(t) = 4βe·Kce·Tl/(Vt·Jt) + Ṫl/Jt` of (9) at state `x`.
     #[inline]
-    pub fn d(&self, x: &[f64; 3]) -> f64 {
+    pub fn d(&self, x: &[T; 3]) -> T {
         self.d_per_torque * self.load.torque(x[0], x[1])
             + self.load.torque_rate(x[0], x[1], x[2]) / self.params.jt
     }

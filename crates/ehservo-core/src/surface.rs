@@ -10,53 +10,54 @@
 //! p = (90, 2600, 24000) places its roots at −20, −30, −40.
 
 use crate::error::ParamError;
+use crate::math::Real;
 
 /// The coefficients p1, p2, p3 of (10), checked to give a stable surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SwitchingSurface {
-    p: [f64; 3],
+pub struct SwitchingSurface<T = f64> {
+    p: [T; 3],
 }
 
 /// The surface and error quantities at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct SurfaceState {
+pub struct SurfaceState<T = f64> {
     /// e = θd − x1 (rad).
-    pub e: f64,
+    pub e: T,
     /// ė = θ̇d − x2 (rad/s).
-    pub e_dot: f64,
+    pub e_dot: T,
     /// ë = θ̈d − x3 (rad/s²).
-    pub e_ddot: f64,
+    pub e_ddot: T,
     /// ∫e (rad·s).
-    pub int_e: f64,
+    pub int_e: T,
     /// σ of (10) (rad/s²).
-    pub sigma: f64,
+    pub sigma: T,
     /// ‖E‖ = ‖[∫e, e, ė]‖.
-    pub norm_e: f64,
+    pub norm_e: T,
 }
 
-impl SurfaceState {
+impl<T: Real> SurfaceState<T> {
     /// E = [∫e, e, ė] of (16).
-    pub fn e_vec(&self) -> [f64; 3] {
+    pub fn e_vec(&self) -> [T; 3] {
         [self.int_e, self.e, self.e_dot]
     }
 
     /// Ė = [e, ė, ë].
-    pub fn e_vec_dot(&self) -> [f64; 3] {
+    pub fn e_vec_dot(&self) -> [T; 3] {
         [self.e, self.e_dot, self.e_ddot]
     }
 }
 
-impl SwitchingSurface {
+impl<T: Real> SwitchingSurface<T> {
     /// From coefficients; rejects a surface whose error dynamics
     /// `s³ + p1 s² + p2 s + p3` are not Hurwitz (Routh: p1, p2, p3 > 0 and
     /// p1·p2 > p3).
-    pub fn try_new(p: [f64; 3]) -> Result<Self, ParamError> {
+    pub fn try_new(p: [T; 3]) -> Result<Self, ParamError> {
         for (i, name) in ["p1", "p2", "p3"].iter().enumerate() {
-            if !p[i].is_finite() || p[i] <= 0.0 {
+            if !p[i].is_finite() || p[i] <= T::ZERO {
                 return Err(ParamError::new(
                     name,
                     "must be finite and > 0 for a stable switching surface",
-                    p[i],
+                    p[i].to_f64(),
                 ));
             }
         }
@@ -73,13 +74,13 @@ impl SwitchingSurface {
     /// From three real poles, all strictly in the left half-plane:
     /// (s − r1)(s − r2)(s − r3) = s³ + p1 s² + p2 s + p3 with
     /// p1 = −(r1 + r2 + r3), p2 = r1r2 + r1r3 + r2r3, p3 = −r1r2r3.
-    pub fn from_poles(poles: [f64; 3]) -> Result<Self, ParamError> {
+    pub fn from_poles(poles: [T; 3]) -> Result<Self, ParamError> {
         for &r in &poles {
-            if !r.is_finite() || r >= 0.0 {
+            if !r.is_finite() || r >= T::ZERO {
                 return Err(ParamError::new(
                     "poles",
                     "every pole must be finite and < 0 (left half-plane)",
-                    r,
+                    r.to_f64(),
                 ));
             }
         }
@@ -91,28 +92,29 @@ impl SwitchingSurface {
         ])
     }
 
-    /// The paper's surface, poles −20, −30, −40.
-    pub fn paper() -> Self {
-        Self {
-            p: [90.0, 2600.0, 24000.0],
+    /// The same surface in another float type.
+    pub fn cast<U: Real>(&self) -> SwitchingSurface<U> {
+        SwitchingSurface {
+            p: self.p.map(|v| U::of(v.to_f64())),
         }
     }
 
     /// [p1, p2, p3].
-    pub fn p(&self) -> [f64; 3] {
+    pub fn p(&self) -> [T; 3] {
         self.p
     }
 
     /// The matrix P of (16), row-major.
-    pub fn p_matrix(&self) -> [[f64; 3]; 3] {
+    pub fn p_matrix(&self) -> [[T; 3]; 3] {
         let [p1, p2, p3] = self.p;
-        [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-p3, -p2, -p1]]
+        let (o, l) = (T::ZERO, T::ONE);
+        [[o, l, o], [o, o, l], [-p3, -p2, -p1]]
     }
 
     /// Errors, σ and ‖E‖ for state `x = (θ, θ̇, θ̈)`, reference `z` and the
     /// integral of the error `int_e`.
     #[inline]
-    pub fn evaluate(&self, x: &[f64; 3], z: &[f64; 4], int_e: f64) -> SurfaceState {
+    pub fn evaluate(&self, x: &[T; 3], z: &[T; 4], int_e: T) -> SurfaceState<T> {
         let e = z[0] - x[0];
         let e_dot = z[1] - x[1];
         let e_ddot = z[2] - x[2];
@@ -133,7 +135,7 @@ impl SwitchingSurface {
     /// the numerator of (12) (with the printed p1[θ̇d − x3] read as
     /// p1[θ̈d − x3], SPEC §4).
     #[inline]
-    pub fn equivalent_numerator(&self, a: &[f64; 3], x: &[f64; 3], z: &[f64; 4]) -> f64 {
+    pub fn equivalent_numerator(&self, a: &[T; 3], x: &[T; 3], z: &[T; 4]) -> T {
         let [p1, p2, p3] = self.p;
         z[3] + a[0] * x[0]
             + a[1] * x[1]
@@ -141,6 +143,15 @@ impl SwitchingSurface {
             + p1 * (z[2] - x[2])
             + p2 * (z[1] - x[1])
             + p3 * (z[0] - x[0])
+    }
+}
+
+impl SwitchingSurface<f64> {
+    /// The paper's surface, poles −20, −30, −40.
+    pub fn paper() -> Self {
+        Self {
+            p: [90.0, 2600.0, 24000.0],
+        }
     }
 }
 

@@ -247,7 +247,7 @@ mod tests {
             t: k as f64 * h,
             e: e_deg * DR,
             u,
-            signals: SlidingParts::SIGNALS,
+            signals: SlidingParts::<f64>::SIGNALS,
             ..Default::default()
         };
         parts.write(&mut s.values);

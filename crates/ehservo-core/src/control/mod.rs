@@ -37,19 +37,20 @@ pub mod sliding;
 pub mod vsc;
 
 use crate::error::ParamError;
+use crate::math::Real;
 use crate::rk4::OdeState;
 use crate::servo::NominalModel;
 use crate::surface::SwitchingSurface;
 
 /// What the controller measures at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Measurement {
+pub struct Measurement<T = f64> {
     /// Time (s).
-    pub t: f64,
+    pub t: T,
     /// x = (θm, θ̇m, θ̈m) (rad, rad/s, rad/s²); Assumption A4.
-    pub x: [f64; 3],
+    pub x: [T; 3],
     /// z = (θd, θ̇d, θ̈d, θ⃛d); Assumption A3.
-    pub z: [f64; 4],
+    pub z: [T; 4],
 }
 
 /// Flags a law may raise (bit set in [`Output::flags`]).
@@ -122,23 +123,23 @@ impl Signals for () {
 /// The result of a law at one instant: the command, the law's flags and its
 /// parts. Dereferences to the parts.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Output<P> {
+pub struct Output<P, T = f64> {
     /// Control voltage u (V).
-    pub u: f64,
+    pub u: T,
     /// Bit set of [`flags`].
     pub flags: u8,
     /// The parts of the law.
     pub parts: P,
 }
 
-impl<P> core::ops::Deref for Output<P> {
+impl<P, T> core::ops::Deref for Output<P, T> {
     type Target = P;
     fn deref(&self) -> &P {
         &self.parts
     }
 }
 
-impl<P> core::ops::DerefMut for Output<P> {
+impl<P, T> core::ops::DerefMut for Output<P, T> {
     fn deref_mut(&mut self) -> &mut P {
         &mut self.parts
     }
@@ -153,10 +154,11 @@ pub trait Truth {
     fn lumped_uncertainty(&self, u: f64, u_eq: f64, b_bar: f64) -> f64;
 }
 
-/// A control law with state.
-pub trait Controller {
+/// A control law with state, computing in the float type `T` (f64 by
+/// default; f32 on a board's single-precision FPU).
+pub trait Controller<T: Real = f64> {
     /// The controller state ξ.
-    type State: OdeState;
+    type State: OdeState<T>;
     /// The parts of the law, as named signals.
     type Parts: Signals;
 
@@ -165,10 +167,15 @@ pub trait Controller {
 
     /// Evaluates the law at measurement `m` and state `s`; writes ξ̇ into
     /// `ds`. Infallible and allocation-free.
-    fn law(&self, m: &Measurement, s: &Self::State, ds: &mut Self::State) -> Output<Self::Parts>;
+    fn law(
+        &self,
+        m: &Measurement<T>,
+        s: &Self::State,
+        ds: &mut Self::State,
+    ) -> Output<Self::Parts, T>;
 
     /// The network weights in `s` (empty for controllers without any).
-    fn weights<'a>(&self, _s: &'a Self::State) -> &'a [f64] {
+    fn weights<'a>(&self, _s: &'a Self::State) -> &'a [T] {
         &[]
     }
 
@@ -176,18 +183,29 @@ pub trait Controller {
     /// the uncertainty the network should learn) once per logged sample,
     /// with the state the law saw and what the simulator knows of the true
     /// plant. The default does nothing.
-    fn annotate(&self, _s: &Self::State, _out: &mut Output<Self::Parts>, _truth: &dyn Truth) {}
+    fn annotate(&self, _s: &Self::State, _out: &mut Output<Self::Parts, T>, _truth: &dyn Truth) {}
 }
 
 /// What a controller is designed from besides its own parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Design {
+pub struct Design<T: Real = f64> {
     /// The nominal model (what the controller is told of the plant).
-    pub model: NominalModel,
+    pub model: NominalModel<T>,
     /// The switching surface (for the laws that use one).
-    pub surface: SwitchingSurface,
+    pub surface: SwitchingSurface<T>,
     /// The sample period (s) of the loop the controller runs in.
-    pub dt: f64,
+    pub dt: T,
+}
+
+impl<T: Real> Design<T> {
+    /// The same context in another float type.
+    pub fn cast<U: Real>(&self) -> Design<U> {
+        Design {
+            model: self.model.cast(),
+            surface: self.surface.cast(),
+            dt: U::of(self.dt.to_f64()),
+        }
+    }
 }
 
 /// A controller kind's parameters: what a scenario's `[controller]` table

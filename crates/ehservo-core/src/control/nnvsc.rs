@@ -28,7 +28,7 @@
 use super::sliding::SlidingParts;
 use super::{flags, Controller, Measurement, Output, Truth};
 use crate::error::{non_negative, positive, ParamError};
-use crate::math::sgn;
+use crate::math::{sgn, Real};
 use crate::rbf::{Rbf, N_KERNELS, N_LEVELS, N_PHI};
 use crate::rk4::OdeState;
 use crate::servo::NominalModel;
@@ -68,32 +68,32 @@ impl MuRule {
 
 /// Gains of the NNBVSC.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NnVscParams {
+pub struct NnVscParams<T = f64> {
     /// γ1 > 0, the linear switching gain.
-    pub gamma1: f64,
+    pub gamma1: T,
     /// η ≥ 0, the revised ε-modification gain.
-    pub eta: f64,
+    pub eta: T,
     /// α > ᾱ, the exponential-tracking rate parameter of Theorem 2.
-    pub alpha: f64,
+    pub alpha: T,
     /// ᾱ ≥ 0, the dead-zone slope.
-    pub alpha_bar: f64,
+    pub alpha_bar: T,
     /// Wmax ≥ 0, the assumed bound on ‖W̄‖ (21).
-    pub w_max: f64,
+    pub w_max: T,
     /// ε0 ≥ 0 of (22).
-    pub eps0: f64,
+    pub eps0: T,
     /// ε1 ≥ 0 of (22).
-    pub eps1: f64,
+    pub eps1: T,
     /// ε2 > 0 of (34).
-    pub eps2: f64,
+    pub eps2: T,
     /// h > 0, H = h·I in (26).
-    pub h: f64,
+    pub h: T,
     /// β = bound_b·b̄, 0 ≤ bound_b < 1.
-    pub bound_b: f64,
+    pub bound_b: T,
     /// The boundary-layer rule (SPEC §5 by default).
     pub mu_rule: MuRule,
 }
 
-impl NnVscParams {
+impl NnVscParams<f64> {
     /// The Fig. 2 values.
     pub const fn paper() -> Self {
         Self {
@@ -110,6 +110,26 @@ impl NnVscParams {
             mu_rule: MuRule::Remark7,
         }
     }
+}
+
+impl<T: Real> NnVscParams<T> {
+    /// The same gains in another float type.
+    pub fn cast<U: Real>(&self) -> NnVscParams<U> {
+        let c = |v: T| U::of(v.to_f64());
+        NnVscParams {
+            gamma1: c(self.gamma1),
+            eta: c(self.eta),
+            alpha: c(self.alpha),
+            alpha_bar: c(self.alpha_bar),
+            w_max: c(self.w_max),
+            eps0: c(self.eps0),
+            eps1: c(self.eps1),
+            eps2: c(self.eps2),
+            h: c(self.h),
+            bound_b: c(self.bound_b),
+            mu_rule: self.mu_rule,
+        }
+    }
 
     /// Checks every gain; the error names the first one that is wrong.
     pub fn validate(&self) -> Result<(), ParamError> {
@@ -121,7 +141,7 @@ impl NnVscParams {
             return Err(ParamError::new(
                 "alpha_bar",
                 "must be < alpha (Theorem 3: 0 ≤ ᾱ < α)",
-                self.alpha_bar,
+                self.alpha_bar.to_f64(),
             ));
         }
         non_negative("w_max", self.w_max)?;
@@ -130,19 +150,19 @@ impl NnVscParams {
         positive("eps2", self.eps2)?;
         positive("h", self.h)?;
         non_negative("bound_b", self.bound_b)?;
-        if self.bound_b >= 1.0 {
+        if self.bound_b >= T::ONE {
             return Err(ParamError::new(
                 "bound_b",
                 "must be < 1 (Assumption A1: β < b̄)",
-                self.bound_b,
+                self.bound_b.to_f64(),
             ));
         }
         // c = ηW²/4 + ε0‖Φ‖ + ε1 ≥ ηW²/4 + ε0 + ε1 (‖Φ‖ ≥ 1): μ divides by it.
-        if self.eta * self.w_max * self.w_max / 4.0 + self.eps0 + self.eps1 <= 0.0 {
+        if self.eta * self.w_max * self.w_max / T::of(4.0) + self.eps0 + self.eps1 <= T::ZERO {
             return Err(ParamError::new(
                 "eps1",
                 "η·Wmax²/4 + ε0 + ε1 must be > 0 (μ(t) divides by it)",
-                self.eps1,
+                self.eps1.to_f64(),
             ));
         }
         Ok(())
@@ -152,23 +172,23 @@ impl NnVscParams {
 /// The NNBVSC state: ∫e and the 130 weights (W[0] is the bias weight, the
 /// paper's w_1 is W[1], w_128 is W[128]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NnState {
+pub struct NnState<T = f64> {
     /// ∫e.
-    pub int_e: f64,
+    pub int_e: T,
     /// Connection weights W.
-    pub w: [f64; N_PHI],
+    pub w: [T; N_PHI],
 }
 
-impl OdeState for NnState {
+impl<T: Real> OdeState<T> for NnState<T> {
     #[inline]
     fn zero() -> Self {
         Self {
-            int_e: 0.0,
-            w: [0.0; N_PHI],
+            int_e: T::ZERO,
+            w: [T::ZERO; N_PHI],
         }
     }
     #[inline]
-    fn axpy(&mut self, a: f64, o: &Self) {
+    fn axpy(&mut self, a: T, o: &Self) {
         self.int_e += a * o.int_e;
         self.w.axpy(a, &o.w);
     }
@@ -178,15 +198,15 @@ impl OdeState for NnState {
         // exactly when some entry is not finite. Branch-free, in eight lanes
         // (four SIMD pairs, short addition chains); 130 tests with a branch
         // each cost as much as the rest of the hardware step's bookkeeping.
-        let mut lane = [0.0; 8];
+        let mut lane = [T::ZERO; 8];
         for chunk in self.w.chunks_exact(8) {
-            for (l, v) in lane.iter_mut().zip(chunk) {
-                *l += 0.0 * v;
+            for (l, &v) in lane.iter_mut().zip(chunk) {
+                *l += T::ZERO * v;
             }
         }
-        let mut sum = 0.0 * self.int_e;
-        for v in &self.w[N_PHI - N_PHI % 8..] {
-            sum += 0.0 * v;
+        let mut sum = T::ZERO * self.int_e;
+        for &v in &self.w[N_PHI - N_PHI % 8..] {
+            sum += T::ZERO * v;
         }
         for l in lane {
             sum += l;
@@ -194,7 +214,7 @@ impl OdeState for NnState {
         sum.is_finite()
     }
     #[inline]
-    fn axpy_finite(&mut self, a: f64, o: &Self) -> bool {
+    fn axpy_finite(&mut self, a: T, o: &Self) -> bool {
         let v = self.int_e + a * o.int_e;
         if v.is_finite() && crate::rk4::axpy_results_finite(&self.w, a, &o.w) {
             self.int_e = v;
@@ -208,65 +228,81 @@ impl OdeState for NnState {
 
 /// The NNBVSC of Theorem 3.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NnVsc {
-    model: NominalModel,
-    surface: SwitchingSurface,
-    params: NnVscParams,
-    rbf: Rbf,
-    c_fixed: f64,
-    b_floor: f64,
+pub struct NnVsc<T: Real = f64> {
+    model: NominalModel<T>,
+    surface: SwitchingSurface<T>,
+    params: NnVscParams<T>,
+    rbf: Rbf<T>,
+    c_fixed: T,
+    b_floor: T,
 }
 
-impl NnVsc {
+impl<T: Real> NnVsc<T> {
     /// Validates the gains and builds the controller.
     pub fn try_new(
-        model: NominalModel,
-        surface: SwitchingSurface,
-        params: NnVscParams,
-        rbf: Rbf,
+        model: NominalModel<T>,
+        surface: SwitchingSurface<T>,
+        params: NnVscParams<T>,
+        rbf: Rbf<T>,
     ) -> Result<Self, ParamError> {
         params.validate()?;
         Ok(Self {
             model,
             surface,
             rbf,
-            c_fixed: params.eta * params.w_max * params.w_max / 4.0 + params.eps1,
-            b_floor: 1e-3 * model.b_at_rest(),
+            c_fixed: params.eta * params.w_max * params.w_max / T::of(4.0) + params.eps1,
+            b_floor: T::of(1e-3) * model.b_at_rest(),
             params,
         })
     }
 
+    /// The same controller in another float type: model, surface, gains
+    /// and network cast, and its constants recomputed in `U`.
+    pub fn cast<U: Real>(&self) -> Result<NnVsc<U>, ParamError> {
+        NnVsc::try_new(
+            self.model.cast(),
+            self.surface.cast(),
+            self.params.cast(),
+            self.rbf.cast()?,
+        )
+    }
+
     /// The gains.
-    pub fn params(&self) -> &NnVscParams {
+    pub fn params(&self) -> &NnVscParams<T> {
         &self.params
     }
 
     /// The network.
-    pub fn rbf(&self) -> &Rbf {
+    pub fn rbf(&self) -> &Rbf<T> {
         &self.rbf
     }
 
     /// The switching surface.
-    pub fn surface(&self) -> &SwitchingSurface {
+    pub fn surface(&self) -> &SwitchingSurface<T> {
         &self.surface
     }
 
     /// The nominal model.
-    pub fn model(&self) -> &NominalModel {
+    pub fn model(&self) -> &NominalModel<T> {
         &self.model
     }
 }
 
-impl Controller for NnVsc {
-    type State = NnState;
-    type Parts = SlidingParts;
+impl<T: Real> Controller<T> for NnVsc<T> {
+    type State = NnState<T>;
+    type Parts = SlidingParts<T>;
 
-    fn initial_state(&self) -> NnState {
+    fn initial_state(&self) -> NnState<T> {
         NnState::zero()
     }
 
     #[inline]
-    fn law(&self, m: &Measurement, s: &NnState, ds: &mut NnState) -> Output<SlidingParts> {
+    fn law(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        ds: &mut NnState<T>,
+    ) -> Output<SlidingParts<T>, T> {
         let p = &self.params;
         let x = &m.x;
         let st = self.surface.evaluate(x, &m.z, s.int_e);
@@ -281,17 +317,19 @@ impl Controller for NnVsc {
         let gamma2 = c + p.eps2;
 
         let mut fl = 0;
-        let (sd, mu, xi) = if st.norm_e > 0.0 {
+        let (sd, mu, xi) = if st.norm_e > T::ZERO {
             let delta = p.alpha_bar * st.norm_e;
             let sd = if st.sigma.abs() > delta {
                 st.sigma - delta * sgn(st.sigma)
             } else {
-                0.0
+                T::ZERO
             };
             let mu = match p.mu_rule {
                 MuRule::Remark7 => (p.alpha - p.alpha_bar) * st.norm_e * p.eps2 / c,
-                MuRule::Literal33 => (p.alpha - p.alpha_bar) * st.norm_e * ((gamma2 - c) / c - 1.0),
-                MuRule::Zero => 0.0,
+                MuRule::Literal33 => {
+                    (p.alpha - p.alpha_bar) * st.norm_e * ((gamma2 - c) / c - T::ONE)
+                }
+                MuRule::Zero => T::ZERO,
             };
             let e = st.e_vec();
             let ed = st.e_vec_dot();
@@ -300,30 +338,30 @@ impl Controller for NnVsc {
             (sd, mu, xi)
         } else {
             fl |= flags::ZERO_ERROR_NORM;
-            (0.0, 0.0, 0.0)
+            (T::ZERO, T::ZERO, T::ZERO)
         };
 
         let denom = sd.abs() + mu;
         // |σΔ| + μ ≥ 0 under the default rule, and 0 only when σΔ = 0.
         // (Under the literal (33) it can be negative: computed as printed.)
-        let frac = if denom != 0.0 && sd != 0.0 {
+        let frac = if denom != T::ZERO && sd != T::ZERO {
             sd / denom
         } else {
-            0.0
+            T::ZERO
         };
         // (b̄ − β)·u_sw = γ1σΔ + γ2σΔ/(|σΔ| + μ), and b̄ − β = b̄(1 − bound_b).
         let sw_num = p.gamma1 * sd + gamma2 * frac;
         // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
         // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
         // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
-        let inv_h = 1.0 / p.h;
+        let inv_h = T::ONE / p.h;
         let a = sd * inv_h;
         let bw = p.eta * sd.abs() * inv_h;
         let (w, dw) = (&s.w, &mut ds.w);
         let g3 = &g[2];
-        let mut wphi_k = 0.0;
+        let mut wphi_k = T::ZERO;
         for (i1, &g1) in g[0].iter().enumerate() {
-            let mut u = 0.0;
+            let mut u = T::ZERO;
             for (i2, &g2) in g[1].iter().enumerate() {
                 let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
                 let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
@@ -349,13 +387,13 @@ impl Controller for NnVsc {
         let n = self
             .surface
             .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
-        let v = n + wphi + sw_num / (1.0 - p.bound_b);
+        let v = n + wphi + sw_num / (T::ONE - p.bound_b);
         let (b_bar, clamped) = self.model.gain_for(x, v, self.b_floor);
         if clamped {
             fl |= flags::VALVE_ROOT_CLAMPED;
         }
         let u_eq = (n + wphi) / b_bar;
-        let u_sw = sw_num / (b_bar * (1.0 - p.bound_b));
+        let u_sw = sw_num / (b_bar * (T::ONE - p.bound_b));
 
         Output {
             u: u_eq + u_sw,
@@ -378,11 +416,11 @@ impl Controller for NnVsc {
         }
     }
 
-    fn weights<'a>(&self, s: &'a NnState) -> &'a [f64] {
+    fn weights<'a>(&self, s: &'a NnState<T>) -> &'a [T] {
         &s.w
     }
 
-    fn annotate(&self, s: &NnState, out: &mut Output<SlidingParts>, truth: &dyn Truth) {
+    fn annotate(&self, s: &NnState<T>, out: &mut Output<SlidingParts<T>, T>, truth: &dyn Truth) {
         SlidingParts::annotate(out, &s.w, truth);
     }
 }

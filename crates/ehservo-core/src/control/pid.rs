@@ -50,7 +50,7 @@
 
 use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals};
 use crate::error::{positive, ParamError};
-use crate::math::sqrt;
+use crate::math::{sqrt, Real};
 
 /// `kind = "pid"`: the `[controller]` keys. Gains left out are designed
 /// from the nominal model (module doc).
@@ -135,20 +135,20 @@ pub fn design_gains(
 
 /// The PID's parts.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct PidParts {
+pub struct PidParts<T = f64> {
     /// Proportional term kp·e (V).
-    pub p: f64,
+    pub p: T,
     /// Integral term I (V).
-    pub i: f64,
+    pub i: T,
     /// Derivative term kd·(θ̇d − y_d) (V).
-    pub d: f64,
+    pub d: T,
     /// Feedforward (V).
-    pub ff: f64,
+    pub ff: T,
     /// The command before the output limit (V).
-    pub u_unsat: f64,
+    pub u_unsat: T,
 }
 
-impl Signals for PidParts {
+impl<T: Real> Signals for PidParts<T> {
     const SIGNALS: &'static [Signal] = &[
         Signal::new("p", "p_V", "V", "proportional term kp·e"),
         Signal::new("i", "i_V", "V", "integral term"),
@@ -167,33 +167,54 @@ impl Signals for PidParts {
         ),
     ];
     fn write(&self, out: &mut [f64]) {
-        out[..5].copy_from_slice(&[self.p, self.i, self.d, self.ff, self.u_unsat]);
+        for (o, v) in out
+            .iter_mut()
+            .zip([self.p, self.i, self.d, self.ff, self.u_unsat])
+        {
+            *o = v.to_f64();
+        }
     }
 }
 
 /// The PID controller, built.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pid {
-    kp: f64,
-    ki: f64,
-    kd: f64,
-    tf: f64,
-    tt: f64,
-    u_limit: f64,
-    a: [f64; 3],
-    b0: f64,
+pub struct Pid<T: Real = f64> {
+    kp: T,
+    ki: T,
+    kd: T,
+    tf: T,
+    tt: T,
+    u_limit: T,
+    a: [T; 3],
+    b0: T,
     feedforward: bool,
 }
 
-impl Pid {
+impl<T: Real> Pid<T> {
     /// The gains `(kp, ki, kd)` in use.
-    pub fn gains(&self) -> (f64, f64, f64) {
+    pub fn gains(&self) -> (T, T, T) {
         (self.kp, self.ki, self.kd)
     }
 
     /// The filter and tracking times `(Tf, Tt)` (s).
-    pub fn times(&self) -> (f64, f64) {
+    pub fn times(&self) -> (T, T) {
         (self.tf, self.tt)
+    }
+
+    /// The same controller in another float type.
+    pub fn cast<U: Real>(&self) -> Pid<U> {
+        let c = |v: T| U::of(v.to_f64());
+        Pid {
+            kp: c(self.kp),
+            ki: c(self.ki),
+            kd: c(self.kd),
+            tf: c(self.tf),
+            tt: c(self.tt),
+            u_limit: c(self.u_limit),
+            a: self.a.map(c),
+            b0: c(self.b0),
+            feedforward: self.feedforward,
+        }
     }
 }
 
@@ -243,24 +264,24 @@ impl Config for PidConfig {
     }
 }
 
-impl Controller for Pid {
+impl<T: Real> Controller<T> for Pid<T> {
     /// (I, θf): the integral term (V) and the filtered θ (rad).
-    type State = [f64; 2];
-    type Parts = PidParts;
+    type State = [T; 2];
+    type Parts = PidParts<T>;
 
-    fn initial_state(&self) -> [f64; 2] {
-        [0.0; 2]
+    fn initial_state(&self) -> [T; 2] {
+        [T::ZERO; 2]
     }
 
     #[inline]
-    fn law(&self, m: &Measurement, s: &[f64; 2], ds: &mut [f64; 2]) -> Output<PidParts> {
+    fn law(&self, m: &Measurement<T>, s: &[T; 2], ds: &mut [T; 2]) -> Output<PidParts<T>, T> {
         let (x, z) = (&m.x, &m.z);
         let e = z[0] - x[0];
         let y_d = (x[0] - s[1]) / self.tf;
         let ff = if self.feedforward {
             (z[3] + self.a[0] * z[0] + self.a[1] * z[1] + self.a[2] * z[2]) / self.b0
         } else {
-            0.0
+            T::ZERO
         };
         let p = self.kp * e;
         let d = self.kd * (z[1] - y_d);

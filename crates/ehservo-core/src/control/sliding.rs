@@ -13,47 +13,48 @@ use super::{Config, Design, Output, Signal, Signals, Truth};
 use crate::control::nnvsc::{MuRule, NnVsc, NnVscParams};
 use crate::control::vsc::{Switching, Vsc, VscParams};
 use crate::error::{non_negative, positive, ParamError};
+use crate::math::Real;
 use crate::rbf::Rbf;
 
 /// The parts of a sliding-mode law at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct SlidingParts {
+pub struct SlidingParts<T = f64> {
     /// Equivalent control (12) or (24) (V).
-    pub u_eq: f64,
+    pub u_eq: T,
     /// Switching control (13) or (25) (V).
-    pub u_sw: f64,
+    pub u_sw: T,
     /// Tracking error e = θd − x1 (rad).
-    pub e: f64,
+    pub e: T,
     /// Switching function σ of (10) (rad/s²).
-    pub sigma: f64,
+    pub sigma: T,
     /// Dead-zone switching function σΔ of (27) (σ itself for the VSC).
-    pub sigma_delta: f64,
+    pub sigma_delta: T,
     /// The network's estimate WᵀΦ (rad/s³); 0 for the VSC.
-    pub wphi: f64,
+    pub wphi: T,
     /// The lumped uncertainty of (19), Σ Δa_i x_i − Δb·u_eq + d − ξ
     /// (rad/s³): a diagnostic filled by [`super::Controller::annotate`].
-    pub uncertainty: f64,
+    pub uncertainty: T,
     /// ‖W‖ (0 without a network; filled by [`super::Controller::annotate`]).
-    pub w_norm: f64,
+    pub w_norm: T,
     /// The paper's w_1, the first Gaussian's weight W[1].
-    pub w_1: f64,
+    pub w_1: T,
     /// The paper's w_128, θ̈d's weight W[128].
-    pub w_128: f64,
+    pub w_128: T,
     /// Boundary layer: μ(t) (NNBVSC, SPEC §5) or the constant μ (VSC-sat).
-    pub mu: f64,
+    pub mu: T,
     /// ‖E‖.
-    pub norm_e: f64,
+    pub norm_e: T,
     /// Nominal gain b̄(t) used by the law (s⁻³V⁻¹).
-    pub b_bar: f64,
+    pub b_bar: T,
     /// ‖Φ‖ (0 for the VSC).
-    pub phi_norm: f64,
+    pub phi_norm: T,
     /// ξ = ᾱ·EᵀĖ·sgn(σ)/‖E‖ of (19) (rad/s³); 0 for the VSC.
-    pub xi: f64,
+    pub xi: T,
     /// Switching gain: k of (14) for the VSC, γ2 of (34) for the NNBVSC.
-    pub gain: f64,
+    pub gain: T,
 }
 
-impl Signals for SlidingParts {
+impl<T: Real> Signals for SlidingParts<T> {
     const SIGNALS: &'static [Signal] = &[
         Signal::new("u_eq", "u_eq_V", "V", "equivalent control (12)/(24)"),
         Signal::new("u_sw", "u_sw_V", "V", "switching control (13)/(25)"),
@@ -117,20 +118,23 @@ impl Signals for SlidingParts {
             self.xi,
             self.gain,
         ];
-        out[..v.len()].copy_from_slice(&v);
+        for (o, v) in out.iter_mut().zip(v) {
+            *o = v.to_f64();
+        }
     }
 }
 
-impl SlidingParts {
+impl<T: Real> SlidingParts<T> {
     /// The diagnostics of [`super::Controller::annotate`]: the lumped uncertainty
     /// of (19) (less ξ) and the weight statistics of `w` (empty for the VSC).
     #[inline]
-    pub fn annotate(out: &mut Output<SlidingParts>, w: &[f64], truth: &dyn Truth) {
+    pub fn annotate(out: &mut Output<SlidingParts<T>, T>, w: &[T], truth: &dyn Truth) {
         let p = &mut out.parts;
-        p.uncertainty = truth.lumped_uncertainty(out.u, p.u_eq, p.b_bar) - p.xi;
+        let lumped = truth.lumped_uncertainty(out.u.to_f64(), p.u_eq.to_f64(), p.b_bar.to_f64());
+        p.uncertainty = T::of(lumped) - p.xi;
         p.w_norm = crate::math::norm(w);
-        p.w_1 = w.get(1).copied().unwrap_or(0.0);
-        p.w_128 = w.get(128).copied().unwrap_or(0.0);
+        p.w_1 = w.get(1).copied().unwrap_or(T::ZERO);
+        p.w_128 = w.get(128).copied().unwrap_or(T::ZERO);
     }
 }
 

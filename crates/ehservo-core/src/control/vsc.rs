@@ -16,34 +16,34 @@
 use super::sliding::SlidingParts;
 use super::{flags, Controller, Measurement, Output, Truth};
 use crate::error::{non_negative, positive, ParamError};
-use crate::math::{sat, sgn};
+use crate::math::{sat, sgn, Real};
 use crate::servo::NominalModel;
 use crate::surface::SwitchingSurface;
 
 /// How the switching term switches.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Switching {
+pub enum Switching<T = f64> {
     /// sgn(σ), eq. (13).
     Sign,
     /// sat(σ/μ) with a constant boundary-layer width μ (Remark 2).
     Saturation {
         /// Width μ of the boundary layer (rad/s²).
-        mu: f64,
+        mu: T,
     },
 }
 
 /// Gains of the traditional VSC.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct VscParams {
+pub struct VscParams<T = f64> {
     /// α_i = bound_a·|ā_i|.
-    pub bound_a: f64,
+    pub bound_a: T,
     /// β = bound_b·b̄, 0 ≤ bound_b < 1 (A1: β < b̄).
-    pub bound_b: f64,
+    pub bound_b: T,
     /// sgn or sat.
-    pub switching: Switching,
+    pub switching: Switching<T>,
 }
 
-impl VscParams {
+impl VscParams<f64> {
     /// The paper's Theorem 1 controller with the Fig. 2 bounds.
     pub const fn paper() -> Self {
         Self {
@@ -54,30 +54,45 @@ impl VscParams {
     }
 }
 
-/// The traditional VSC (Theorem 1), or its boundary-layer variant.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Vsc {
-    model: NominalModel,
-    surface: SwitchingSurface,
-    params: VscParams,
-    alpha: [f64; 3],
-    b_floor: f64,
+impl<T: Real> VscParams<T> {
+    /// The same parameters in another float type.
+    pub fn cast<U: Real>(&self) -> VscParams<U> {
+        let c = |v: T| U::of(v.to_f64());
+        VscParams {
+            bound_a: c(self.bound_a),
+            bound_b: c(self.bound_b),
+            switching: match self.switching {
+                Switching::Sign => Switching::Sign,
+                Switching::Saturation { mu } => Switching::Saturation { mu: c(mu) },
+            },
+        }
+    }
 }
 
-impl Vsc {
+/// The traditional VSC (Theorem 1), or its boundary-layer variant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Vsc<T: Real = f64> {
+    model: NominalModel<T>,
+    surface: SwitchingSurface<T>,
+    params: VscParams<T>,
+    alpha: [T; 3],
+    b_floor: T,
+}
+
+impl<T: Real> Vsc<T> {
     /// Validates the gains and builds the controller.
     pub fn try_new(
-        model: NominalModel,
-        surface: SwitchingSurface,
-        params: VscParams,
+        model: NominalModel<T>,
+        surface: SwitchingSurface<T>,
+        params: VscParams<T>,
     ) -> Result<Self, ParamError> {
         non_negative("bound_a", params.bound_a)?;
         non_negative("bound_b", params.bound_b)?;
-        if params.bound_b >= 1.0 {
+        if params.bound_b >= T::ONE {
             return Err(ParamError::new(
                 "bound_b",
                 "must be < 1 (Assumption A1: β < b̄)",
-                params.bound_b,
+                params.bound_b.to_f64(),
             ));
         }
         if let Switching::Saturation { mu } = params.switching {
@@ -90,39 +105,44 @@ impl Vsc {
                 params.bound_a * a[1].abs(),
                 params.bound_a * a[2].abs(),
             ],
-            b_floor: 1e-3 * model.b_at_rest(),
+            b_floor: T::of(1e-3) * model.b_at_rest(),
             model,
             surface,
             params,
         })
     }
 
+    /// The same controller in another float type.
+    pub fn cast<U: Real>(&self) -> Result<Vsc<U>, ParamError> {
+        Vsc::try_new(self.model.cast(), self.surface.cast(), self.params.cast())
+    }
+
     /// The gains.
-    pub fn params(&self) -> &VscParams {
+    pub fn params(&self) -> &VscParams<T> {
         &self.params
     }
 
     /// The switching surface.
-    pub fn surface(&self) -> &SwitchingSurface {
+    pub fn surface(&self) -> &SwitchingSurface<T> {
         &self.surface
     }
 
     /// The nominal model.
-    pub fn model(&self) -> &NominalModel {
+    pub fn model(&self) -> &NominalModel<T> {
         &self.model
     }
 }
 
-impl Controller for Vsc {
-    type State = [f64; 1];
-    type Parts = SlidingParts;
+impl<T: Real> Controller<T> for Vsc<T> {
+    type State = [T; 1];
+    type Parts = SlidingParts<T>;
 
-    fn initial_state(&self) -> [f64; 1] {
-        [0.0]
+    fn initial_state(&self) -> [T; 1] {
+        [T::ZERO]
     }
 
     #[inline]
-    fn law(&self, m: &Measurement, s: &[f64; 1], ds: &mut [f64; 1]) -> Output<SlidingParts> {
+    fn law(&self, m: &Measurement<T>, s: &[T; 1], ds: &mut [T; 1]) -> Output<SlidingParts<T>, T> {
         let x = &m.x;
         let st = self.surface.evaluate(x, &m.z, s[0]);
         let a = self.model.coeffs.as_array();
@@ -130,7 +150,7 @@ impl Controller for Vsc {
         let gamma = self.model.d(x).abs();
         let bb = self.params.bound_b;
         let (switch, mu) = match self.params.switching {
-            Switching::Sign => (sgn(st.sigma), 0.0),
+            Switching::Sign => (sgn(st.sigma), T::ZERO),
             Switching::Saturation { mu } => (sat(st.sigma / mu), mu),
         };
         // k·b̄ = [Σα|x| + γ + bb·|N|]/(1 − bb): independent of b̄ (module doc).
@@ -139,7 +159,7 @@ impl Controller for Vsc {
             + self.alpha[2] * x[2].abs()
             + gamma
             + bb * n.abs())
-            / (1.0 - bb);
+            / (T::ONE - bb);
         let v = n + switch * kb;
         let mut fl = 0;
         let (b_bar, clamped) = self.model.gain_for(x, v, self.b_floor);
@@ -168,7 +188,7 @@ impl Controller for Vsc {
         }
     }
 
-    fn annotate(&self, _s: &[f64; 1], out: &mut Output<SlidingParts>, truth: &dyn Truth) {
+    fn annotate(&self, _s: &[T; 1], out: &mut Output<SlidingParts<T>, T>, truth: &dyn Truth) {
         SlidingParts::annotate(out, &[], truth);
     }
 }

@@ -131,7 +131,7 @@ mod tests {
 
     fn sample(p: SlidingParts) -> Sample {
         let mut s = Sample {
-            signals: SlidingParts::SIGNALS,
+            signals: SlidingParts::<f64>::SIGNALS,
             ..Sample::default()
         };
         p.write(&mut s.values);

@@ -1,0 +1,171 @@
+//! The core in f32 against the core in f64, on the paper's cases closed
+//! around the on-board plant ([`ehservo_core::onboard`]).
+//!
+//! The requirement: closed-loop e_max (t ≥ 2 s) of f32 within 2 %
+//! of f64. Measured (`cargo test -p ehservo-core --test float_types --
+//! --nocapture` prints every pair): the largest relative difference over
+//! these cases is far below that (see BENCHMARKS.md); the 2 % band is the
+//! requirement, not a fit to the measurement.
+
+use ehservo_core::control::nnvsc::NnVscParams;
+use ehservo_core::control::vsc::{Vsc, VscParams};
+use ehservo_core::control::Controller;
+use ehservo_core::math::{Real, DR};
+use ehservo_core::onboard::{Bias, BiasedPlant, ClosedLoop, Fig2Loop};
+use ehservo_core::prelude::*;
+
+fn nn_case<T: Real>(rate: u32, params: NnVscParams, bias: Bias<T>, seconds: u32) -> f64 {
+    let mut lp = Fig2Loop::<T>::paper_with(rate, params, bias).unwrap();
+    lp.run_for(seconds).expect("bounded");
+    lp.e_max_deg().to_f64()
+}
+
+fn vsc_case<T: Real>(rate: u32, bias: Bias<T>, seconds: u32) -> f64 {
+    let mut lp = ClosedLoop::paper_vsc(rate, bias).unwrap();
+    if let Err(k) = lp.run_for(seconds) {
+        panic!("unbounded at k = {k} ({rate} Hz, {})", T::NAME);
+    }
+    lp.e_max_deg().to_f64()
+}
+
+/// A controller computing in `T` around the f64 plant: what a board does
+/// (its plant is physics, not arithmetic). x is rounded to `T` at the
+/// measurement, u widened back; the reference phase is reduced as in
+/// [`ClosedLoop::control`].
+fn mixed_case<T: Real, C: Controller<T>>(ctl: C, rate: u32, bias: Bias<f64>, seconds: u32) -> f64 {
+    let dt = 1.0 / f64::from(rate);
+    let mut sc = SampledController::new(ctl, T::of(dt)).unwrap();
+    let model = NominalModel::new(ServoParams::paper(), Load::paper());
+    let plant = BiasedPlant::new(model, bias).unwrap();
+    let r = Sine::paper().cast::<T>();
+    let (mut x, mut e_max) = ([0.0f64; 3], 0.0f64);
+    for k in 0..seconds * rate {
+        let t_ref = T::of(f64::from(k % rate)) * T::of(dt);
+        let z = r.z(t_ref);
+        let e = z[0].to_f64() - x[0];
+        if k >= 2 * rate {
+            e_max = e_max.max(e.abs());
+        }
+        let u = sc
+            .step(T::of(f64::from(k) * dt), x.map(T::of), z)
+            .u
+            .to_f64();
+        rk4_step(
+            |_, x: &[f64; 3], dx: &mut [f64; 3]| plant.rhs(x, u, dx),
+            0.0,
+            &mut x,
+            dt,
+        );
+        assert!(x.iter().all(|v| v.is_finite()), "unbounded at k = {k}");
+    }
+    e_max / DR
+}
+
+fn bias<T: Real>(a: f64, b: f64) -> Bias<T> {
+    Bias {
+        a_bias: T::of(a),
+        b_bias: T::of(b),
+        ..Bias::fig2()
+    }
+}
+
+fn check(name: &str, e32: f64, e64: f64) -> f64 {
+    let rel = (e32 - e64).abs() / e64;
+    println!("{name:<28} f64 {e64:.9}°  f32 {e32:.9}°  rel {rel:.2e}");
+    assert!(e64.is_finite() && e64 > 0.0, "{name}: e_max {e64}");
+    assert!(
+        rel < 0.02,
+        "{name}: f32 e_max {e32}° vs f64 {e64}° ({rel:.3e})"
+    );
+    rel
+}
+
+/// The f64 loop at the paper's 0.01 s is the Fig. 2 run of the C yardstick
+/// (`shared/peers/c/nnvsc.c`, an independent implementation): its printed
+/// e_max is 0.20909499579719379°. The band (1e-12 relative) allows the last
+/// bits of `exp` (libm's here, glibc's in the C).
+#[test]
+fn f64_fig2_is_the_c_yardstick() {
+    let e = nn_case::<f64>(100, NnVscParams::paper(), Bias::fig2(), 10);
+    assert!((e - 0.209_094_995_797_193_8).abs() < 1e-12 * e, "{e}");
+}
+
+/// The paper's NNBVSC cases of 10 s (Figs. 2, 4, 5 and the ε variations;
+/// the 60 s ones share the gains of `abar50`, taken here over 10 s) at the
+/// paper's sample rate, and Fig. 2 at 1 and 10 kHz.
+#[test]
+fn f32_nnbvsc_within_two_percent_of_f64() {
+    let p = NnVscParams::paper();
+    let cases: [(&str, u32, NnVscParams); 7] = [
+        ("fig2 100 Hz", 100, p),
+        ("fig2 1 kHz", 1_000, p),
+        ("fig2 10 kHz", 10_000, p),
+        ("eta0", 100, NnVscParams { eta: 0.0, ..p }),
+        ("gamma1-200", 100, NnVscParams { gamma1: 200.0, ..p }),
+        (
+            "eps-5-2",
+            100,
+            NnVscParams {
+                eps0: 5.0,
+                eps1: 2.0,
+                ..p
+            },
+        ),
+        (
+            "abar50",
+            100,
+            NnVscParams {
+                alpha_bar: 50.0,
+                ..p
+            },
+        ),
+    ];
+    let mut worst = 0.0f64;
+    for (name, rate, params) in cases {
+        let e64 = nn_case::<f64>(rate, params, Bias::fig2(), 10);
+        let e32 = nn_case::<f32>(rate, params, Bias::fig2(), 10);
+        worst = worst.max(check(name, e32, e64));
+    }
+    println!("worst relative difference: {worst:.2e}");
+}
+
+/// The traditional VSC (Fig. 3: 40 % biases; and on the Fig. 2 case).
+/// Sign switching chatters, so this is the least forgiving comparison.
+/// Sampled at the paper's 0.01 s it is unbounded (as `ehservo run
+/// scenarios/paper/fig3.toml` reports: θ leaves its limit at t = 1.77 s) in
+/// both types; at 1 kHz it tracks, and f32 stays within 2 % of f64.
+///
+/// At 10 kHz the VSC chatters at |e| ≈ 6e-5 rad (0.0033°) and e_max *is*
+/// the chattering amplitude: with the plant, too, integrated in f32 (whose
+/// x1 += h·ẋ1 rounds by ulp(0.09 rad) ≈ 7e-9 rad every step, a random walk
+/// of about 1e-6 rad over 10⁵ steps that the loop must reject) e_max moved
+/// by 3 %. That is the f32 *plant*, not the f32 controller: the same f32
+/// controller around an f64 plant (as on a board, whose plant is physics)
+/// stays within 2 %, and that is what is asserted at 10 kHz.
+#[test]
+fn f32_vsc_within_two_percent_of_f64() {
+    for (name, a, b) in [("fig3 vsc", 0.4, 0.4), ("vsc on fig2", 1.0, 0.5)] {
+        let e64 = vsc_case::<f64>(1_000, bias(a, b), 10);
+        let e32 = vsc_case::<f32>(1_000, bias(a, b), 10);
+        check(&format!("{name} 1 kHz"), e32, e64);
+        let vsc = || {
+            let m = NominalModel::new(ServoParams::paper(), Load::paper());
+            Vsc::try_new(m, SwitchingSurface::paper(), VscParams::paper()).unwrap()
+        };
+        let e64 = mixed_case::<f64, _>(vsc(), 10_000, bias(a, b), 10);
+        let e32 = mixed_case::<f32, _>(vsc().cast().unwrap(), 10_000, bias(a, b), 10);
+        check(&format!("{name} 10 kHz, f64 plant"), e32, e64);
+        let all32 = vsc_case::<f32>(10_000, bias(a, b), 10);
+        println!(
+            "  (f32 plant too: {all32:.9}°, rel {:.2e})",
+            (all32 - e64).abs() / e64
+        );
+    }
+    let mut l64 = ClosedLoop::paper_vsc(100, bias::<f64>(0.4, 0.4)).unwrap();
+    let mut l32 = ClosedLoop::paper_vsc(100, bias::<f32>(0.4, 0.4)).unwrap();
+    let (r64, r32) = (l64.run_for(10), l32.run_for(10));
+    // The simulator (an independent loop over the same core) reports the
+    // f64 run "unbounded at t = 1.7700 s" (tests/golden/fig3.json of the
+    // ehservo crate): k = 177 at 100 Hz. f32 leaves at the same sample.
+    assert_eq!((r64, r32), (Err(177), Err(177)));
+}
