@@ -8,7 +8,8 @@
 # (hex, no 0x). For each call prints
 #   exact: <call#> <instructions, the bl included> <cycles low> <cycles high>
 # and, for call number `mixcall` (default 1: the second, a typical one),
-# its instruction mix by cost class.
+# its instruction mix by cost class ("mix:" lines) and by function ("sym:"
+# lines: instructions executed in each function, callees excluded).
 #
 # Cycle model (Cortex-M4 TRM r0p1, Table 3-1 and the FPU chapter's table;
 # zero wait states, i.e. no flash wait states or bus contention):
@@ -109,13 +110,18 @@ function trace(line,   s, f, pc) {
             printf "mix: call %d, by cost class:\n", calls
             for (c in mix) printf "mix: %-28s %7d instructions %8d..%d cycles\n", c, mix[c], mixlo[c], mixhi[c]
             printf "mix: %-28s %7d refills      %8d..%d cycles\n", "taken branches (P = 1..3)", refills, refills, 3 * refills
+            for (c in syms) printf "sym: %d %s\n", syms[c], c
         }
         calls++; on = 0
         return
     }
     if (!(pc in mnem)) { unknown++; lo = 1; hi = 1; cls = "unknown" } else classify(mnem[pc], opnd[pc])
     n++; clo += lo; chi += hi
-    if (first) { mix[cls]++; mixlo[cls] += lo; mixhi[cls] += hi }
+    if (first) {
+        mix[cls]++; mixlo[cls] += lo; mixhi[cls] += hi
+        sym = line; sub(/^[^]]*\] */, "", sym); sym = sym == "" ? "?" : sym
+        syms[sym]++
+    }
     nextpc = sprintf("%x", hex(pc) + size[pc])
 }
 

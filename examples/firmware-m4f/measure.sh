@@ -54,6 +54,7 @@ pick() { for t in "$@"; do if command -v "$t" >/dev/null 2>&1; then echo "$t"; r
 SIZE="$(pick arm-none-eabi-size llvm-size size)"
 OBJDUMP="$(pick arm-none-eabi-objdump llvm-objdump)"
 NM="$(pick arm-none-eabi-nm llvm-nm nm)"
+CXXFILT="$(pick arm-none-eabi-c++filt c++filt llvm-cxxfilt cat)"
 
 report="$OUT/measure-opt${opt}.txt"
 : >"$report"
@@ -135,6 +136,9 @@ for fl in $FLOATS; do
             if (bad) { print "  MISMATCH beyond one tick (+ a few glue instructions)"; exit 1 }
             printf "  agree within one tick; CPI over steps k>=1: %.2f..%.2f\n", lo, hi }' | tee -a "$report"
     grep '^mix:' "$tmp/exact" | sed 's/^mix:/ /' | tee -a "$report"
+    say "  call 1, instructions by function (callees excluded), top 12:"
+    grep '^sym:' "$tmp/exact" | sort -k2,2nr | head -12 | "$CXXFILT" \
+      | awk '{ n = $2; $1 = ""; $2 = ""; sub(/^ +/, ""); printf "  %7d  %s\n", n, $0 }' | tee -a "$report"
     rm -rf "$tmp"
   fi
 done
