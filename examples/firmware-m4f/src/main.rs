@@ -1,7 +1,8 @@
 //! The paper's Fig. 2 case closed on an (emulated) Cortex-M4F: the sampled
 //! NNBVSC at 10 kHz against the plant, 10 s of simulated time, output over
-//! semihosting. Runs in QEMU's `mps2-an386` (see README in this folder's
-//! `run.sh` / `measure.sh`).
+//! semihosting. Runs in QEMU's `mps2-an386`: `cargo run --release` here
+//! (`--features f64` for the f64 build), `run.sh` for CI, `measure.sh` for
+//! the instruction counts and sizes.
 //!
 //! Output, line by line:
 //! - a header (`# ...`);
@@ -9,8 +10,8 @@
 //!   the end: these lines are the host's (`--example onboard`) to the bit,
 //!   floats printed with `{:?}` (shortest round-trip);
 //! - `timing: …`, `calib: …`, `stack: …`: SysTick readings (meaningful as
-//!   instruction counts only under `qemu -icount shift=0`, see measure.sh)
-//!   and the stack high-water mark.
+//!   instruction counts only under `qemu -icount shift=0`, see measure.sh),
+//!   the stack high-water mark and the loop's size (it lives on the stack).
 //!
 //! The number of steps defaults to 100 000 and can be given as the last
 //! word of the semihosting command line (`qemu … -append 500`).
@@ -132,7 +133,13 @@ fn main() -> ! {
         );
     }
     let (used, size) = stack_high_water();
-    hprintln!("stack: high_water_bytes={} of {}", used, size);
+    hprintln!(
+        "stack: high_water_bytes={} of {} (Fig2Loop<{}> on it: {} bytes)",
+        used,
+        size,
+        FLOAT,
+        core::mem::size_of::<Fig2Loop<F>>()
+    );
 
     debug::exit(debug::EXIT_SUCCESS);
     loop {
