@@ -24,7 +24,7 @@ if [ "$status" -ne 0 ]; then
   echo "firmware-m4f: QEMU exited with status $status (124: timed out)" >&2
   exit 1
 fi
-checkpoints=$(grep -c '^k=' "$out" || true)
+checkpoints=$(grep -c '^checkpoint ' "$out" || true)
 if [ "$checkpoints" -ne 10 ] || ! grep -q '^e_max_deg=' "$out"; then
   echo "firmware-m4f: expected 10 checkpoint lines and e_max_deg, got $checkpoints checkpoints" >&2
   exit 1

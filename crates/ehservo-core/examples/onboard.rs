@@ -21,7 +21,7 @@ fn run<T: Real>(rate: u32, seconds: u32) -> Result<(), String> {
             .map_err(|k| format!("non-finite state or command at k = {k}"))?;
         println!("{}", lp.checkpoint());
     }
-    println!("e_max_deg(t>=2s)={:?}", lp.e_max_deg());
+    println!("e_max_deg={:?}", lp.e_max_deg());
     Ok(())
 }
 

@@ -6,9 +6,10 @@
 //!
 //! Output, line by line:
 //! - a header (`# ...`);
-//! - `k=… t=… x1=… e=…` every 1 s of simulated time and `e_max_deg=…` at
-//!   the end: these lines are the host's (`--example onboard`) to the bit,
-//!   floats printed with `{:?}` (shortest round-trip);
+//! - `checkpoint k=… t=… x1=… e=… u=…` every 1 s of simulated time
+//!   ([`ehservo_core::onboard::Checkpoint`]) and `e_max_deg=…` at the end:
+//!   these lines are the host's (`--example onboard`) to the bit, floats
+//!   printed with `{:?}` (shortest round-trip);
 //! - `timing: …`, `calib: …`, `stack: …`: SysTick readings (meaningful as
 //!   instruction counts only under `qemu -icount shift=0`, see measure.sh),
 //!   the stack high-water mark and the loop's size (it lives on the stack).
@@ -26,9 +27,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln, nr};
 use panic_semihosting as _;
 
-mod stand_in;
-// The one line to change when `ehservo_core::onboard` lands:
-use stand_in::Fig2Loop;
+use ehservo_core::onboard::Fig2Loop;
 
 #[cfg(not(feature = "f64"))]
 type F = f32;
@@ -95,7 +94,7 @@ fn main() -> ! {
             fail(format_args!("non-finite at k={}: u={:?} x={:?}", k, u, x));
         }
         if lp.k() % RATE_HZ == 0 {
-            hprintln!("k={} t={:?} x1={:?} e={:?}", lp.k(), lp.t(), x[0], lp.e());
+            hprintln!("{}", lp.checkpoint());
         }
     }
     hprintln!("e_max_deg={:?}", lp.e_max_deg());
