@@ -98,13 +98,18 @@ for fl in $FLOATS; do
     /^timing: control\(\)/ {
       for (i = 4; i <= NF; i++) { split($i, kv, "="); v[kv[1]] = kv[2] }
     }
+    /^timing: sense\(\)/ {
+      for (i = 4; i <= NF; i++) { split($i, kv, "="); sv[kv[1]] = kv[2] }
+    }
     END {
       ipt = (ins[2] - ins[1]) / (tk[2] - tk[1])
       printf "calibration: %d instructions in %d ticks, %d in %d: %.4f instructions per tick (each reading +-1 tick)\n", ins[1], tk[1], ins[2], tk[2], ipt
       if (ipt < 39.99 || ipt > 40.01) { printf "error: expected 40 instructions per SysTick tick (25 MHz, 1 ns per instruction)\n"; exit 1 }
       ipt = 40
-      printf "%s control(): mean %.1f instructions/step over %d steps; worst step %d ticks = %d..%d instructions (k=%d); qemu %ds\n",
+      printf "%s control() = SampledController::step: mean %.1f instructions/step over %d steps; worst step %d ticks = %d..%d instructions (k=%d); qemu %ds\n",
         fl, v["total"] * ipt / v["steps"], v["steps"], v["max"], (v["max"] - 1) * ipt, (v["max"] + 1) * ipt, v["max_at_k"], secs
+      printf "%s sense() = reference z(t) and e: mean %.1f instructions/step; worst %d..%d\n",
+        fl, sv["total"] * ipt / v["steps"], (sv["max"] - 1) * ipt, (sv["max"] + 1) * ipt
     }' "$log" | tee -a "$report"
 
   # Exact cross-check on a short run: count the traced instructions from

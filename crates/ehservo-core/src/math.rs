@@ -5,8 +5,13 @@
 //! `std` feature gives it the platform's `exp` (glibc's on Linux, faster).
 //! **f32** is a Cortex-M4F's: its single-precision FPU does `+ − × ÷ √` in
 //! hardware (f64 would be emulated in software, tens of times slower). For
-//! f32 every transcendental (`exp`, `sin`, `cos`, `tanh`) is `libm`'s, with
-//! or without `std`, so a host build and a board compute the same bits.
+//! f32 the same portable code runs with or without `std`, so a host build
+//! and a board compute the same bits: `exp` and `tanh` are `libm`'s (pure
+//! f32), `sin`/`cos` are Cephes' single-precision kernels in f32 arithmetic
+//! ([`sin_cos_f32`]: libm's `sinf`/`cosf` and fpmath's evaluate in f64, which
+//! a Cortex-M4F does in software, about 500–1500 instructions a call), and
+//! `sqrt` is the FPU's `VSQRT.F32` on hard-float Arm targets, `libm::sqrtf`
+//! elsewhere — both correctly rounded (IEEE 754), so the same bits.
 
 use core::fmt::{Debug, Display};
 use core::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -64,6 +69,9 @@ pub trait Real:
     fn of(v: f64) -> Self;
     /// From a count (exact below 2²⁴ for f32, 2⁵³ for f64).
     fn of_usize(n: usize) -> Self;
+    /// From a u32, converted directly (no detour through f64, which a
+    /// Cortex-M4F does in software); exact below 2²⁴ for f32.
+    fn of_u32(n: u32) -> Self;
     /// To f64 (exact).
     fn to_f64(self) -> f64;
     /// |v|.
@@ -101,6 +109,10 @@ macro_rules! real_common {
         const NAN: Self = <$t>::NAN;
         #[inline(always)]
         fn of_usize(n: usize) -> Self {
+            n as $t
+        }
+        #[inline(always)]
+        fn of_u32(n: u32) -> Self {
             n as $t
         }
         #[inline(always)]
@@ -187,7 +199,7 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        libm::sqrtf(self)
+        sqrt_f32(self)
     }
     #[inline(always)]
     fn exp(self) -> Self {
@@ -195,20 +207,97 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn sin(self) -> Self {
-        libm::sinf(self)
+        sin_cos_f32(self).0
     }
     #[inline(always)]
     fn cos(self) -> Self {
-        libm::cosf(self)
+        sin_cos_f32(self).1
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
-        libm::sincosf(self)
+        sin_cos_f32(self)
     }
     #[inline(always)]
     fn tanh(self) -> Self {
         libm::tanhf(self)
     }
+}
+
+/// √v in f32, correctly rounded: the FPU's `VSQRT.F32` on a hard-float
+/// Arm target (one instruction, 14 cycles on a Cortex-M4F, where
+/// `libm::sqrtf` is about 150 instructions of integer code), `libm::sqrtf`
+/// elsewhere (SSE's `sqrtss` on x86_64). IEEE 754 requires both to round
+/// correctly, so they agree to the bit.
+#[inline(always)]
+fn sqrt_f32(v: f32) -> f32 {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    {
+        // rustc's `sreg` operand class asks for the double-precision `vfp2`
+        // feature, which a Cortex-M4F (single-precision VFPv4) lacks: the
+        // value goes through a core register and s15, saved around it.
+        let bits: u32;
+        // SAFETY: s15 is pushed and popped around its use (the stack is
+        // balanced); the rest are register moves and one VSQRT.F32, which
+        // touch no other state.
+        #[allow(unsafe_code)]
+        unsafe {
+            core::arch::asm!(
+                "vpush {{s15}}",
+                "vmov s15, {x}",
+                "vsqrt.f32 s15, s15",
+                "vmov {x}, s15",
+                "vpop {{s15}}",
+                x = inout(reg) v.to_bits() => bits,
+                options(pure, nomem, preserves_flags)
+            );
+        }
+        f32::from_bits(bits)
+    }
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    {
+        libm::sqrtf(v)
+    }
+}
+
+/// `(sin x, cos x)` in f32 arithmetic only: Cephes' `sinf`/`cosf`
+/// (S. L. Moshier): x reduced by the octant j = ⌊4|x|/π⌋ (made even) with
+/// π/4 in three parts (exact products for |x| ≤ 8192), then the minimax
+/// polynomials of sin and cos on [−π/4, π/4]. Cephes states a peak
+/// relative error of about 1 ulp there; the tests bound it by 2 ulp
+/// against f64. Beyond 8192 rad, or for ±∞ and NaN, `libm::sincosf`.
+#[inline]
+pub fn sin_cos_f32(x: f32) -> (f32, f32) {
+    const FOPI: f32 = 1.273_239_5; // 4/π
+    const DP1: f32 = 0.785_156_25;
+    const DP2: f32 = 2.418_756_5e-4;
+    const DP3: f32 = 3.774_895e-8;
+    let ax = x.abs();
+    if ax.is_nan() || ax > 8192.0 {
+        return libm::sincosf(x);
+    }
+    let mut j = (ax * FOPI) as u32;
+    let mut y = j as f32;
+    if j & 1 == 1 {
+        j += 1;
+        y += 1.0;
+    }
+    j &= 7;
+    let (mut s_neg, mut c_neg) = (x < 0.0, false);
+    if j > 3 {
+        j -= 4;
+        s_neg = !s_neg;
+        c_neg = !c_neg;
+    }
+    if j > 1 {
+        c_neg = !c_neg;
+    }
+    let z = ((ax - y * DP1) - y * DP2) - y * DP3;
+    let zz = z * z;
+    let sp = ((-1.951_529_6e-4 * zz + 8.332_161e-3) * zz - 1.666_665_5e-1) * zz * z + z;
+    let cp =
+        ((2.443_315_7e-5 * zz - 1.388_731_6e-3) * zz + 4.166_664_6e-2) * zz * zz - 0.5 * zz + 1.0;
+    let (s, c) = if j == 1 || j == 2 { (cp, sp) } else { (sp, cp) };
+    (if s_neg { -s } else { s }, if c_neg { -c } else { c })
 }
 
 /// The paper's `sgn`: −1, 0 or +1 (`sgn(0) = 0`, and `sgn(NaN) = 0`).
@@ -302,5 +391,55 @@ mod tests {
         let v: [f64; 9] = core::array::from_fn(|i| (i + 1) as f64);
         assert!((norm(&v) - 285f64.sqrt()).abs() < 1e-14);
         assert_eq!(norm::<f64>(&[]), 0.0);
+    }
+
+    /// f32's sin_cos is (sin, cos) to the bit, each within 2 f32 ulp of
+    /// f64's over ±4π and at 10⁵ points to 8192 rad; exp within one ulp;
+    /// sqrt correctly rounded.
+    #[test]
+    fn f32_transcendentals_against_f64() {
+        let ulp = |v: f32| f32::from_bits(v.abs().to_bits() + 1) - v.abs();
+        for i in -20_000..=20_000 {
+            let v = i as f32 * (4.0 * core::f32::consts::PI / 20_000.0);
+            let (s, c) = Real::sin_cos(v);
+            assert_eq!(
+                (s.to_bits(), c.to_bits()),
+                (Real::sin(v).to_bits(), Real::cos(v).to_bits())
+            );
+            let (s64, c64) = (f64::from(v).sin(), f64::from(v).cos());
+            // 2 ulp of the result, or 2 ulp of 2⁻²⁶ near a zero (where the
+            // reduced argument's own rounding, 6e-8·|x|/2²⁴, dominates).
+            let tol = |r: f64| {
+                2.0 * f64::from(ulp(r as f32)).max(1.5e-8 * f64::from(v.abs()).max(1.0) / 16.0)
+            };
+            assert!(
+                (f64::from(s) - s64).abs() <= tol(s64),
+                "sin {v}: {s} vs {s64}"
+            );
+            assert!(
+                (f64::from(c) - c64).abs() <= tol(c64),
+                "cos {v}: {c} vs {c64}"
+            );
+            let e = Real::exp(v / 4.0);
+            assert!(
+                (f64::from(e) - (f64::from(v) / 4.0).exp()).abs() <= f64::from(ulp(e)),
+                "exp {v}"
+            );
+            let r = Real::sqrt(v.abs());
+            assert_eq!(r, (f64::from(v.abs()).sqrt()) as f32, "sqrt {v}");
+        }
+        let mut worst = 0.0f64;
+        for i in 0..100_000 {
+            let v = (i as f32 * 0.081_92) * if i % 2 == 0 { 1.0 } else { -1.0 };
+            let (s, c) = sin_cos_f32(v);
+            let (s64, c64) = (f64::from(v).sin(), f64::from(v).cos());
+            for (a, b) in [(s, s64), (c, c64)] {
+                let err = (f64::from(a) - b).abs()
+                    / f64::from(ulp(b as f32))
+                        .max(f64::from(ulp(1.0)) * f64::from(v.abs()) / 2f64.powi(24));
+                worst = worst.max(err);
+            }
+        }
+        assert!(worst <= 2.0, "{worst} ulp");
     }
 }

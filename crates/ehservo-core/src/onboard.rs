@@ -174,7 +174,7 @@ impl<C: Controller<T>, T: Real> ClosedLoop<C, T> {
         if substeps == 0 {
             return Err(ParamError::new("substeps", "must be > 0", 0.0));
         }
-        let dt = T::ONE / T::of(f64::from(rate_hz));
+        let dt = T::ONE / T::of_u32(rate_hz);
         Ok(Self {
             ctl: SampledController::new(ctl, dt)?,
             plant: BiasedPlant::new(model, bias)?,
@@ -190,18 +190,24 @@ impl<C: Controller<T>, T: Real> ClosedLoop<C, T> {
         })
     }
 
-    /// The controller's half of a period: one step of the sampled law at
-    /// `t = k·dt` on the current state; returns u (V). Tracks e and its
-    /// maximum over t ≥ 2 s.
+    /// The controller's half of a period: [`Self::sense`] then
+    /// [`Self::law_step`]; returns u (V).
     #[inline]
     pub fn control(&mut self) -> T {
-        let t = self.t();
+        let z = self.sense();
+        self.law_step(z)
+    }
+
+    /// The reference at `t = k·dt` (what the controller is asked to track);
+    /// tracks e and its maximum over t ≥ 2 s.
+    #[inline]
+    pub fn sense(&mut self) -> [T; 4] {
         // The reference's phase from k mod rate (its period is 1 s): exact
         // to ulp(1 s) at any time. In f32, t = k·dt itself carries
         // ulp(10 s) ≈ 1e-6 s at 10 s, i.e. 3e-7 rad in θd and 8e-4 rad/s²
         // in σ (through p2·e) — at the sign-switching VSC's chattering level
         // (|e| ≈ 6e-5 rad at 10 kHz) a 3 % effect on e_max.
-        let t_ref = T::of(f64::from(self.k % self.rate_hz)) * self.dt;
+        let t_ref = T::of_u32(self.k % self.rate_hz) * self.dt;
         let z = self.reference.z(t_ref);
         self.e = z[0] - self.x[0];
         if self.k >= 2 * self.rate_hz {
@@ -210,7 +216,16 @@ impl<C: Controller<T>, T: Real> ClosedLoop<C, T> {
                 self.e_max = ae;
             }
         }
-        self.u = self.ctl.step(t, self.x, z).u;
+        z
+    }
+
+    /// The controller step proper: [`SampledController::step`] (checks,
+    /// the law, forward Euler on the controller state) on the measured
+    /// state and the reference `z`; returns u (V). This is what a board's
+    /// control interrupt runs.
+    #[inline]
+    pub fn law_step(&mut self, z: [T; 4]) -> T {
+        self.u = self.ctl.step(self.t(), self.x, z).u;
         self.u
     }
 
@@ -218,7 +233,7 @@ impl<C: Controller<T>, T: Real> ClosedLoop<C, T> {
     /// then `k += 1`.
     #[inline]
     pub fn advance(&mut self, u: T) {
-        let h = self.dt / T::of(f64::from(self.substeps));
+        let h = self.dt / T::of_u32(self.substeps);
         let plant = &self.plant;
         for _ in 0..self.substeps {
             rk4_step(
@@ -265,7 +280,7 @@ impl<C: Controller<T>, T: Real> ClosedLoop<C, T> {
     }
     /// `t = k·dt` (s).
     pub fn t(&self) -> T {
-        T::of(f64::from(self.k)) * self.dt
+        T::of_u32(self.k) * self.dt
     }
     /// The plant state (θ, θ̇, θ̈).
     pub fn x(&self) -> [T; 3] {

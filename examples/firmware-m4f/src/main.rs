@@ -70,14 +70,20 @@ fn main() -> ! {
     };
 
     let (mut ctl_total, mut ctl_max, mut ctl_max_k) = (0u64, 0u32, 0u32);
-    let mut adv_total = 0u64;
+    let (mut adv_total, mut sense_total, mut sense_max) = (0u64, 0u64, 0u32);
     for _ in 0..steps {
         let k = lp.k();
+        let ts = SYST::get_current();
+        let z = sense_step(&mut lp);
         let t0 = SYST::get_current();
-        let u = control_step(&mut lp);
+        let u = control_step(&mut lp, z);
         let t1 = SYST::get_current();
         advance_step(&mut lp, u);
         let t2 = SYST::get_current();
+
+        let ds = ts.wrapping_sub(t0) & SYST_MASK;
+        sense_total += ds as u64;
+        sense_max = sense_max.max(ds);
 
         let d = t0.wrapping_sub(t1) & SYST_MASK;
         ctl_total += d as u64;
@@ -105,6 +111,11 @@ fn main() -> ! {
         ctl_total,
         ctl_max,
         ctl_max_k
+    );
+    hprintln!(
+        "timing: sense() SysTick ticks: total={} max={}",
+        sense_total,
+        sense_max
     );
     hprintln!("timing: advance() SysTick ticks: total={}", adv_total);
     // Two counted loops of 2n instructions each (subs + bne): under
@@ -146,11 +157,19 @@ fn main() -> ! {
     }
 }
 
-/// The controller's half of one sample, kept out of line so that its
-/// entry and return can be found in a trace (measure.sh).
+/// The controller step proper (`SampledController::step`: measurement
+/// checks, the NNBVSC law, forward Euler on ∫e and W), kept out of line so
+/// that its entry and return can be found in a trace (measure.sh).
 #[inline(never)]
-fn control_step(lp: &mut Fig2Loop<F>) -> F {
-    lp.control()
+fn control_step(lp: &mut Fig2Loop<F>, z: [F; 4]) -> F {
+    lp.law_step(z)
+}
+
+/// The reference z(t) (θd and its three derivatives: one sin/cos pair) and
+/// the error bookkeeping: timed apart from the controller step.
+#[inline(never)]
+fn sense_step(lp: &mut Fig2Loop<F>) -> [F; 4] {
+    lp.sense()
 }
 
 /// The plant's half of one sample.
