@@ -369,34 +369,27 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
         // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
         // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
-        let a = sd * self.inv_h;
-        let bw = p.eta * sd.abs() * self.inv_h;
-        let (w, dw) = (&s.w, &mut ds.w);
+        // WᵀΦ first, in a pass of its own: v, b̄ and u wait for it, nothing
+        // waits for Ẇ, so Ẇ's pass comes last and runs while the divisions
+        // of u finish.
+        let w = &s.w;
         let g3 = &g[2];
         let mut wphi_k = T::ZERO;
         for (i1, &g1) in g[0].iter().enumerate() {
             let mut u = T::ZERO;
             for (i2, &g2) in g[1].iter().enumerate() {
                 let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
-                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
+                let wr = &w[j..j + N_LEVELS];
                 let t = ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3]))
                     + wr[4] * g3[4];
                 u += g2 * t;
-                let ag = a * (g1 * g2);
-                for ((d, &wi), &gi) in dr.iter_mut().zip(wr).zip(g3) {
-                    *d = ag * gi - bw * wi;
-                }
             }
             wphi_k += g1 * u;
         }
-        dw[0] = a - bw * w[0]; // Φ_0 = 1
         let mut wphi = w[0] + wphi_k;
         for (i, &zi) in m.z.iter().enumerate() {
-            let k = 1 + N_KERNELS + i;
-            wphi += w[k] * zi;
-            dw[k] = a * zi - bw * w[k];
+            wphi += w[1 + N_KERNELS + i] * zi;
         }
-        ds.int_e = st.e; // ∫e' = e
 
         let v = n + wphi + sw_v;
         let (b_bar, clamped) = gains.pick(&self.model, v);
@@ -405,6 +398,26 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         }
         let u_eq = (n + wphi) / b_bar;
         let u_sw = sw_num / (b_bar * self.one_minus_bb);
+
+        let a = sd * self.inv_h;
+        let bw = p.eta * sd.abs() * self.inv_h;
+        let dw = &mut ds.w;
+        for (i1, &g1) in g[0].iter().enumerate() {
+            for (i2, &g2) in g[1].iter().enumerate() {
+                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
+                let ag = a * (g1 * g2);
+                for ((d, &wi), &gi) in dr.iter_mut().zip(wr).zip(g3) {
+                    *d = ag * gi - bw * wi;
+                }
+            }
+        }
+        dw[0] = a - bw * w[0]; // Φ_0 = 1
+        for (i, &zi) in m.z.iter().enumerate() {
+            let k = 1 + N_KERNELS + i;
+            dw[k] = a * zi - bw * w[k];
+        }
+        ds.int_e = st.e; // ∫e' = e
 
         Output {
             u: u_eq + u_sw,
