@@ -437,14 +437,14 @@ impl<T: Real> NominalModel<T> {
     }
 
     /// The nominal gains b̄ of [`NominalModel::gain_for`] for both valve
-    /// directions at state `x`, before `v` is known: the load pressure (a
+    /// directions at a state `x` whose load pressure is
+    /// `pl = load_pressure(x)`, before `v` is known: the load pressure (a
     /// sine), the division and root of each direction need only `x`, so a
     /// law can start them first and let them run while it computes `v`;
     /// [`DirectionalGains::pick`] then returns what `gain_for(x, v, floor)`
     /// returns, to the bit.
     #[inline]
-    pub fn directional_gains(&self, x: &[T; 3], floor: T) -> DirectionalGains<T> {
-        let pl = self.load_pressure(x);
+    pub fn directional_gains(&self, pl: T, floor: T) -> DirectionalGains<T> {
         DirectionalGains {
             pl,
             floor,
@@ -582,7 +582,7 @@ mod tests {
         ];
         for x in states {
             for floor in [floor, 1e9] {
-                let d = m.directional_gains(&x, floor);
+                let d = m.directional_gains(m.load_pressure(&x), floor);
                 for v in [1.0, -2.5, 0.0, -0.0, f64::NAN, 1e-300, -f64::INFINITY] {
                     let (a, fa) = m.gain_for(&x, v, floor);
                     let (b, fb) = d.pick(&m, v);

@@ -314,14 +314,15 @@ impl<T: Real> Controller<T> for NnVsc<T> {
     ) -> Output<SlidingParts<T>, T> {
         let p = &self.params;
         let x = &m.x;
-        // Φ first (its four exponentials: everything else of the network
-        // waits for them), then what needs only the measurement while they
-        // run out: b̄ for both valve directions (a sine, a division and a
-        // root each; the end of the law only picks one by sgn v), N and
-        // the surface. Φ is never stored: its 125 kernels are the products
-        // of 15 per-axis factors, formed once in the single pass over W below.
+        // The load pressure (a sine) and Φ (four exponentials) first: the
+        // longest chains, needing only x. Then, while they run out, what
+        // else needs only the measurement: b̄ for both valve directions (a
+        // division and a root each; the end of the law only picks one by
+        // sgn v), N and the surface. Φ is never stored: its 125 kernels are
+        // the products of 15 per-axis factors (see the passes over W below).
+        let pl = self.model.load_pressure(x);
         let g = self.rbf.gaussians(x);
-        let gains = self.model.directional_gains(x, self.b_floor);
+        let gains = self.model.directional_gains(pl, self.b_floor);
         let n = self
             .surface
             .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
