@@ -224,6 +224,12 @@ impl<T: Real> OdeState<T> for NnState<T> {
             false
         }
     }
+    #[inline]
+    fn euler_from(&mut self, base: &Self, a: T) -> bool {
+        self.int_e = base.int_e + a * self.int_e;
+        let w_ok = crate::rk4::euler_results_finite(&mut self.w, &base.w, a);
+        w_ok && self.int_e.is_finite()
+    }
 }
 
 /// The NNBVSC of Theorem 3.
