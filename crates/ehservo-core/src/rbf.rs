@@ -234,11 +234,20 @@ impl<T: Real> Rbf<T> {
         for k in 0..3 {
             let (q, qi) = (q[k], T::ONE / q[k]);
             let (q2, qi2) = (q * q, qi * qi);
-            // q^j for j = −4..=4; the window j = i − m, i = 0..5.
+            // q^j for j = −4..=4; the window j = i − m, i = 0..5, picked by
+            // a match (an indexed window would be stored and loaded back,
+            // and wide loads of narrow stores wait for the stores to retire).
             let p = [qi2 * qi2, qi2 * qi, qi2, qi, T::ONE, q, q2, q2 * q, q2 * q2];
+            let p = match m[k] {
+                0 => [p[4], p[5], p[6], p[7], p[8]],
+                1 => [p[3], p[4], p[5], p[6], p[7]],
+                2 => [p[2], p[3], p[4], p[5], p[6]],
+                3 => [p[1], p[2], p[3], p[4], p[5]],
+                _ => [p[0], p[1], p[2], p[3], p[4]],
+            };
             let w = TOP - m[k];
-            let (c, p) = (&sp.c[w..w + N_LEVELS], &p[w..w + N_LEVELS]);
-            for ((gi, &ci), &pi) in g[k].iter_mut().zip(c).zip(p) {
+            let c = &sp.c[w..w + N_LEVELS];
+            for ((gi, &ci), pi) in g[k].iter_mut().zip(c).zip(p) {
                 *gi = ci * pi;
             }
         }

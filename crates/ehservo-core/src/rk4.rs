@@ -38,6 +38,47 @@ pub trait OdeState<T: Real = f64>: Copy {
             false
         }
     }
+    /// `self ← base + a·self` (an Euler step from `base` with the
+    /// derivative in `self`, computed as `axpy` computes it), returning
+    /// whether every component of the result is finite. `self` is written
+    /// either way. The default copies the state; implementations may do it
+    /// in one pass.
+    #[inline]
+    fn euler_from(&mut self, base: &Self, a: T) -> bool {
+        let mut next = *base;
+        next.axpy(a, self);
+        *self = next;
+        self.all_finite()
+    }
+}
+
+/// `d[i] ← b[i] + a·d[i]` for every i, returning whether every result is
+/// finite: one pass (the sum of 0·v in eight lanes is NaN exactly when
+/// some v is ±∞ or NaN; see [`axpy_results_finite`]).
+#[inline]
+pub fn euler_results_finite<T: Real>(d: &mut [T], b: &[T], a: T) -> bool {
+    let mut lane = [T::ZERO; 8];
+    let n = d.len().min(b.len());
+    let (d, b) = (&mut d[..n], &b[..n]);
+    let mut dc = d.chunks_exact_mut(8);
+    let mut bc = b.chunks_exact(8);
+    for (cd, cb) in (&mut dc).zip(&mut bc) {
+        for ((l, x), y) in lane.iter_mut().zip(cd).zip(cb) {
+            let v = *y + a * *x;
+            *x = v;
+            *l += T::ZERO * v;
+        }
+    }
+    let mut sum = T::ZERO;
+    for (x, y) in dc.into_remainder().iter_mut().zip(bc.remainder()) {
+        let v = *y + a * *x;
+        *x = v;
+        sum += T::ZERO * v;
+    }
+    for l in lane {
+        sum += l;
+    }
+    sum == T::ZERO
 }
 
 /// Whether every `s[i] + a·o[i]` is finite, without writing: 0·v is ±0 for
@@ -87,6 +128,10 @@ impl<T: Real, const N: usize> OdeState<T> for [T; N] {
         } else {
             false
         }
+    }
+    #[inline]
+    fn euler_from(&mut self, base: &Self, a: T) -> bool {
+        euler_results_finite(self, base, a)
     }
 }
 
@@ -188,6 +233,27 @@ mod tests {
         big[3] = f64::MAX;
         assert!(!s.axpy_finite(2.0, &big), "overflow to +inf is refused");
         assert_eq!(s, [2.0; 11]);
+    }
+
+    /// euler_from writes base + a·self as axpy computes it, and reports a
+    /// non-finite or overflowing component in any position.
+    #[test]
+    fn euler_from_is_axpy_and_checks_every_component() {
+        let base: [f64; 19] = core::array::from_fn(|i| 0.3 * i as f64 - 2.0);
+        let d: [f64; 19] = core::array::from_fn(|i| 1.7 - 0.11 * (i * i) as f64);
+        let mut want = base;
+        want.axpy(0.01, &d);
+        let mut got = d;
+        assert!(got.euler_from(&base, 0.01));
+        assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
+        for k in [0, 7, 8, 15, 16, 18] {
+            for bad in [f64::NAN, f64::INFINITY, f64::MAX] {
+                let mut got = d;
+                got[k] = bad;
+                let ok = got.euler_from(&base, 2.0);
+                assert!(!ok, "{bad} at {k}");
+            }
+        }
     }
 
     /// The time argument of each stage: f = t integrates to t²/2 exactly.

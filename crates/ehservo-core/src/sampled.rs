@@ -17,13 +17,15 @@
 //! ([`flags::NON_FINITE_CONTROL`], [`flags::NON_FINITE_STATE`]). A good command is clamped to
 //! `±limits.u` (the valve's range) and the clamp raises [`flags::SATURATED`].
 //!
-//! No allocation: the state lives inside the struct (about 1 kB for the
+//! No allocation: the state lives inside the struct, twice (the current
+//! one and the next one being formed; about 1 kB each for the
 //! NNBVSC).
 
 use crate::control::{flags, Controller, Measurement, Output};
 use crate::error::{positive, ParamError};
 use crate::math::Real;
 use crate::rk4::OdeState;
+use core::fmt;
 
 /// What to command when a step cannot be trusted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -101,15 +103,41 @@ impl<T: Real> FaultPolicy<T> {
 }
 
 /// A controller with its state, a fixed sample period and a fault policy.
-#[derive(Debug, Clone)]
+///
+/// The state is double-buffered: the law writes ξ̇ into the spare buffer,
+/// one pass turns it into ξ + dt·ξ̇ while checking that every component is
+/// finite, and a good step makes it the current state (no copy of the
+/// state, no second pass).
+#[derive(Clone)]
 pub struct SampledController<C: Controller<T>, T: Real = f64> {
     ctrl: C,
-    state: C::State,
+    /// The current state is `states[cur]`; the other one is scratch.
+    states: [C::State; 2],
+    cur: usize,
     dt: T,
     policy: FaultPolicy<T>,
     last_u: T,
     faults: u64,
     saturations: u64,
+}
+
+impl<C, T> fmt::Debug for SampledController<C, T>
+where
+    C: Controller<T> + fmt::Debug,
+    C::State: fmt::Debug,
+    T: Real,
+{
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SampledController")
+            .field("ctrl", &self.ctrl)
+            .field("state", self.state())
+            .field("dt", &self.dt)
+            .field("policy", &self.policy)
+            .field("last_u", &self.last_u)
+            .field("faults", &self.faults)
+            .field("saturations", &self.saturations)
+            .finish()
+    }
 }
 
 impl<T: Real, C: Controller<T>> SampledController<C, T> {
@@ -124,7 +152,8 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
         positive("dt", dt)?;
         policy.validate()?;
         Ok(Self {
-            state: ctrl.initial_state(),
+            states: [ctrl.initial_state(), C::State::zero()],
+            cur: 0,
             ctrl,
             dt,
             policy,
@@ -176,33 +205,45 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
         if bad_x || !t.is_finite() || z.iter().any(|v| !v.is_finite()) {
             return self.safe_output(flags::MEASUREMENT_FAULT);
         }
-        let mut ds = C::State::zero();
-        let mut out = self
-            .ctrl
-            .law(&Measurement { t, x, z }, &self.state, &mut ds);
-        if !out.u.is_finite() {
-            return self.safe_output(flags::NON_FINITE_CONTROL);
+        // The spare buffer receives ξ̇ (zeroed first, as a fresh ξ̇ would
+        // be), then becomes ξ + dt·ξ̇ in place.
+        let (state, next) = match &mut self.states {
+            [a, b] if self.cur == 0 => (&*a, b),
+            [a, b] => (&*b, a),
+        };
+        *next = C::State::zero();
+        let mut out = self.ctrl.law(&Measurement { t, x, z }, state, next);
+        let fault = if !out.u.is_finite() {
+            flags::NON_FINITE_CONTROL
+        } else {
+            if out.u.abs() > lim.u {
+                out.u = out.u.clamp(-lim.u, lim.u);
+                out.flags |= flags::SATURATED;
+            }
+            inspect(&self.ctrl, state, &mut out);
+            // A non-finite ξ̇ makes ξ + dt·ξ̇ non-finite: one check covers
+            // both, and refuses an overflow too.
+            if next.euler_from(state, self.dt) {
+                0
+            } else {
+                flags::NON_FINITE_STATE
+            }
+        };
+        if fault != 0 {
+            out = self.safe_output(fault);
+        } else {
+            self.cur = 1 - self.cur;
+            if out.flags & flags::SATURATED != 0 {
+                self.saturations += 1;
+            }
+            self.last_u = out.u;
         }
-        if out.u.abs() > lim.u {
-            out.u = out.u.clamp(-lim.u, lim.u);
-            out.flags |= flags::SATURATED;
-        }
-        inspect(&self.ctrl, &self.state, &mut out);
-        // A non-finite ξ̇ makes ξ + dt·ξ̇ non-finite: one check (without a
-        // copy of the state) covers both, and refuses an overflow too.
-        if !self.state.axpy_finite(self.dt, &ds) {
-            return self.safe_output(flags::NON_FINITE_STATE);
-        }
-        if out.flags & flags::SATURATED != 0 {
-            self.saturations += 1;
-        }
-        self.last_u = out.u;
         out
     }
 
     /// Back to the initial state (∫e = 0, W = 0), last command 0, counters 0.
     pub fn reset(&mut self) {
-        self.state = self.ctrl.initial_state();
+        self.states[self.cur] = self.ctrl.initial_state();
         self.last_u = T::ZERO;
         self.faults = 0;
         self.saturations = 0;
@@ -210,7 +251,7 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
 
     /// The controller state.
     pub fn state(&self) -> &C::State {
-        &self.state
+        &self.states[self.cur]
     }
 
     /// The controller.
@@ -311,6 +352,51 @@ mod tests {
         let f = c.step(0.01, [2.0, 0.0, 0.0], r.z(0.01));
         assert_ne!(f.flags & flags::MEASUREMENT_FAULT, 0);
         assert_eq!(f.u, 0.25);
+    }
+
+    /// A step whose ξ + dt·ξ̇ overflows is refused: the state is the one
+    /// before (the spare buffer is not taken), the last command is held,
+    /// and the controller keeps stepping from the old state.
+    #[test]
+    fn overflowing_state_is_refused_and_the_state_kept() {
+        let r = Sine::paper();
+        // dt = 1e306: the first Ẇ (|Ẇ[129]| ≈ 1009) overflows W.
+        let mut c = SampledController::new(nn(), 1e306).unwrap();
+        let before: NnState = *c.state();
+        let o = c.step(0.0, [0.0; 3], r.z(0.0));
+        assert_ne!(o.flags & flags::NON_FINITE_STATE, 0);
+        assert_eq!(o.u, 0.0, "the last good command (none yet)");
+        assert_eq!(*c.state(), before);
+        assert_eq!(c.fault_count(), 1);
+        // The same step with a usable dt from the same state: the double
+        // buffer gives what a single buffer gives.
+        let mut d = SampledController::new(nn(), 0.01).unwrap();
+        let mut e = SampledController::new(nn(), 0.01).unwrap();
+        for k in 0..5 {
+            let t = 0.01 * f64::from(k);
+            let (od, oe) = (
+                d.step(t, [1e-3 * t; 3], r.z(t)),
+                e.step(t, [1e-3 * t; 3], r.z(t)),
+            );
+            assert_eq!(od, oe);
+        }
+        let mut manual = NnState::zero();
+        let ctl = nn();
+        for k in 0..5 {
+            let t = 0.01 * f64::from(k);
+            let mut ds = NnState::zero();
+            let _ = ctl.law(
+                &Measurement {
+                    t,
+                    x: [1e-3 * t; 3],
+                    z: r.z(t),
+                },
+                &manual,
+                &mut ds,
+            );
+            manual.axpy(0.01, &ds);
+        }
+        assert_eq!(*d.state(), manual, "ξ ← ξ + dt·ξ̇, to the bit");
     }
 
     #[test]

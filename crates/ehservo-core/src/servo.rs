@@ -433,7 +433,32 @@ impl<T: Real> NominalModel<T> {
     /// `(b̄, floored)`.
     #[inline]
     pub fn gain_for(&self, x: &[T; 3], v: T, floor: T) -> (T, bool) {
-        let (b, clamped) = self.b(x, sgn(v));
+        self.floored_gain(self.load_pressure(x), sgn(v), floor)
+    }
+
+    /// The nominal gains b̄ of [`NominalModel::gain_for`] for both valve
+    /// directions at a state `x` whose load pressure is
+    /// `pl = load_pressure(x)`, before `v` is known: the load pressure (a
+    /// sine), the division and root of each direction need only `x`, so a
+    /// law can start them first and let them run while it computes `v`;
+    /// [`DirectionalGains::pick`] then returns what `gain_for(x, v, floor)`
+    /// returns, to the bit.
+    #[inline]
+    pub fn directional_gains(&self, pl: T, floor: T) -> DirectionalGains<T> {
+        DirectionalGains {
+            pl,
+            floor,
+            up: self.floored_gain(pl, T::ONE, floor),
+            down: self.floored_gain(pl, -T::ONE, floor),
+        }
+    }
+
+    /// `b(x, s)` from the load pressure `pl` of `x` and `s = sgn v`,
+    /// floored as [`NominalModel::gain_for`] describes.
+    #[inline]
+    fn floored_gain(&self, pl: T, s: T, floor: T) -> (T, bool) {
+        let (kg, clamped) = self.params.flow_gain(pl, sgn(s));
+        let b = self.b_per_kg * kg;
         if clamped || b < floor {
             (b.max(floor), true)
         } else {
@@ -451,6 +476,31 @@ impl<T: Real> NominalModel<T> {
     pub fn d(&self, x: &[T; 3]) -> T {
         self.d_per_torque * self.load.torque(x[0], x[1])
             + self.load.torque_rate(x[0], x[1], x[2]) / self.params.jt
+    }
+}
+
+/// The floored nominal gain for each valve direction at one state
+/// ([`NominalModel::directional_gains`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionalGains<T: Real = f64> {
+    pl: T,
+    floor: T,
+    up: (T, bool),
+    down: (T, bool),
+}
+
+impl<T: Real> DirectionalGains<T> {
+    /// `gain_for(x, v, floor)`: the gain of direction `sgn v` and whether
+    /// it was floored. `v = 0` (or NaN), rare, is computed here.
+    #[inline]
+    pub fn pick(&self, model: &NominalModel<T>, v: T) -> (T, bool) {
+        if v > T::ZERO {
+            self.up
+        } else if v < T::ZERO {
+            self.down
+        } else {
+            model.floored_gain(self.pl, sgn(v), self.floor)
+        }
     }
 }
 
@@ -514,6 +564,32 @@ mod tests {
         let m = NominalModel::new(ServoParams::paper(), Load::paper());
         let d = m.d(&[0.1, 0.5, 0.0]);
         assert!((d - 340.7558).abs() < 1e-3, "d = {d}");
+    }
+
+    /// The gains computed ahead of v are `gain_for`'s to the bit: both
+    /// directions, v = ±0 and NaN (direction 0), a load pressure beyond the
+    /// supply (the root clamped, b̄ floored) and a floor above b.
+    #[test]
+    fn directional_gains_pick_what_gain_for_computes() {
+        let m = NominalModel::new(ServoParams::paper(), Load::paper());
+        let floor = 1e-3 * m.b_at_rest();
+        let states = [
+            [0.0, 0.0, 0.0],
+            [0.1, 0.5, -3.0],
+            [-0.3, 2.0, 40.0],
+            [0.0, 0.0, 5e4],  // Pl beyond Ps: one direction clamped
+            [0.0, 0.0, -5e4], // and the other one
+        ];
+        for x in states {
+            for floor in [floor, 1e9] {
+                let d = m.directional_gains(m.load_pressure(&x), floor);
+                for v in [1.0, -2.5, 0.0, -0.0, f64::NAN, 1e-300, -f64::INFINITY] {
+                    let (a, fa) = m.gain_for(&x, v, floor);
+                    let (b, fb) = d.pick(&m, v);
+                    assert_eq!((a.to_bits(), fa), (b.to_bits(), fb), "{x:?} {v}");
+                }
+            }
+        }
     }
 
     /// Friction slope against a central finite difference.

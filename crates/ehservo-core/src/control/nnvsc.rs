@@ -224,6 +224,12 @@ impl<T: Real> OdeState<T> for NnState<T> {
             false
         }
     }
+    #[inline]
+    fn euler_from(&mut self, base: &Self, a: T) -> bool {
+        self.int_e = base.int_e + a * self.int_e;
+        let w_ok = crate::rk4::euler_results_finite(&mut self.w, &base.w, a);
+        w_ok && self.int_e.is_finite()
+    }
 }
 
 /// The NNBVSC of Theorem 3.
@@ -235,6 +241,12 @@ pub struct NnVsc<T: Real = f64> {
     rbf: Rbf<T>,
     c_fixed: T,
     b_floor: T,
+    /// α − ᾱ (in μ).
+    alpha_gap: T,
+    /// 1/h (H⁻¹ in (26)).
+    inv_h: T,
+    /// 1 − bound_b (b̄ − β = b̄·(1 − bound_b)).
+    one_minus_bb: T,
 }
 
 impl<T: Real> NnVsc<T> {
@@ -252,6 +264,9 @@ impl<T: Real> NnVsc<T> {
             rbf,
             c_fixed: params.eta * params.w_max * params.w_max / T::of(4.0) + params.eps1,
             b_floor: T::of(1e-3) * model.b_at_rest(),
+            alpha_gap: params.alpha - params.alpha_bar,
+            inv_h: T::ONE / params.h,
+            one_minus_bb: T::ONE - params.bound_b,
             params,
         })
     }
@@ -305,11 +320,19 @@ impl<T: Real> Controller<T> for NnVsc<T> {
     ) -> Output<SlidingParts<T>, T> {
         let p = &self.params;
         let x = &m.x;
-        let st = self.surface.evaluate(x, &m.z, s.int_e);
-
-        // Φ is never stored: its 125 kernels are the products of 15 per-axis
-        // factors, formed once in the single pass over W below.
+        // The load pressure (a sine) and Φ (four exponentials) first: the
+        // longest chains, needing only x. Then, while they run out, what
+        // else needs only the measurement: b̄ for both valve directions (a
+        // division and a root each; the end of the law only picks one by
+        // sgn v), N and the surface. Φ is never stored: its 125 kernels are
+        // the products of 15 per-axis factors (see the passes over W below).
+        let pl = self.model.load_pressure(x);
         let g = self.rbf.gaussians(x);
+        let gains = self.model.directional_gains(pl, self.b_floor);
+        let n = self
+            .surface
+            .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
+        let st = self.surface.evaluate(x, &m.z, s.int_e);
         let phi_norm = Rbf::norm_from(&g, &m.z);
 
         // c = ηW²max/4 + ε0‖Φ‖ + ε1; γ2 = c + ε2 (34).
@@ -325,10 +348,8 @@ impl<T: Real> Controller<T> for NnVsc<T> {
                 T::ZERO
             };
             let mu = match p.mu_rule {
-                MuRule::Remark7 => (p.alpha - p.alpha_bar) * st.norm_e * p.eps2 / c,
-                MuRule::Literal33 => {
-                    (p.alpha - p.alpha_bar) * st.norm_e * ((gamma2 - c) / c - T::ONE)
-                }
+                MuRule::Remark7 => self.alpha_gap * st.norm_e * p.eps2 / c,
+                MuRule::Literal33 => self.alpha_gap * st.norm_e * ((gamma2 - c) / c - T::ONE),
                 MuRule::Zero => T::ZERO,
             };
             let e = st.e_vec();
@@ -351,49 +372,59 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         };
         // (b̄ − β)·u_sw = γ1σΔ + γ2σΔ/(|σΔ| + μ), and b̄ − β = b̄(1 − bound_b).
         let sw_num = p.gamma1 * sd + gamma2 * frac;
+        let sw_v = sw_num / self.one_minus_bb;
         // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
         // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
         // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
-        let inv_h = T::ONE / p.h;
-        let a = sd * inv_h;
-        let bw = p.eta * sd.abs() * inv_h;
-        let (w, dw) = (&s.w, &mut ds.w);
+        // WᵀΦ first, in a pass of its own: v, b̄ and u wait for it, nothing
+        // waits for Ẇ, so Ẇ's pass comes last and runs while the divisions
+        // of u finish.
+        let w = &s.w;
         let g3 = &g[2];
         let mut wphi_k = T::ZERO;
         for (i1, &g1) in g[0].iter().enumerate() {
             let mut u = T::ZERO;
             for (i2, &g2) in g[1].iter().enumerate() {
                 let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
-                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
+                let wr = &w[j..j + N_LEVELS];
                 let t = ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3]))
                     + wr[4] * g3[4];
                 u += g2 * t;
+            }
+            wphi_k += g1 * u;
+        }
+        let mut wphi = w[0] + wphi_k;
+        for (i, &zi) in m.z.iter().enumerate() {
+            wphi += w[1 + N_KERNELS + i] * zi;
+        }
+
+        let v = n + wphi + sw_v;
+        let (b_bar, clamped) = gains.pick(&self.model, v);
+        if clamped {
+            fl |= flags::VALVE_ROOT_CLAMPED;
+        }
+        let u_eq = (n + wphi) / b_bar;
+        let u_sw = sw_num / (b_bar * self.one_minus_bb);
+
+        let a = sd * self.inv_h;
+        let bw = p.eta * sd.abs() * self.inv_h;
+        let dw = &mut ds.w;
+        for (i1, &g1) in g[0].iter().enumerate() {
+            for (i2, &g2) in g[1].iter().enumerate() {
+                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
                 let ag = a * (g1 * g2);
                 for ((d, &wi), &gi) in dr.iter_mut().zip(wr).zip(g3) {
                     *d = ag * gi - bw * wi;
                 }
             }
-            wphi_k += g1 * u;
         }
         dw[0] = a - bw * w[0]; // Φ_0 = 1
-        let mut wphi = w[0] + wphi_k;
         for (i, &zi) in m.z.iter().enumerate() {
             let k = 1 + N_KERNELS + i;
-            wphi += w[k] * zi;
             dw[k] = a * zi - bw * w[k];
         }
         ds.int_e = st.e; // ∫e' = e
-
-        let n = self
-            .surface
-            .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
-        let v = n + wphi + sw_num / (T::ONE - p.bound_b);
-        let (b_bar, clamped) = self.model.gain_for(x, v, self.b_floor);
-        if clamped {
-            fl |= flags::VALVE_ROOT_CLAMPED;
-        }
-        let u_eq = (n + wphi) / b_bar;
-        let u_sw = sw_num / (b_bar * (T::ONE - p.bound_b));
 
         Output {
             u: u_eq + u_sw,
