@@ -365,7 +365,8 @@ impl Plant for ThirdOrderPlant {
     ) -> f64 {
         let s = sgn(u);
         let (b, d) = self.terms.b_and_d(x, s);
-        if sgn(u_plant) == s {
+        // Signs are exactly −1, 0 or +1 (never −0): compare their bits.
+        if sgn(u_plant).to_bits() == s.to_bits() {
             self.deriv_with(x, u_plant, v, b, d, dx);
         } else {
             let (bp, dp) = self.terms.b_and_d(x, sgn(u_plant));
