@@ -100,19 +100,25 @@ pub struct UncertaintySignal {
     drawn: u64,
     r: [f64; 4],
     random: bool,
+    /// The variation while no random part is drawn (r = 0): the bias alone,
+    /// the same every step, so computed once.
+    bias: Variation,
 }
 
 impl UncertaintySignal {
     /// A signal for the plant with nominal coefficients `abar`.
     pub fn new(spec: UncertaintySpec, abar: [f64; 3]) -> Self {
-        Self {
+        let mut s = Self {
             spec,
             abar,
             rng: ChaCha8Rng::seed_from_u64(spec.seed),
             drawn: 0,
             r: [0.0; 4],
             random: spec.a_random != 0.0 || spec.b_random != 0.0,
-        }
+            bias: Variation::NONE,
+        };
+        s.bias = s.variation();
+        s
     }
 
     /// One uniform draw on [−1, 1): 53 random bits, portable across
@@ -142,7 +148,11 @@ impl UncertaintySignal {
 
     /// The variation over the `j`-th (sub)step of `hs` seconds (it starts
     /// at `j·hs`), with `per_hold = steps_per_hold(hs)`.
+    #[inline]
     pub fn at_step(&mut self, j: u64, hs: f64, per_hold: Option<u64>) -> Variation {
+        if !self.random {
+            return self.bias;
+        }
         let i = self.interval(j, hs, per_hold);
         self.at_interval(i)
     }
@@ -158,14 +168,21 @@ impl UncertaintySignal {
 
     /// The variation over hold interval `j` (intervals never go backwards).
     pub fn at_interval(&mut self, j: u64) -> Variation {
-        if self.random {
-            while self.drawn <= j {
-                for i in 0..4 {
-                    self.r[i] = self.uniform();
-                }
-                self.drawn += 1;
-            }
+        if !self.random {
+            return self.bias;
         }
+        while self.drawn <= j {
+            for i in 0..4 {
+                self.r[i] = self.uniform();
+            }
+            self.drawn += 1;
+        }
+        self.variation()
+    }
+
+    /// The variation for the current draw `r`.
+    #[inline]
+    fn variation(&self) -> Variation {
         let s = &self.spec;
         let da = core::array::from_fn(|i| self.abar[i].abs() * (s.a_bias + s.a_random * self.r[i]));
         Variation {
@@ -201,22 +218,96 @@ pub trait Plant {
         v: &Variation,
     ) -> f64 {
         let m = self.nominal();
-        let b_true = (1.0 + v.db_rel) * m.b(x, sgn(u)).0;
-        v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2] - (b_true - b_bar) * u_eq + m.d(x)
+        let (b, d) = NominalTerms::new(m).b_and_d(x, sgn(u));
+        lumped(x, u_eq, b_bar, v, b, d)
+    }
+
+    /// [`Plant::deriv`] at `s` under the input `u_plant`, and
+    /// [`Plant::lumped_uncertainty`] at `x = measure(s)` for the command
+    /// `u`: the simulator asks for both at once for the first RK4 stage of
+    /// a sample (whose state is the sample's), so that a plant can evaluate
+    /// what the two share only once. Must return exactly what the two
+    /// calls return; the default makes them.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn deriv_and_lumped(
+        &self,
+        t: f64,
+        s: &Self::State,
+        u_plant: f64,
+        v: &Variation,
+        ds: &mut Self::State,
+        u: f64,
+        u_eq: f64,
+        b_bar: f64,
+    ) -> f64 {
+        self.deriv(t, s, u_plant, v, ds);
+        self.lumped_uncertainty(&self.measure(s), u, u_eq, b_bar, v)
+    }
+}
+
+/// `Σ Δa_i x_i − Δb·u_eq + d` with `Δb = b_true − b̄`, from the nominal
+/// `b(x, sgn u)` and `d(x)`: the expression of (19) both plants share.
+#[inline]
+fn lumped(x: &[f64; 3], u_eq: f64, b_bar: f64, v: &Variation, b: f64, d: f64) -> f64 {
+    let b_true = (1.0 + v.db_rel) * b;
+    v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2] - (b_true - b_bar) * u_eq + d
+}
+
+/// The nominal model's `b(x, s)` and `d(x)` evaluated together: the load
+/// torque Tl that both contain is computed once, and sin(kθ) and cos(kθ)
+/// with one `sincos` (one argument reduction instead of three). The
+/// expressions are those of `NominalModel::b` and `NominalModel::d`, in the
+/// same order, so the results are the same bits (`libm::sincos` is
+/// `libm::sin` and `libm::cos` in one; the test
+/// `b_and_d_are_the_nominal_models_bit_for_bit` holds it to that).
+#[derive(Debug, Clone, Copy)]
+struct NominalTerms {
+    model: NominalModel,
+    b_per_kg: f64,
+    d_per_torque: f64,
+}
+
+impl NominalTerms {
+    fn new(model: &NominalModel) -> Self {
+        Self {
+            model: *model,
+            b_per_kg: model.params.b_per_kg(),
+            d_per_torque: model.params.d_per_torque(),
+        }
+    }
+
+    /// `(b(x, s), d(x))`; `s` is a sign (−1, 0, 1).
+    #[inline]
+    fn b_and_d(&self, x: &[f64; 3], s: f64) -> (f64, f64) {
+        let (p, l) = (&self.model.params, &self.model.load);
+        let (sin_kt, cos_kt) = libm::sincos(l.wavenumber * x[0]);
+        // Load::torque and Load::torque_rate.
+        let mut tl = l.amplitude * sin_kt;
+        let mut tl_rate = l.amplitude * l.wavenumber * cos_kt * x[1];
+        if let Some(f) = &l.friction {
+            tl += f.torque(x[1]);
+            tl_rate += f.slope(x[1]) * x[2];
+        }
+        // NominalModel::load_pressure, ::b and ::d.
+        let pl = (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + tl) / p.dm;
+        let b = self.b_per_kg * p.flow_gain(pl, s).0;
+        let d = self.d_per_torque * tl + tl_rate / p.jt;
+        (b, d)
     }
 }
 
 /// The third-order model (8)–(9).
 #[derive(Debug, Clone, Copy)]
 pub struct ThirdOrderPlant {
-    model: NominalModel,
+    terms: NominalTerms,
 }
 
 impl ThirdOrderPlant {
     /// From validated physical parameters and load.
     pub fn new(params: ServoParams, load: Load) -> Self {
         Self {
-            model: NominalModel::new(params, load),
+            terms: NominalTerms::new(&NominalModel::new(params, load)),
         }
     }
 }
@@ -233,19 +324,69 @@ impl Plant for ThirdOrderPlant {
         *s
     }
 
+    /// `b` and `d` at x in one evaluation ([`NominalTerms::b_and_d`]): one
+    /// `sincos` per stage instead of two sines and a cosine.
     #[inline]
     fn deriv(&self, _t: f64, x: &[f64; 3], u: f64, v: &Variation, dx: &mut [f64; 3]) {
-        let a = &self.model.coeffs;
-        let b = (1.0 + v.db_rel) * self.model.b(x, sgn(u)).0;
+        let (b, d) = self.terms.b_and_d(x, sgn(u));
+        self.deriv_with(x, u, v, b, d, dx);
+    }
+
+    fn nominal(&self) -> &NominalModel {
+        &self.terms.model
+    }
+
+    #[inline]
+    fn lumped_uncertainty(
+        &self,
+        x: &[f64; 3],
+        u: f64,
+        u_eq: f64,
+        b_bar: f64,
+        v: &Variation,
+    ) -> f64 {
+        let (b, d) = self.terms.b_and_d(x, sgn(u));
+        lumped(x, u_eq, b_bar, v, b, d)
+    }
+
+    /// b and d once for both when the input and the command have the same
+    /// sign (the valve root of both is then the same); x is the state.
+    #[inline]
+    fn deriv_and_lumped(
+        &self,
+        _t: f64,
+        x: &[f64; 3],
+        u_plant: f64,
+        v: &Variation,
+        dx: &mut [f64; 3],
+        u: f64,
+        u_eq: f64,
+        b_bar: f64,
+    ) -> f64 {
+        let s = sgn(u);
+        let (b, d) = self.terms.b_and_d(x, s);
+        // Signs are exactly −1, 0 or +1 (never −0): compare their bits.
+        if sgn(u_plant).to_bits() == s.to_bits() {
+            self.deriv_with(x, u_plant, v, b, d, dx);
+        } else {
+            let (bp, dp) = self.terms.b_and_d(x, sgn(u_plant));
+            self.deriv_with(x, u_plant, v, bp, dp, dx);
+        }
+        lumped(x, u_eq, b_bar, v, b, d)
+    }
+}
+
+impl ThirdOrderPlant {
+    /// ẋ from the nominal `b(x, sgn u)` and `d(x)`.
+    #[inline]
+    fn deriv_with(&self, x: &[f64; 3], u: f64, v: &Variation, b: f64, d: f64, dx: &mut [f64; 3]) {
+        let a = &self.terms.model.coeffs;
+        let b = (1.0 + v.db_rel) * b;
         dx[0] = x[1];
         dx[1] = x[2];
         dx[2] = -(a.a1 + v.da[0]) * x[0] - (a.a2 + v.da[1]) * x[1] - (a.a3 + v.da[2]) * x[2]
             + b * u
-            - self.model.d(x);
-    }
-
-    fn nominal(&self) -> &NominalModel {
-        &self.model
+            - d;
     }
 }
 
@@ -373,6 +514,106 @@ mod tests {
             None,
             "0.01 s is not a whole number of 3 ms"
         );
+    }
+
+    /// Arguments over every magnitude a run can meet and then some: a
+    /// deterministic spread of sign, exponent and mantissa, the edges of
+    /// libm's small-argument branches, and the special values.
+    fn spread() -> Vec<f64> {
+        let mut v = vec![
+            0.0,
+            -0.0,
+            f64::MIN_POSITIVE,
+            5e-324,
+            1.0536712127723509e-8, // 2^-27·√2: sincos's and cos's tiny branch
+            1.4901161193847656e-8, // 2^-26: sin's tiny branch
+            std::f64::consts::FRAC_PI_4,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let mut z = 0x9E37_79B9_7F4A_7C15_u64;
+        for i in 0..200_000u64 {
+            z = z
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            // Exponents from 2^-40 to 2^40, denser near the run's range.
+            let e = (z >> 58) as i32 - 40 + (i % 17) as i32;
+            let m = 1.0 + (z >> 11) as f64 / (1u64 << 53) as f64;
+            let x = m * 2f64.powi(e.clamp(-40, 40));
+            v.push(if i % 2 == 0 { x } else { -x });
+        }
+        // Around the tiny-branch edges, ulp by ulp.
+        for edge in [1.0536712127723509e-8, 1.4901161193847656e-8] {
+            let b = f64::to_bits(edge);
+            for d in 0..2000u64 {
+                v.push(f64::from_bits(b - 1000 + d));
+            }
+        }
+        v
+    }
+
+    /// `libm::sincos` is `libm::sin` and `libm::cos` to the bit.
+    #[test]
+    fn sincos_is_sin_and_cos() {
+        for x in spread() {
+            let (s, c) = libm::sincos(x);
+            assert_eq!(s.to_bits(), libm::sin(x).to_bits(), "sin {x:e}");
+            assert_eq!(c.to_bits(), libm::cos(x).to_bits(), "cos {x:e}");
+        }
+    }
+
+    /// The plant's shared evaluation of b and d is the nominal model's
+    /// `b` and `d`, bit for bit, with and without friction, at every sign
+    /// and in the clamped valve root; so are the derivative and the lumped
+    /// uncertainty built on it.
+    #[test]
+    fn b_and_d_are_the_nominal_models_bit_for_bit() {
+        let p = ServoParams::paper();
+        let friction = Load {
+            friction: Some(ehservo_core::servo::Friction::default()),
+            ..Load::paper()
+        };
+        let odd = Load {
+            amplitude: -3.5,
+            wavenumber: 1e3,
+            friction: None,
+        };
+        let xs = spread();
+        for load in [Load::paper(), Load::none(), friction, odd] {
+            let plant = ThirdOrderPlant::new(p, load);
+            let m = NominalModel::new(p, load);
+            let v = Variation {
+                da: [0.4, -13000.0, 170.0],
+                db_rel: 0.25,
+            };
+            for (i, w) in xs.windows(3).enumerate().step_by(7) {
+                let x = [w[0] * 1e-2, w[1], w[2] * 1e2];
+                for s in [-1.0, 0.0, 1.0] {
+                    let (b, d) = plant.terms.b_and_d(&x, s);
+                    assert_eq!(b.to_bits(), m.b(&x, s).0.to_bits(), "b at {x:?}, {s}");
+                    assert_eq!(d.to_bits(), m.d(&x).to_bits(), "d at {x:?}");
+                }
+                let u = w[(i % 3).min(2)] * 1e-3;
+                let mut dx = [0.0; 3];
+                plant.deriv(0.0, &x, u, &v, &mut dx);
+                let a = &m.coeffs;
+                let bt = (1.0 + v.db_rel) * m.b(&x, sgn(u)).0;
+                let dx2 =
+                    -(a.a1 + v.da[0]) * x[0] - (a.a2 + v.da[1]) * x[1] - (a.a3 + v.da[2]) * x[2]
+                        + bt * u
+                        - m.d(&x);
+                assert_eq!(dx[2].to_bits(), dx2.to_bits(), "deriv at {x:?}, u = {u}");
+                let (u_eq, b_bar) = (w[1] * 0.5, 17000.0);
+                let old = v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2] - (bt - b_bar) * u_eq
+                    + m.d(&x);
+                let new = plant.lumped_uncertainty(&x, u, u_eq, b_bar, &v);
+                assert_eq!(new.to_bits(), old.to_bits(), "lumped at {x:?}");
+                let phys = PhysicalPlant::new(p, load).lumped_uncertainty(&x, u, u_eq, b_bar, &v);
+                assert_eq!(phys.to_bits(), old.to_bits(), "default lumped at {x:?}");
+            }
+        }
     }
 
     /// The physical model's measured θ̈ and the third-order model's x3 have

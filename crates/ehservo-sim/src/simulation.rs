@@ -39,6 +39,7 @@ use ehservo_core::reference::Reference;
 use ehservo_core::rk4::{rk4_step, rk4_step_with_k1, OdeState};
 use ehservo_core::sampled::{FaultPolicy, SampledController};
 use serde::{Deserialize, Serialize};
+use std::cell::Cell;
 
 /// How the controller is coupled to the integrator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -148,13 +149,29 @@ impl Sample {
     pub fn part(&self, key: &str) -> f64 {
         self.get(key).unwrap_or(0.0)
     }
+    /// Every logged number is finite. Branch-free: `0·v` is ±0 for a
+    /// finite `v` and NaN for ±∞ or NaN, so the sum is 0 exactly when all
+    /// are finite (as `ehservo_core::rk4::axpy_results_finite`).
+    /// The order of the sum does not change the verdict: four lanes.
+    #[inline]
     fn is_finite(&self) -> bool {
-        self.values[..self.signals.len()]
-            .iter()
-            .chain(self.x.iter())
-            .chain(self.z.iter())
-            .chain([self.u, self.u_plant, self.e].iter())
-            .all(|v| v.is_finite())
+        let mut lane = [
+            0.0 * self.u,
+            0.0 * self.u_plant,
+            0.0 * self.e,
+            0.0 * self.x[0],
+        ];
+        let rest = [
+            self.x[1], self.x[2], self.z[0], self.z[1], self.z[2], self.z[3],
+        ];
+        for part in [&self.values[..self.signals.len()], &rest[..]] {
+            for chunk in part.chunks(4) {
+                for (l, v) in lane.iter_mut().zip(chunk) {
+                    *l += 0.0 * v;
+                }
+            }
+        }
+        (lane[0] + lane[1]) + (lane[2] + lane[3]) == 0.0
     }
 }
 
@@ -279,12 +296,46 @@ struct TruthAt<'a, P: Plant> {
     plant: &'a P,
     x: [f64; 3],
     var: Variation,
+    /// Sampled mode: the first RK4 stage of the step that follows the
+    /// sample, evaluated together with the lumped uncertainty.
+    stage: Option<FirstStage<'a, P>>,
+}
+
+/// The first RK4 stage of a sampled step: at the sample's time and state,
+/// under the command the law returns. [`Plant::deriv_and_lumped`] gives
+/// it with the lumped uncertainty (the third-order plant computes the b
+/// and d both need once); the step then starts from it
+/// ([`rk4_step_with_k1`]) if the command was not changed afterwards.
+struct FirstStage<'a, P: Plant> {
+    t: f64,
+    y: &'a PlantAct<P::State>,
+    act: &'a Actuator,
+    /// The command's bits and k1.
+    k1: Cell<Option<(u64, PlantAct<P::State>)>>,
 }
 
 impl<P: Plant> Truth for TruthAt<'_, P> {
     fn lumped_uncertainty(&self, u: f64, u_eq: f64, b_bar: f64) -> f64 {
-        self.plant
-            .lumped_uncertainty(&self.x, u, u_eq, b_bar, &self.var)
+        let Some(st) = &self.stage else {
+            return self
+                .plant
+                .lumped_uncertainty(&self.x, u, u_eq, b_bar, &self.var);
+        };
+        // What the RK4 step's derivative computes first (see `advance`).
+        let mut k1 = PlantAct::<P::State>::zero();
+        let lumped = self.plant.deriv_and_lumped(
+            st.t,
+            &st.y.x,
+            st.act.output(&st.y.a, u),
+            &self.var,
+            &mut k1.x,
+            u,
+            u_eq,
+            b_bar,
+        );
+        st.act.deriv(&st.y.a, u, &mut k1.a);
+        st.k1.set(Some((u.to_bits(), k1)));
+        lumped
     }
 }
 
@@ -314,6 +365,10 @@ pub struct Simulation<P: Plant, C: Controller, R: Reference> {
     ctrl: SampledController<C>,
     y: Augmented<P::State, C::State>,
     per_hold: Option<u64>,
+    /// Whether `y.xi` is finite in sampled mode, where it never changes
+    /// (the sampled controller keeps its own state): the check after each
+    /// step then need not scan it again.
+    xi_finite: bool,
     k: u64,
     stop: Option<Stop>,
     outcome: Outcome,
@@ -353,6 +408,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             cfg,
             ctrl,
             per_hold,
+            xi_finite: xi.all_finite(),
             k: 0,
             stop: None,
             outcome: Outcome::default(),
@@ -395,18 +451,28 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         }
     }
 
-    fn diverge(&mut self, t: f64, reason: DivergenceReason) -> Option<Sample> {
+    fn diverge(&mut self, t: f64, reason: DivergenceReason) {
         let d = Divergence { t, reason };
         self.outcome.diverged = Some(d);
         self.stop = Some(Stop::Diverged(d));
-        None
     }
 
     /// Produces the sample at `t_k` and advances to `t_{k+1}`; `None` once
     /// the run has stopped (see [`Simulation::stopped`]).
     pub fn step(&mut self) -> Option<Sample> {
+        let mut sample = Sample::default();
+        self.advance(&mut sample).then_some(sample)
+    }
+
+    /// [`Simulation::step`] into a sample row the caller keeps: `run` and
+    /// `run_until` fill one row in place for the whole run instead of
+    /// building, returning and copying a 400-byte row per sample. Returns
+    /// whether a sample was produced. The row's `values` past the
+    /// controller's signals are never written (they stay as the caller
+    /// made them: zero, from [`Sample::default`]).
+    fn advance(&mut self, sample: &mut Sample) -> bool {
         if self.stop.is_some() {
-            return None;
+            return false;
         }
         let h = self.cfg.step;
         let k = self.k;
@@ -420,71 +486,43 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         let x = self.plant.measure(&self.y.pa.x);
         let xm = self.sensor.measure(x);
         let z = self.reference.z(t);
-        let truth = TruthAt {
-            plant: &self.plant,
-            x,
-            var,
-        };
-        let mut dy = Augmented::<P::State, C::State>::zero();
-        let out: Output<C::Parts> = match self.cfg.mode {
-            Mode::Sampled => self
-                .ctrl
-                .step_with(t, xm, z, |c, s, o| c.annotate(s, o, &truth)),
-            Mode::Continuous => {
-                let c = self.ctrl.controller();
-                let mut o = c.law(&Measurement { t, x: xm, z }, &self.y.xi, &mut dy.xi);
-                if o.u.is_finite() {
-                    c.annotate(&self.y.xi, &mut o, &truth);
-                }
-                o
-            }
-        };
-        if out.flags & flags::VALVE_ROOT_CLAMPED != 0 {
-            self.outcome.valve_root_clamped += 1;
-        }
-        if out.flags & flags::ZERO_ERROR_NORM != 0 {
-            self.outcome.zero_error_norm += 1;
-        }
-        if out.flags & flags::MEASUREMENT_FAULT != 0 {
-            self.outcome.measurement_faults += 1;
-        }
-        if out.flags & flags::NON_FINITE_STATE != 0 {
-            return self.diverge(t, DivergenceReason::NonFiniteState);
-        }
-        if out.flags & flags::NON_FINITE_CONTROL != 0 || !out.u.is_finite() {
-            return self.diverge(t, DivergenceReason::NonFiniteControl);
-        }
-        let u = out.u;
-        if out.flags & flags::SATURATED != 0 || u.abs() > self.actuator.limit() {
-            self.outcome.saturated += 1;
-        }
-        let mut sample = Sample {
-            k,
-            t,
-            z,
-            x,
-            u,
-            u_plant: self.actuator.output(&self.y.pa.a, u),
-            e: z[0] - x[0],
-            flags: out.flags,
-            signals: C::Parts::SIGNALS,
-            values: [0.0; MAX_PARTS],
-        };
-        out.parts.write(&mut sample.values);
-        // Every logged signal must be finite (a finite u can still come with
-        // an overflowing ‖E‖ or σ): otherwise the run ends here, as a result.
-        if !sample.is_finite() {
-            return self.diverge(t, DivergenceReason::NonFiniteControl);
-        }
-        self.outcome.samples += 1;
-        if k == self.cfg.steps {
-            self.stop = Some(Stop::Horizon);
-            return Some(sample);
-        }
-
-        let (plant, act) = (&self.plant, &self.actuator);
         match self.cfg.mode {
             Mode::Sampled => {
+                let truth = TruthAt {
+                    plant: &self.plant,
+                    x,
+                    var,
+                    stage: Some(FirstStage {
+                        t,
+                        y: &self.y.pa,
+                        act: &self.actuator,
+                        k1: Cell::new(None),
+                    }),
+                };
+                let out = self
+                    .ctrl
+                    .step_with(t, xm, z, |c, s, o| c.annotate(s, o, &truth));
+                // k1 of the step below, if the law's diagnostics evaluated
+                // it for the command the plant now gets.
+                let k1 = truth
+                    .stage
+                    .and_then(|st| st.k1.get())
+                    .filter(|(bits, _)| *bits == out.u.to_bits());
+                if !self.log(sample, t, z, x, &out) {
+                    return false;
+                }
+                if k == self.cfg.steps {
+                    self.stop = Some(Stop::Horizon);
+                    return true;
+                }
+                let (plant, act, u) = (&self.plant, &self.actuator, out.u);
+                let f = |tt: f64,
+                         s: &PlantAct<P::State>,
+                         ds: &mut PlantAct<P::State>,
+                         v: &Variation| {
+                    plant.deriv(tt, &s.x, act.output(&s.a, u), v, &mut ds.x);
+                    act.deriv(&s.a, u, &mut ds.a);
+                };
                 for j in 0..m {
                     let ts = t + j as f64 * hs;
                     let v = if j == 0 {
@@ -492,18 +530,42 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     } else {
                         self.unc.at_step(j0 + j, hs, self.per_hold)
                     };
-                    rk4_step(
-                        |tt, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
-                            plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
-                            act.deriv(&s.a, u, &mut ds.a);
-                        },
-                        ts,
-                        &mut self.y.pa,
-                        hs,
-                    );
+                    let stage = |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+                        f(tt, s, ds, &v)
+                    };
+                    match k1 {
+                        // The same k1 = f(t, y) that rk4_step would compute.
+                        Some((_, k1)) if j == 0 => {
+                            rk4_step_with_k1(stage, ts, &mut self.y.pa, &k1, hs)
+                        }
+                        _ => rk4_step(stage, ts, &mut self.y.pa, hs),
+                    }
                 }
             }
             Mode::Continuous => {
+                // The first RK4 stage: ξ̇ from the logged law, the plant's
+                // derivative below (the sampled mode never needs this 1 kB
+                // state, so only this mode makes one).
+                let mut dy = Augmented::<P::State, C::State>::zero();
+                let truth = TruthAt {
+                    plant: &self.plant,
+                    x,
+                    var,
+                    stage: None,
+                };
+                let c = self.ctrl.controller();
+                let mut out = c.law(&Measurement { t, x: xm, z }, &self.y.xi, &mut dy.xi);
+                if out.u.is_finite() {
+                    c.annotate(&self.y.xi, &mut out, &truth);
+                }
+                if !self.log(sample, t, z, x, &out) {
+                    return false;
+                }
+                if k == self.cfg.steps {
+                    self.stop = Some(Stop::Horizon);
+                    return true;
+                }
+                let (plant, act, u) = (&self.plant, &self.actuator, out.u);
                 plant.deriv(t, &self.y.pa.x, sample.u_plant, &var, &mut dy.pa.x);
                 act.deriv(&self.y.pa.a, u, &mut dy.pa.a);
                 let (c, sensor, reference) =
@@ -526,14 +588,68 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         }
         self.k += 1;
         let t_next = self.k as f64 * h;
-        if !self.y.all_finite() {
+        let finite = match self.cfg.mode {
+            Mode::Sampled => self.y.pa.all_finite() && self.xi_finite,
+            Mode::Continuous => self.y.all_finite(),
+        };
+        if !finite {
             self.diverge(t_next, DivergenceReason::NonFiniteState);
-            return Some(sample);
-        }
-        if self.plant.measure(&self.y.pa.x)[0].abs() > self.cfg.theta_limit {
+        } else if self.plant.measure(&self.y.pa.x)[0].abs() > self.cfg.theta_limit {
             self.diverge(t_next, DivergenceReason::ThetaLimit);
         }
-        Some(sample)
+        true
+    }
+
+    /// Counts the law's flags and fills `sample` at `t_k`; false (and the
+    /// run stopped) when the output or a logged signal is not finite.
+    #[inline]
+    fn log(
+        &mut self,
+        sample: &mut Sample,
+        t: f64,
+        z: [f64; 4],
+        x: [f64; 3],
+        out: &Output<C::Parts>,
+    ) -> bool {
+        if out.flags & flags::VALVE_ROOT_CLAMPED != 0 {
+            self.outcome.valve_root_clamped += 1;
+        }
+        if out.flags & flags::ZERO_ERROR_NORM != 0 {
+            self.outcome.zero_error_norm += 1;
+        }
+        if out.flags & flags::MEASUREMENT_FAULT != 0 {
+            self.outcome.measurement_faults += 1;
+        }
+        if out.flags & flags::NON_FINITE_STATE != 0 {
+            self.diverge(t, DivergenceReason::NonFiniteState);
+            return false;
+        }
+        if out.flags & flags::NON_FINITE_CONTROL != 0 || !out.u.is_finite() {
+            self.diverge(t, DivergenceReason::NonFiniteControl);
+            return false;
+        }
+        let u = out.u;
+        if out.flags & flags::SATURATED != 0 || u.abs() > self.actuator.limit() {
+            self.outcome.saturated += 1;
+        }
+        sample.k = self.k;
+        sample.t = t;
+        sample.z = z;
+        sample.x = x;
+        sample.u = u;
+        sample.u_plant = self.actuator.output(&self.y.pa.a, u);
+        sample.e = z[0] - x[0];
+        sample.flags = out.flags;
+        sample.signals = C::Parts::SIGNALS;
+        out.parts.write(&mut sample.values);
+        // Every logged signal must be finite (a finite u can still come with
+        // an overflowing ‖E‖ or σ): otherwise the run ends here, as a result.
+        if !sample.is_finite() {
+            self.diverge(t, DivergenceReason::NonFiniteControl);
+            return false;
+        }
+        self.outcome.samples += 1;
+        true
     }
 
     /// Steps until the next sample would be later than `t_end` (s) or the
@@ -541,9 +657,10 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
     /// if the run has stopped.
     pub fn run_until(&mut self, t_end: f64, observe: &mut dyn FnMut(&Sample)) -> Option<Stop> {
         let tol = 1e-9 * self.cfg.step;
+        let mut sample = Sample::default();
         while self.stop.is_none() && self.time() <= t_end + tol {
-            if let Some(s) = self.step() {
-                observe(&s);
+            if self.advance(&mut sample) {
+                observe(&sample);
             }
         }
         self.stop
@@ -552,9 +669,10 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
     /// Runs to the horizon (or the earlier stop), handing each sample to
     /// `observe`.
     pub fn run(&mut self, observe: &mut dyn FnMut(&Sample)) -> Outcome {
+        let mut sample = Sample::default();
         while self.stop.is_none() {
-            if let Some(s) = self.step() {
-                observe(&s);
+            if self.advance(&mut sample) {
+                observe(&sample);
             }
         }
         self.outcome
@@ -635,6 +753,151 @@ mod tests {
             assert_eq!(s.outcome(), out);
             assert_eq!(out.samples, 301);
         }
+    }
+
+    /// The finiteness check of a sample looks at every logged number and
+    /// nothing else: one ±∞ or NaN anywhere among them fails it.
+    #[test]
+    fn a_sample_is_finite_exactly_when_every_logged_number_is() {
+        use ehservo_core::control::sliding::SlidingParts;
+        let mut s = Sample {
+            x: [1.0, -2.0, 3e300],
+            z: [0.1, 0.2, -0.3, 0.4],
+            u: -0.0,
+            u_plant: 5e-324,
+            e: f64::MAX,
+            signals: SlidingParts::SIGNALS,
+            ..Default::default()
+        };
+        for (i, v) in s.values.iter_mut().enumerate() {
+            *v = i as f64 - 7.5;
+        }
+        assert!(s.is_finite());
+        let n = SlidingParts::SIGNALS.len();
+        let mut past = s;
+        past.values[n] = f64::NAN; // not one of this controller's signals
+        assert!(past.is_finite());
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut cases = Vec::new();
+            for i in 0..n {
+                let mut c = s;
+                c.values[i] = bad;
+                cases.push(c);
+            }
+            for i in 0..3 {
+                let mut c = s;
+                c.x[i] = bad;
+                cases.push(c);
+            }
+            for i in 0..4 {
+                let mut c = s;
+                c.z[i] = bad;
+                cases.push(c);
+            }
+            for f in [
+                |c: &mut Sample, b| c.u = b,
+                |c: &mut Sample, b| c.u_plant = b,
+                |c: &mut Sample, b| c.e = b,
+            ] {
+                let mut c = s;
+                f(&mut c, bad);
+                cases.push(c);
+            }
+            assert_eq!(cases.len(), n + 10);
+            assert!(cases.iter().all(|c| !c.is_finite()), "{bad}");
+        }
+    }
+
+    /// The third-order plant through the trait's defaults only: no shared
+    /// evaluation of k1 and the lumped uncertainty.
+    #[derive(Debug, Clone, Copy)]
+    struct Plain(ThirdOrderPlant);
+
+    impl Plant for Plain {
+        type State = [f64; 3];
+        fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {
+            self.0.initial_state(x0)
+        }
+        fn measure(&self, s: &[f64; 3]) -> [f64; 3] {
+            self.0.measure(s)
+        }
+        fn deriv(&self, t: f64, s: &[f64; 3], u: f64, v: &Variation, ds: &mut [f64; 3]) {
+            self.0.deriv(t, s, u, v, ds)
+        }
+        fn nominal(&self) -> &NominalModel {
+            self.0.nominal()
+        }
+        fn lumped_uncertainty(&self, x: &[f64; 3], u: f64, ue: f64, bb: f64, v: &Variation) -> f64 {
+            self.0.lumped_uncertainty(x, u, ue, bb, v)
+        }
+    }
+
+    /// Every number of a sample, as bits.
+    fn bits(s: &Sample) -> Vec<u64> {
+        let mut b = vec![s.k, s.t.to_bits(), s.u.to_bits(), s.u_plant.to_bits()];
+        b.extend(s.x.iter().chain(&s.z).chain(&s.values).map(|v| v.to_bits()));
+        b.extend([s.e.to_bits(), s.flags as u64, s.signals.len() as u64]);
+        b
+    }
+
+    /// The sampled step that starts from the k1 the diagnostics evaluated
+    /// (`Plant::deriv_and_lumped`) gives the run the plain RK4 step gives,
+    /// bit for bit: with the valve passing the command, lagging it (the
+    /// plant's input then differs from the command, and its sign may too),
+    /// saturating it, with sub-steps, and for a law without diagnostics.
+    #[test]
+    fn the_shared_first_stage_changes_nothing() {
+        let lag = Actuator::try_new(&ActuatorConfig {
+            time_constant: Some(0.02),
+            ..Default::default()
+        })
+        .unwrap();
+        let sat = Actuator::try_new(&ActuatorConfig {
+            limit: Some(0.2),
+            ..Default::default()
+        })
+        .unwrap();
+        let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+        for (a, substeps) in [
+            (Actuator::IDENTITY, 1),
+            (lag, 1),
+            (sat, 1),
+            (Actuator::IDENTITY, 3),
+        ] {
+            let mut c = cfg(Mode::Sampled);
+            c.substeps = substeps;
+            let mut shared = Vec::new();
+            let o1 = Simulation::new(plant, nn(), Sine::paper(), stages(a), c)
+                .unwrap()
+                .run(&mut |s| shared.push(bits(s)));
+            let mut plain = Vec::new();
+            let o2 = Simulation::new(Plain(plant), nn(), Sine::paper(), stages(a), c)
+                .unwrap()
+                .run(&mut |s| plain.push(bits(s)));
+            assert_eq!(o1, o2);
+            assert_eq!(shared, plain, "{a:?}, {substeps} sub-steps");
+            assert_eq!(shared.len(), 301);
+        }
+        // A PID has no diagnostics: no k1 is shared, the step is rk4_step.
+        let pid = ehservo_core::control::Config::build(
+            &ehservo_core::control::pid::PidConfig::default(),
+            &ehservo_core::control::Design {
+                model: *plant.nominal(),
+                surface: SwitchingSurface::paper(),
+                dt: 0.01,
+            },
+        )
+        .unwrap();
+        let c = cfg(Mode::Sampled);
+        let mut a1 = Vec::new();
+        Simulation::new(plant, pid, Sine::paper(), stages(lag), c)
+            .unwrap()
+            .run(&mut |s| a1.push(bits(s)));
+        let mut a2 = Vec::new();
+        Simulation::new(Plain(plant), pid, Sine::paper(), stages(lag), c)
+            .unwrap()
+            .run(&mut |s| a2.push(bits(s)));
+        assert_eq!(a1, a2);
     }
 
     /// A lag of τ between command and plant: the plant sees the valve

@@ -275,14 +275,34 @@ impl Scenario {
         &self,
         values: &[(String, toml::Value)],
     ) -> Result<(Scenario, Setup), ScenarioError> {
+        self.with_values_built_on(self.table()?, values)
+    }
+
+    /// This scenario as a TOML table: what [`Scenario::with_values_built_on`]
+    /// starts from.
+    pub fn table(&self) -> Result<toml::Table, ScenarioError> {
+        toml::Table::try_from(self).map_err(|e| ScenarioError {
+            file: self.name.clone(),
+            key: String::new(),
+            line_col: None,
+            reason: e.to_string(),
+        })
+    }
+
+    /// As [`Scenario::with_values_built`], from `table`, which must be this
+    /// scenario's own [`Scenario::table`]: a sweep makes it once, not once
+    /// for every run.
+    pub fn with_values_built_on(
+        &self,
+        mut table: toml::Table,
+        values: &[(String, toml::Value)],
+    ) -> Result<(Scenario, Setup), ScenarioError> {
         let fail = |key: String, reason: String| ScenarioError {
             file: self.name.clone(),
             key,
             line_col: None,
             reason,
         };
-        let mut table =
-            toml::Table::try_from(self).map_err(|e| fail(String::new(), e.to_string()))?;
         // A study may switch `controller.kind`. Between kinds with the same
         // keys (nnvsc, vsc, vsc-sat) the base's values carry over; to a kind
         // with other keys the table starts from that kind's defaults (the

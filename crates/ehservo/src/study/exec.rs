@@ -36,7 +36,7 @@ pub fn execute(
             .into_par_iter()
             .map(|i| {
                 let (values, sets, seed) = plan.run_values(i);
-                let row = match plan.base.with_values_built(&sets) {
+                let row = match plan.build_run(&sets) {
                     // Validation built the Setup: run it, not the scenario again.
                     Ok((_, setup)) => RunRow {
                         index: i,

@@ -65,6 +65,9 @@ pub struct Plan {
     pub replicates: u64,
     /// Total runs.
     pub runs: u64,
+    /// `base` as a TOML table, made once for every run to start from
+    /// (None if it could not be made: each run then reports why).
+    pub(crate) base_table: Option<toml::Table>,
 }
 
 impl Plan {
@@ -105,6 +108,18 @@ impl Plan {
             }
         }
         (cols, sets, seed)
+    }
+
+    /// Run `i`'s scenario, checked, and the [`Setup`](crate::scenario::Setup)
+    /// its validation built, from the base with the run's overrides `sets`.
+    pub fn build_run(
+        &self,
+        sets: &[(String, toml::Value)],
+    ) -> Result<(Scenario, crate::scenario::Setup), crate::scenario::ScenarioError> {
+        match &self.base_table {
+            Some(t) => self.base.with_values_built_on(t.clone(), sets),
+            None => self.base.with_values_built(sets),
+        }
     }
 
     /// The run indices of shard `k` of `n` (contiguous).

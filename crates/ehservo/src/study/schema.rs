@@ -577,6 +577,7 @@ impl Plan {
         }
         Ok(Plan {
             study,
+            base_table: base.table().ok(),
             base,
             axes,
             replicates,
