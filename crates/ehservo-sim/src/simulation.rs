@@ -766,14 +766,14 @@ mod tests {
             u: -0.0,
             u_plant: 5e-324,
             e: f64::MAX,
-            signals: SlidingParts::SIGNALS,
+            signals: SlidingParts::<f64>::SIGNALS,
             ..Default::default()
         };
         for (i, v) in s.values.iter_mut().enumerate() {
             *v = i as f64 - 7.5;
         }
         assert!(s.is_finite());
-        let n = SlidingParts::SIGNALS.len();
+        let n = SlidingParts::<f64>::SIGNALS.len();
         let mut past = s;
         past.values[n] = f64::NAN; // not one of this controller's signals
         assert!(past.is_finite());
