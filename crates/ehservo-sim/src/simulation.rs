@@ -152,24 +152,33 @@ impl Sample {
     /// Every logged number is finite. Branch-free: `0·v` is ±0 for a
     /// finite `v` and NaN for ±∞ or NaN, so the sum is 0 exactly when all
     /// are finite (as `ehservo_core::rk4::axpy_results_finite`).
-    /// The order of the sum does not change the verdict: four lanes.
-    #[inline]
+    #[cfg(test)]
     fn is_finite(&self) -> bool {
+        self.finite_with(self.signals.len())
+    }
+
+    /// The finiteness check with `n = signals.len()` given: the loop
+    /// passes its controller's constant count, so that the check unrolls.
+    /// The order of the sum does not change the verdict: four lanes.
+    #[inline(always)]
+    fn finite_with(&self, n: usize) -> bool {
         let mut lane = [
-            0.0 * self.u,
-            0.0 * self.u_plant,
-            0.0 * self.e,
-            0.0 * self.x[0],
+            0.0 * self.u + 0.0 * self.x[1],
+            0.0 * self.u_plant + 0.0 * self.x[2],
+            0.0 * self.e + 0.0 * self.z[0],
+            0.0 * self.x[0] + 0.0 * self.z[1],
         ];
-        let rest = [
-            self.x[1], self.x[2], self.z[0], self.z[1], self.z[2], self.z[3],
-        ];
-        for part in [&self.values[..self.signals.len()], &rest[..]] {
-            for chunk in part.chunks(4) {
-                for (l, v) in lane.iter_mut().zip(chunk) {
-                    *l += 0.0 * v;
-                }
+        lane[0] += 0.0 * self.z[2];
+        lane[1] += 0.0 * self.z[3];
+        let values = self.values[..n].chunks_exact(4);
+        let rest = values.remainder();
+        for chunk in values {
+            for (l, v) in lane.iter_mut().zip(chunk) {
+                *l += 0.0 * v;
             }
+        }
+        for (l, v) in lane.iter_mut().zip(rest) {
+            *l += 0.0 * v;
         }
         (lane[0] + lane[1]) + (lane[2] + lane[3]) == 0.0
     }
@@ -644,7 +653,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         out.parts.write(&mut sample.values);
         // Every logged signal must be finite (a finite u can still come with
         // an overflowing ‖E‖ or σ): otherwise the run ends here, as a result.
-        if !sample.is_finite() {
+        if !sample.finite_with(C::Parts::SIGNALS.len()) {
             self.diverge(t, DivergenceReason::NonFiniteControl);
             return false;
         }
@@ -773,6 +782,14 @@ mod tests {
             *v = i as f64 - 7.5;
         }
         assert!(s.is_finite());
+        // A count that is not a multiple of the four lanes.
+        let mut short = s;
+        short.signals = &SlidingParts::<f64>::SIGNALS[..13];
+        short.values[12] = f64::INFINITY;
+        assert!(!short.is_finite());
+        short.values[12] = 0.0;
+        short.values[13] = f64::INFINITY;
+        assert!(short.is_finite());
         let n = SlidingParts::<f64>::SIGNALS.len();
         let mut past = s;
         past.values[n] = f64::NAN; // not one of this controller's signals
