@@ -376,9 +376,10 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
         // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
         // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
-        // WᵀΦ first, in a pass of its own: v, b̄ and u wait for it, nothing
-        // waits for Ẇ, so Ẇ's pass comes last and runs while the divisions
-        // of u finish.
+        // WᵀΦ first, in a pass of its own: v, b̄ and u wait for it. Nothing
+        // waits for Ẇ, so its pass comes last (in one fused pass its
+        // products delayed WᵀΦ's chain). Each result is computed by the
+        // same operations in the same order as in the fused pass.
         let w = &s.w;
         let g3 = &g[2];
         let mut wphi_k = T::ZERO;
