@@ -387,7 +387,13 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     };
     let mut files = vec!["trace.csv", "summary.json"];
     let json = serde_json::to_string_pretty(&summary(s, &run))?;
-    write_atomic(&stage.path().join("summary.json"), json.as_bytes())?;
+    // Straight into the staging folder, which is what makes the output
+    // whole or absent (write_atomic's own temporary file, rename and fsync
+    // would add nothing to that, and its fsync cost more than the rest of
+    // the file system work; trace.csv beside it is not synced either).
+    let summary_path = stage.path().join("summary.json");
+    fs::write(&summary_path, json.as_bytes())
+        .with_context(|| format!("writing {}", summary_path.display()))?;
     if plot {
         trace_figure(s, &run).png(&stage.path().join("trace.png"))?;
         files.push("trace.png");
