@@ -13,13 +13,13 @@ use serde::Serialize;
 pub const K1_TOLERANCE: f64 = 1e-9;
 
 /// Relative slack of the closed-form search: a grid point whose upper
-/// bounds put g within it of the largest g so far is not evaluated (where
-/// g has settled on its limit every point ties with the largest to
-/// rounding). On the search grid it is left out of the maximum (which it
-/// cannot beat by more than the slack); on the check grid it counts with
-/// its bound, so the check's largest g/K1 may exceed the exact one by the
-/// slack, never fall below it.
-const SLACK: f64 = 1e-12;
+/// bound (with its rounding margin) is at most the largest g so far times
+/// 1 + SLACK is not evaluated — where g has settled on its limit every point
+/// ties with the largest to rounding, on either side. On the search grid it
+/// is left out of the maximum (which it cannot beat by more than the
+/// slack); on the check grid it counts with its bound, so the check's
+/// largest g/K1 may exceed the exact one by the slack, never fall below it.
+const SLACK: f64 = 2e-12;
 
 /// Points of the search grid (evenly strided, and its last) on which
 /// nalgebra's exp is compared with the closed form for `exp_discrepancy`
@@ -78,7 +78,7 @@ pub struct K1 {
     /// Points of the independent check grid (over twice the span).
     pub check_points: usize,
     /// Largest g(t)/K1 on the check grid (in closed form an upper bound of
-    /// it, above it by at most 1e-12 relative).
+    /// it, above it by at most 2e-12 relative).
     pub check_max_ratio: f64,
     /// Largest relative difference between g from nalgebra's exp and g
     /// from the closed form, over 64 evenly strided points of the search
@@ -250,15 +250,29 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
     let n_lin = 4000usize;
     let n_geo = 1000usize;
     let t0 = 1e-3 / scale;
-    let mut points: Vec<(f64, usize)> = (0..=n_lin)
-        .map(|i| (span * i as f64 / n_lin as f64, i))
-        .collect();
-    if t0 < span {
+    let linear = (0..=n_lin).map(|i| (span * i as f64 / n_lin as f64, i));
+    let geometric: Vec<(f64, usize)> = if t0 < span {
         let ratio = (span / t0).ln();
-        points
-            .extend((0..n_geo).map(|i| (t0 * (ratio * i as f64 / n_geo as f64).exp(), usize::MAX)));
+        (0..n_geo)
+            .map(|i| (t0 * (ratio * i as f64 / n_geo as f64).exp(), usize::MAX))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    // Both runs are ascending: merged (a linear point first on a tie), as
+    // a stable sort of their concatenation would order them.
+    let mut points: Vec<(f64, usize)> = Vec::with_capacity(n_lin + 1 + geometric.len());
+    let mut geo = geometric.iter().copied().peekable();
+    for l in linear {
+        while let Some(g) = geo.next_if(|g| g.0.total_cmp(&l.0).is_lt()) {
+            points.push(g);
+        }
+        points.push(l);
     }
-    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    points.extend(geo);
+    if !points.is_sorted_by(|a, b| a.0.total_cmp(&b.0).is_le()) {
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
     points.dedup_by(|a, b| a.0.to_bits() == b.0.to_bits());
     let grid: Vec<f64> = points.iter().map(|q| q.0).collect();
     // The points where nalgebra's exp is compared with the closed form.
@@ -491,42 +505,46 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
 enum Screen {
     /// Below it: an upper bound of g is.
     Below,
-    /// Within [`SLACK`] of it, by an upper bound of g (returned): the point
-    /// ties with the largest to within the slack, its norm is not needed.
+    /// Within [`SLACK`] of it (above or below), by an upper bound of g
+    /// (returned): the point ties with the largest to within the slack, its
+    /// norm is not needed.
     Near(f64),
-    /// Above it by more than the slack: g itself.
+    /// Possibly above it by more than the slack: g itself.
     Exact(f64),
 }
 
-/// Screens a point by two upper bounds of ‖m‖₂ before computing it: the
-/// Frobenius norm, then s·sqrt(q + 2p) ([`super::linalg::norm2_3_upper`]).
-/// Both are computed with an error of a few ε, the norm within 1e-13
+/// Screens a point by two upper bounds of ‖m‖₂ before computing it, both compared in squares (no root, no division):
+/// the Frobenius norm, then q + 2p of mᵀm ([`super::linalg::gram_q_p2`]).
+/// They are computed with an error of a few ε, the norm within 1e-13
 /// ([`norm2_fast`]); the margin 1e-12 keeps "below" true of the computed
 /// norm too.
 fn screen(m: &Matrix3<f64>, floor: f64) -> Screen {
     const MARGIN: f64 = 1.0 + 1e-12;
-    let near = floor * (1.0 + SLACK);
-    let fro = frobenius(m) * MARGIN;
-    if fro < floor {
+    // Thresholds on ‖m‖₂².
+    let below = (floor / MARGIN) * (floor / MARGIN);
+    let near = {
+        let n = floor * (1.0 + SLACK) / MARGIN;
+        n * n
+    };
+    let f2: f64 = m.iter().map(|v| v * v).sum();
+    if f2 < below {
         return Screen::Below;
     }
-    let up = if fro <= near {
-        fro
-    } else {
-        super::linalg::norm2_3_upper(m) * MARGIN
+    if f2 <= near {
+        return Screen::Near(f2.sqrt() * MARGIN);
+    }
+    let Some((q, p2)) = super::linalg::gram_q_p2(m) else {
+        return Screen::Exact(norm2_fast(m));
     };
-    if up < floor {
+    // q + 2p ≤ x without the root of p².
+    let at_most = |x: f64| q <= x && p2 <= 0.25 * (x - q) * (x - q);
+    if at_most(below) {
         Screen::Below
-    } else if up <= near {
-        Screen::Near(up)
+    } else if at_most(near) {
+        Screen::Near((q + 2.0 * p2.sqrt()).sqrt() * MARGIN)
     } else {
         Screen::Exact(norm2_fast(m))
     }
-}
-
-/// The Frobenius norm, ≥ ‖m‖₂.
-fn frobenius(m: &Matrix3<f64>) -> f64 {
-    m.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
 /// Spectral norm of a complex 3×3 matrix.

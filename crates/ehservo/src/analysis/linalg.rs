@@ -60,7 +60,8 @@ pub fn expm3(m: &SMatrix<f64, 3, 3>) -> Option<SMatrix<f64, 3, 3>> {
 
 /// The symmetric G = aᵀa of a = m/s (s = the largest |m_ij|, so G cannot
 /// overflow) with q = tr G/3 and p = sqrt(‖G − qI‖_F²/6): its eigenvalues
-/// are q + 2p·cos(φ + 2πk/3).
+/// are q + 2p·cos(φ + 2πk/3), so λ_max ≤ q + 2p (tight to ≈ (σ₂/σ₁)⁴/4
+/// relative when the two smaller singular values are small).
 struct Gram {
     s: f64,
     g: [f64; 6],
@@ -143,12 +144,19 @@ pub fn norm2_3_fast(m: &SMatrix<f64, 3, 3>) -> f64 {
     s * lambda.sqrt()
 }
 
-/// An upper bound of ‖m‖₂ without the trigonometry: λ_max ≤ q + 2p (the
-/// cosine is at most 1), tight to ≈ (σ₂/σ₁)⁴/4 relative when the two
-/// smaller singular values are small, and never below the norm by more
-/// than a few ε. NaN when m is not finite.
-pub fn norm2_3_upper(m: &SMatrix<f64, 3, 3>) -> f64 {
-    gram(m).map_or(0.0, |g| g.s * (g.q + 2.0 * g.p).sqrt())
+/// (q, p²) of G = mᵀm, unscaled (see [`Gram`]): ‖m‖₂² ≤ q + 2p. None
+/// when they are not finite (m huge or not finite). For a cheap test of the
+/// bound against a threshold x: q + 2p ≤ x ⟺ q ≤ x and p² ≤ ((x − q)/2)².
+pub fn gram_q_p2(m: &SMatrix<f64, 3, 3>) -> Option<(f64, f64)> {
+    let col = |j: usize| [m[(0, j)], m[(1, j)], m[(2, j)]];
+    let (c0, c1, c2) = (col(0), col(1), col(2));
+    let dot = |x: &[f64; 3], y: &[f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    let (g00, g11, g22) = (dot(&c0, &c0), dot(&c1, &c1), dot(&c2, &c2));
+    let (g01, g02, g12) = (dot(&c0, &c1), dot(&c0, &c2), dot(&c1, &c2));
+    let q = (g00 + g11 + g22) / 3.0;
+    let (d0, d1, d2) = (g00 - q, g11 - q, g22 - q);
+    let p2 = (d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)) / 6.0;
+    (q.is_finite() && p2.is_finite()).then_some((q, p2))
 }
 
 #[cfg(test)]
@@ -220,8 +228,11 @@ mod tests {
             }
             let (a, b) = (norm2_3_fast(&m), norm2_3(&m));
             worst = worst.max((a - b).abs() / b);
-            let up = norm2_3_upper(&m);
-            assert!(up >= b * (1.0 - 1e-14) && up <= b * 3f64.sqrt() * (1.0 + 1e-14));
+            // The screening bound: ‖m‖₂ ≤ sqrt(q + 2p) ≤ sqrt(3)·‖m‖₂.
+            if let Some((q, p2)) = gram_q_p2(&m) {
+                let up = (q + 2.0 * p2.sqrt()).sqrt();
+                assert!(up >= b * (1.0 - 1e-14) && up <= b * 3f64.sqrt() * (1.0 + 1e-14));
+            }
         }
         assert!(worst < 1e-14, "{worst}");
         assert!(norm2_3_fast(&Matrix3::zeros()) == 0.0);

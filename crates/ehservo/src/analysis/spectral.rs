@@ -159,16 +159,13 @@ impl SpectralExp {
             return None;
         }
         let id = Matrix3::identity();
-        let out = if equal(&poles[0], &poles[1]) && equal(&poles[1], &poles[2]) {
+        let (b, modes) = if equal(&poles[0], &poles[1]) && equal(&poles[1], &poles[2]) {
             let a = poles[0];
             if a.im != 0.0 {
                 return None;
             }
             let n = p - id * a.re;
-            Self {
-                b: [id, n, n * n * 0.5],
-                modes: Modes::Triple(a.re + shift),
-            }
+            ([id, n, n * n * 0.5], Modes::Triple(a.re + shift))
         } else if let Some((s, d)) = [(0, 1), (1, 2), (2, 0)]
             .iter()
             .find(|&&(i, j)| equal(&poles[i], &poles[j]))
@@ -180,13 +177,13 @@ impl SpectralExp {
             }
             let (pa, pc) = (p - id * a.re, p - id * c.re);
             let ea = pc * pc / ((a.re - c.re) * (a.re - c.re));
-            Self {
-                b: [ea, id - ea, pa * pc / (c.re - a.re)],
-                modes: Modes::Double {
+            (
+                [ea, id - ea, pa * pc / (c.re - a.re)],
+                Modes::Double {
                     simple: a.re + shift,
                     double: c.re + shift,
                 },
-            }
+            )
         } else {
             let l = polished_eigenvalues(p, poles);
             for i in 0..3 {
@@ -198,30 +195,33 @@ impl SpectralExp {
             }
             let a = sylvester_products(p, &l);
             match poles.iter().position(|q| q.im > 0.0) {
-                None => Self {
-                    b: a.map(|m| m.map(|z| z.re)),
-                    modes: Modes::Real(l.map(|z| z.re + shift)),
-                },
+                None => (
+                    a.map(|m| m.map(|z| z.re)),
+                    Modes::Real(l.map(|z| z.re + shift)),
+                ),
                 Some(k) => {
                     // The real one is the pole with im = 0 (cubic_roots
                     // zeroes a round-off imaginary part).
                     let r = poles.iter().position(|q| q.im == 0.0)?;
-                    Self {
-                        b: [
+                    (
+                        [
                             a[r].map(|z| z.re),
                             a[k].map(|z| 2.0 * z.re),
                             a[k].map(|z| -2.0 * z.im),
                         ],
-                        modes: Modes::Pair {
+                        Modes::Pair {
                             real: l[r].re + shift,
                             mu: l[k].re + shift,
                             omega: l[k].im,
                         },
-                    }
+                    )
                 }
             }
         };
-        out.b.iter().all(super::linalg::finite).then_some(out)
+        if !b.iter().all(super::linalg::finite) {
+            return None;
+        }
+        Some(Self { b, modes })
     }
 
     /// The real rates ν_j whose exponentials the coefficients are made of
@@ -265,6 +265,7 @@ impl SpectralExp {
         }
     }
 
+    /// Σ B_k c_k.
     fn combine(&self, c: [f64; 3]) -> Matrix3<f64> {
         self.b[0] * c[0] + self.b[1] * c[1] + self.b[2] * c[2]
     }
@@ -326,14 +327,19 @@ pub struct UniformExp<'a> {
 }
 
 impl UniformExp<'_> {
-    /// exp((P + shift·I)t_i).
-    pub fn exp(&self, i: usize) -> Matrix3<f64> {
+    /// c_k(t_i) of the module doc.
+    fn coefficients(&self, i: usize) -> [f64; 3] {
         let (h, l) = (&self.hi[i / TABLE], &self.lo[i % TABLE]);
         let e = [h[0] * l[0], h[1] * l[1], h[2] * l[2]];
         let c = h[3] * l[3] - h[4] * l[4];
         let s = h[4] * l[3] + h[3] * l[4];
         let t = (i as f64 + self.offset) * self.dt;
-        self.f.combine(self.f.coefficients_from(t, e, (c, s)))
+        self.f.coefficients_from(t, e, (c, s))
+    }
+
+    /// exp((P + shift·I)t_i).
+    pub fn exp(&self, i: usize) -> Matrix3<f64> {
+        self.f.combine(self.coefficients(i))
     }
 }
 
