@@ -37,14 +37,15 @@ pub struct RunDiagnostics {
 /// NaN when f1² + f2 < 0 (a negative μ, `mu_rule = "literal-33"`).
 pub fn f_of(s: &Scenario, smp: &Sample) -> f64 {
     match paper_law(s) {
-        Some((PaperLaw::Nnvsc, c)) => f_with(c, smp),
+        Some((PaperLaw::Nnvsc, c)) => {
+            f_with(c, smp.part("mu"), smp.part("gain"), smp.part("phi_norm"))
+        }
         _ => f64::NAN,
     }
 }
 
-fn f_with(c: &SlidingConfig, smp: &Sample) -> f64 {
-    let (mu, gain) = (smp.part("mu"), smp.part("gain"));
-    let cc = c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * smp.part("phi_norm") + c.eps1;
+fn f_with(c: &SlidingConfig, mu: f64, gain: f64, phi_norm: f64) -> f64 {
+    let cc = c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * phi_norm + c.eps1;
     let f1 = (mu + gain / c.gamma1 - cc / c.gamma1) / 2.0;
     let f2 = cc * mu / c.gamma1;
     let root = (f1 * f1 + f2).sqrt();
@@ -55,16 +56,47 @@ fn f_with(c: &SlidingConfig, smp: &Sample) -> f64 {
     }
 }
 
+/// The signals the diagnostics read, looked up by key once per trace
+/// rather than once per sample (a sample of another controller, were one
+/// mixed in, is looked up by key).
+struct Parts {
+    signals: &'static [ehservo_core::control::Signal],
+    index: [Option<usize>; 5],
+}
+
+impl Parts {
+    const KEYS: [&'static str; 5] = ["mu", "gain", "phi_norm", "norm_e", "sigma_delta"];
+
+    fn of(first: &Sample) -> Self {
+        Self {
+            signals: first.signals,
+            index: Self::KEYS.map(|k| first.index_of(k)),
+        }
+    }
+
+    /// (μ, gain, ‖Φ‖, ‖E‖, σΔ) of a sample, as [`Sample::part`] gives them.
+    fn read(&self, smp: &Sample) -> [f64; 5] {
+        if std::ptr::eq(smp.signals, self.signals) {
+            self.index.map(|i| i.map_or(0.0, |i| smp.values[i]))
+        } else {
+            Self::KEYS.map(|k| smp.part(k))
+        }
+    }
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
-    v.sort_by(f64::total_cmp);
+    // The middle order statistics by selection: the same values a full
+    // sort would put there, in linear time.
     let n = v.len();
+    let (lower, &mut hi, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
     if n % 2 == 1 {
-        v[n / 2]
+        hi
     } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        let lo = lower.iter().copied().max_by(f64::total_cmp).unwrap_or(hi);
+        0.5 * (lo + hi)
     }
 }
 
@@ -81,14 +113,14 @@ pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
         return None;
     }
     let tol = 1e-9 * s.simulation.horizon.max(1.0);
-    let cc_of =
-        |smp: &Sample| c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * smp.part("phi_norm") + c.eps1;
+    let parts = Parts::of(&trace[0]);
+    let cc_of = |phi_norm: f64| c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * phi_norm + c.eps1;
     let eval = |smp: &Sample| {
-        let norm_e = smp.part("norm_e");
-        let cc = cc_of(smp);
-        let left = f_with(c, smp) + c.alpha_bar * norm_e < c.alpha * norm_e;
+        let [mu, gain, phi_norm, norm_e, sigma_delta] = parts.read(smp);
+        let cc = cc_of(phi_norm);
+        let left = f_with(c, mu, gain, phi_norm) + c.alpha_bar * norm_e < c.alpha * norm_e;
         let right = c.alpha * norm_e < cc / c.gamma1 + c.alpha_bar * norm_e;
-        [left && right, left, right, smp.part("sigma_delta") == 0.0]
+        [left && right, left, right, sigma_delta == 0.0]
     };
     let share = |it: &mut dyn Iterator<Item = &Sample>| {
         let mut n = 0usize;
@@ -112,11 +144,11 @@ pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
         condition4_right: all[2],
         dead_zone: all[3],
         after_settle: after,
-        norm_e_median: median(trace.iter().map(|x| x.part("norm_e")).collect()),
+        norm_e_median: median(trace.iter().map(|x| parts.read(x)[3]).collect()),
         right_half_limit_median: median(
             trace
                 .iter()
-                .map(|x| cc_of(x) / (c.gamma1 * (c.alpha - c.alpha_bar)))
+                .map(|x| cc_of(parts.read(x)[2]) / (c.gamma1 * (c.alpha - c.alpha_bar)))
                 .collect(),
         ),
     })

@@ -1,8 +1,10 @@
 //! K1 of (18): Sylvester's form of exp(Pt), the profile
-//! g(t) = ‖exp((P + K2·I)t)‖₂, the golden-section maximum and the search
-//! for K1 = sup_t g(t) with its proof-of-bound check.
+//! g(t) = ‖exp((P + K2·I)t)‖₂ (in closed form, [`super::spectral`], or by
+//! nalgebra's exp), the golden-section maximum and the search for
+//! K1 = sup_t g(t) with its proof-of-bound check.
 
 use super::poles::Pole;
+use super::spectral::{polished_eigenvalues, sylvester_products, SpectralExp};
 use nalgebra::{Complex, Matrix3};
 use serde::Serialize;
 
@@ -10,8 +12,28 @@ use serde::Serialize;
 /// check grid (nor the tail bound) may exceed K1·(1 + K1_TOLERANCE).
 pub const K1_TOLERANCE: f64 = 1e-9;
 
+/// Relative slack of the closed-form search: a grid point whose upper
+/// bound (with its rounding margin) is at most the largest g so far times
+/// 1 + SLACK is not evaluated — where g has settled on its limit every point
+/// ties with the largest to rounding, on either side. On the search grid it
+/// is left out of the maximum (which it cannot beat by more than the
+/// slack); on the check grid it counts with its bound, so the check's
+/// largest g/K1 may exceed the exact one by the slack, never fall below it.
+const SLACK: f64 = 2e-12;
+
+/// Points of the search grid (evenly strided, and its last) on which
+/// nalgebra's exp is compared with the closed form for `exp_discrepancy`
+/// when g comes from the closed form.
+const DISCREPANCY_POINTS: usize = 64;
+
+/// ‖m‖₂ by the SVD: the reference path (nalgebra's exp).
 fn norm2(m: &Matrix3<f64>) -> f64 {
     super::linalg::norm2_3(m)
+}
+
+/// ‖m‖₂ in closed form: the closed-form path.
+fn norm2_fast(m: &Matrix3<f64>) -> f64 {
+    super::linalg::norm2_3_fast(m)
 }
 
 type CMat = Matrix3<Complex<f64>>;
@@ -21,30 +43,9 @@ type CMat = Matrix3<Complex<f64>>;
 /// None when two eigenvalues are closer than 1e-4 of the largest |λ| (the
 /// formula is then ill-conditioned, or a Jordan block makes it wrong).
 pub fn sylvester_terms(p: &Matrix3<f64>, poles: &[Pole; 3]) -> Option<[CMat; 3]> {
-    // The eigenvalues, polished by Newton's method on det(sI − P) =
-    // s³ + c2 s² + c1 s + c0 (c2 = −tr P, c1 = Σ principal 2×2 minors,
-    // c0 = −det P): the coefficients A_i magnify an eigenvalue's error by
-    // ‖P‖/gap.
-    let c2 = -p.trace();
-    let c1 = p[(0, 0)] * p[(1, 1)] - p[(0, 1)] * p[(1, 0)] + p[(0, 0)] * p[(2, 2)]
-        - p[(0, 2)] * p[(2, 0)]
-        + p[(1, 1)] * p[(2, 2)]
-        - p[(1, 2)] * p[(2, 1)];
-    let c0 = -p.determinant();
-    let l: [Complex<f64>; 3] = std::array::from_fn(|i| {
-        let mut z = Complex::new(poles[i].re, poles[i].im);
-        for _ in 0..3 {
-            let f = ((z + c2) * z + c1) * z + c0;
-            let d = (z * 3.0 + 2.0 * c2) * z + c1;
-            if d.norm() > 0.0 {
-                let next = z - f / d;
-                if (((next + c2) * next + c1) * next + c0).norm() < f.norm() {
-                    z = next;
-                }
-            }
-        }
-        z
-    });
+    // The eigenvalues polished by Newton's method: the coefficients A_i
+    // magnify an eigenvalue's error by ‖P‖/gap.
+    let l = polished_eigenvalues(p, poles);
     // Relative to the poles' own size (slow distinct poles are not repeated).
     let scale = poles.iter().map(|q| q.wn).fold(0.0, f64::max);
     for i in 0..3 {
@@ -54,17 +55,7 @@ pub fn sylvester_terms(p: &Matrix3<f64>, poles: &[Pole; 3]) -> Option<[CMat; 3]>
             }
         }
     }
-    let pc: CMat = p.map(|v| Complex::new(v, 0.0));
-    let id = CMat::identity();
-    Some(std::array::from_fn(|i| {
-        let mut m = id;
-        for (j, lj) in l.iter().enumerate() {
-            if j != i {
-                m = m * (pc - id * *lj) / (l[i] - *lj);
-            }
-        }
-        m
-    }))
+    Some(sylvester_products(p, &l))
 }
 
 /// K1 of (18) and how it was obtained and checked.
@@ -86,11 +77,14 @@ pub struct K1 {
     pub tail_bound: Option<f64>,
     /// Points of the independent check grid (over twice the span).
     pub check_points: usize,
-    /// Largest g(t)/K1 on the check grid.
+    /// Largest g(t)/K1 on the check grid (in closed form an upper bound of
+    /// it, above it by at most 2e-12 relative).
     pub check_max_ratio: f64,
-    /// Largest relative difference, over the search grid, between g from
-    /// nalgebra's exp and g from Sylvester's closed form: the accuracy of
-    /// the arithmetic itself (None without Sylvester's form).
+    /// Largest relative difference between g from nalgebra's exp and g
+    /// from the closed form, over 64 evenly strided points of the search
+    /// grid and its last (over every point, against Sylvester's complex
+    /// form, when g itself comes from exp): the accuracy of the arithmetic
+    /// itself (None without Sylvester's form).
     pub exp_discrepancy: Option<f64>,
     /// The relative tolerance of the check: [`K1_TOLERANCE`], or four times
     /// `exp_discrepancy` when that is larger.
@@ -143,13 +137,20 @@ pub(super) fn golden_max(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> (f64
 ///
 /// 1. A repeated dominant eigenvalue (P is a companion matrix, so a repeated
 ///    eigenvalue is always a Jordan block) makes g grow like t: K1 = ∞.
-/// 2. g is evaluated with nalgebra's `exp` on a linear grid of 4001 points
+/// 2. g is evaluated on a linear grid of 4001 points
 ///    and a geometric grid of 1000 points from 10⁻³/max|λ| (the fast
 ///    transients) to the span = max(40/gap, ten periods of the dominant
 ///    oscillation, 10/K2), gap = distance from the dominant real part to the
 ///    next: by then every faster mode has decayed by e^(−40) (longer if
 ///    Sylvester's coefficients of the faster modes are large: until they
-///    fall below 1e-12 of the dominant ones).
+///    fall below 1e-12 of the dominant ones). g comes from the closed form
+///    of exp((P + K2 I)t) ([`SpectralExp`]: three exponentials, from tables
+///    on the uniform grids, and a closed-form 3×3 norm), or from nalgebra's
+///    `exp` and the SVD when two poles are too close for it
+///    ([`super::SEPARATION`]). In closed form only the largest sample is
+///    needed exactly: a point whose upper bounds of g ([`screen`]) put it
+///    below the largest value so far, or within [`SLACK`] of it, skips the
+///    spectral norm.
 /// 3. The largest sample is refined by golden section between its
 ///    neighbours.
 /// 4. Sylvester's formula gives the limit of g as t → ∞ (for distinct real
@@ -160,8 +161,24 @@ pub(super) fn golden_max(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> (f64
 ///    K1·(1 + tolerance), and so must the tail bound; the tolerance is
 ///    [`K1_TOLERANCE`] unless exp and Sylvester's form disagree by more
 ///    than a quarter of it (then four times their disagreement: the check
-///    cannot be sharper than the arithmetic).
+///    cannot be sharper than the arithmetic). In closed form the check's
+///    largest g/K1 may exceed the exact one by [`SLACK`] (never fall
+///    below it): a check point whose upper bound is within that of the
+///    largest g counts with its bound rather than its norm, which spares
+///    the norms of every point where g has settled on its limit.
 pub fn k1(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
+    k1_with(p, poles, k2, true)
+}
+
+/// [`k1`] with g from nalgebra's `exp` and the SVD everywhere: the path
+/// [`k1`] falls back to when the poles are too close for the closed form,
+/// and the reference the closed form is tested and measured against (about
+/// twenty times slower).
+pub fn k1_expm(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
+    k1_with(p, poles, k2, false)
+}
+
+fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K1 {
     let dominant = poles[0].re;
     // Relative to the poles' own size (slow distinct poles are not repeated).
     let scale = poles.iter().map(|q| q.wn).fold(0.0, f64::max);
@@ -216,22 +233,84 @@ pub fn k1(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
         span = span.max((big / (1e-12 * small)).ln().max(0.0) / gap);
     }
     let span = span.max(10.0 / k2.max(1e-12)).min(1e6 / k2.max(1e-12));
-    let g = |t: f64| k1_profile(p, k2, t);
+    // g(t) in closed form when the poles allow it (spectral module doc),
+    // else by nalgebra's exp.
+    let closed = if closed_form {
+        SpectralExp::new(p, poles, k2)
+    } else {
+        None
+    };
+    let g = |t: f64| match &closed {
+        Some(c) => c.norm(t),
+        None => k1_profile(p, k2, t),
+    };
 
-    // 2. Search grid: linear ∪ geometric, sorted.
+    // 2. Search grid: linear ∪ geometric, sorted; each point with its
+    //    index on the linear grid (usize::MAX for a geometric point).
     let n_lin = 4000usize;
     let n_geo = 1000usize;
     let t0 = 1e-3 / scale;
-    let mut grid: Vec<f64> = (0..=n_lin)
-        .map(|i| span * i as f64 / n_lin as f64)
-        .collect();
-    if t0 < span {
+    let linear = (0..=n_lin).map(|i| (span * i as f64 / n_lin as f64, i));
+    let geometric: Vec<(f64, usize)> = if t0 < span {
         let ratio = (span / t0).ln();
-        grid.extend((0..n_geo).map(|i| t0 * (ratio * i as f64 / n_geo as f64).exp()));
+        (0..n_geo)
+            .map(|i| (t0 * (ratio * i as f64 / n_geo as f64).exp(), usize::MAX))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    // Both runs are ascending: merged (a linear point first on a tie), as
+    // a stable sort of their concatenation would order them.
+    let mut points: Vec<(f64, usize)> = Vec::with_capacity(n_lin + 1 + geometric.len());
+    let mut geo = geometric.iter().copied().peekable();
+    for l in linear {
+        while let Some(g) = geo.next_if(|g| g.0.total_cmp(&l.0).is_lt()) {
+            points.push(g);
+        }
+        points.push(l);
     }
-    grid.sort_by(f64::total_cmp);
-    grid.dedup();
-    let values: Vec<f64> = grid.iter().map(|&t| g(t)).collect();
+    points.extend(geo);
+    if !points.is_sorted_by(|a, b| a.0.total_cmp(&b.0).is_le()) {
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    points.dedup_by(|a, b| a.0.to_bits() == b.0.to_bits());
+    let grid: Vec<f64> = points.iter().map(|q| q.0).collect();
+    // The points where nalgebra's exp is compared with the closed form.
+    let stride = grid.len().div_ceil(DISCREPANCY_POINTS).max(1);
+    let compared = |i: usize| i % stride == 0 || i + 1 == grid.len();
+    let values: Vec<f64> = match &closed {
+        None => grid.iter().map(|&t| g(t)).collect(),
+        Some(c) => {
+            // Only the largest value matters (and the compared ones): a
+            // point screened out (below the largest so far, or within
+            // SLACK of it) is recorded as −∞. The last point (t = span)
+            // first: a profile that rises to its limit has its largest
+            // values there.
+            let lin = c.uniform(span / n_lin as f64, 0.0, n_lin + 1);
+            let m_at = |&(t, i): &(f64, usize)| match (&lin, i) {
+                (Some(u), i) if i != usize::MAX => u.exp(i),
+                _ => c.exp(t),
+            };
+            let mut floor = points.last().map_or(0.0, |q| norm2_fast(&m_at(q)));
+            points
+                .iter()
+                .enumerate()
+                .map(|(i, q)| {
+                    let m = m_at(q);
+                    let v = if compared(i) {
+                        norm2_fast(&m)
+                    } else {
+                        match screen(&m, floor) {
+                            Screen::Exact(v) => v,
+                            Screen::Below | Screen::Near(_) => f64::NEG_INFINITY,
+                        }
+                    };
+                    floor = floor.max(v);
+                    v
+                })
+                .collect()
+        }
+    };
     let (imax, &vmax) = values
         .iter()
         .enumerate()
@@ -262,7 +341,12 @@ pub fn k1(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
                         m += a[i] * Complex::new(0.0, poles[i].im * t).exp();
                     }
                 }
-                norm2(&m.map(|c| c.re))
+                let m = m.map(|c| c.re);
+                if closed.is_some() {
+                    norm2_fast(&m)
+                } else {
+                    norm2(&m)
+                }
             };
             let lim = if omega > 0.0 {
                 let period = 2.0 * std::f64::consts::PI / omega;
@@ -284,12 +368,28 @@ pub fn k1(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
         }
         None => (None, None),
     };
-    // The arithmetic's own accuracy: nalgebra's exp against Sylvester's
-    // closed form on the search grid. The check cannot be sharper than
+    // The arithmetic's own accuracy: nalgebra's exp against the closed
+    // form on the search grid. The check cannot be sharper than
     // their disagreement (≈ 1e-13 for well-separated poles, ≈ 1e-8 for
     // poles 0.5 s⁻¹ apart, where the scaling and squaring of a large,
     // non-normal (P + K2 I)t loses digits).
     let discrepancy = terms.as_ref().map(|a| {
+        if closed.is_some() {
+            // g came from the closed form: nalgebra's exp, the reference,
+            // on the strided points of the search grid (the disagreement is
+            // smooth in t; the whole grid would cost what the closed form
+            // saves).
+            return grid
+                .iter()
+                .zip(&values)
+                .enumerate()
+                .filter(|(i, _)| compared(*i))
+                .map(|(_, (&t, &v))| {
+                    let e = k1_profile(p, k2, t);
+                    (v - e).abs() / v
+                })
+                .fold(0.0, f64::max);
+        }
         grid.iter()
             .zip(&values)
             .map(|(&t, &v)| {
@@ -330,18 +430,61 @@ pub fn k1(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
     // 5. Independent check: 3× denser, offset, over twice the span.
     let m_lin = 3 * n_lin;
     let m_geo = 3 * n_geo;
-    let mut worst: f64 = 0.0;
-    for i in 0..m_lin {
-        let t = 2.0 * span * (i as f64 + 0.5) / m_lin as f64;
-        worst = worst.max(g(t) / k1v);
-    }
-    if t0 < 2.0 * span {
-        let ratio = (2.0 * span / t0).ln();
-        for i in 0..m_geo {
-            let t = t0 * (ratio * (i as f64 + 0.5) / m_geo as f64).exp();
-            worst = worst.max(g(t) / k1v);
+    let t_lin = |i: usize| 2.0 * span * (i as f64 + 0.5) / m_lin as f64;
+    let geo = (t0 < 2.0 * span).then(|| (2.0 * span / t0).ln());
+    let t_geo = |i: usize, ratio: f64| t0 * (ratio * (i as f64 + 0.5) / m_geo as f64).exp();
+    let worst = match &closed {
+        None => {
+            let mut worst: f64 = 0.0;
+            for i in 0..m_lin {
+                worst = worst.max(g(t_lin(i)) / k1v);
+            }
+            if let Some(ratio) = geo {
+                for i in 0..m_geo {
+                    worst = worst.max(g(t_geo(i, ratio)) / k1v);
+                }
+            }
+            worst
         }
-    }
+        Some(c) => {
+            // The largest g over the check grid: first the points likeliest
+            // to hold it (the last one, and those around the search's
+            // maximum), then every point not screened out. A point within
+            // the slack counts with its bound: the result is the largest
+            // g/K1, or above it by at most SLACK, never below.
+            let lin = c.uniform(2.0 * span / m_lin as f64, 0.5, m_lin);
+            let m_at = |i: usize| match &lin {
+                Some(u) => u.exp(i),
+                None => c.exp(t_lin(i)),
+            };
+            let mut best: f64 = norm2_fast(&m_at(m_lin - 1));
+            if t_star.is_finite() && t_star < 2.0 * span {
+                let j = (t_star / (2.0 * span) * m_lin as f64 - 0.5)
+                    .floor()
+                    .max(0.0) as usize;
+                for i in [j, j + 1] {
+                    if i < m_lin {
+                        best = best.max(norm2_fast(&m_at(i)));
+                    }
+                }
+            }
+            let mut bound: f64 = 0.0;
+            let mut visit = |m: Matrix3<f64>| match screen(&m, best) {
+                Screen::Below => {}
+                Screen::Near(b) => bound = bound.max(b),
+                Screen::Exact(v) => best = best.max(v),
+            };
+            for i in 0..m_lin {
+                visit(m_at(i));
+            }
+            if let Some(ratio) = geo {
+                for i in 0..m_geo {
+                    visit(c.exp(t_geo(i, ratio)));
+                }
+            }
+            best.max(bound) / k1v
+        }
+    };
     let tail_ok = tail_bound.is_none_or(|b| b <= k1v * (1.0 + tolerance));
     K1 {
         value: Some(k1v),
@@ -355,6 +498,52 @@ pub fn k1(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64) -> K1 {
         exp_discrepancy: discrepancy,
         tolerance,
         verified: worst <= 1.0 + tolerance && tail_ok,
+    }
+}
+
+/// A grid point's g against `floor` (the largest g so far).
+enum Screen {
+    /// Below it: an upper bound of g is.
+    Below,
+    /// Within [`SLACK`] of it (above or below), by an upper bound of g
+    /// (returned): the point ties with the largest to within the slack, its
+    /// norm is not needed.
+    Near(f64),
+    /// Possibly above it by more than the slack: g itself.
+    Exact(f64),
+}
+
+/// Screens a point by two upper bounds of ‖m‖₂ before computing it, both compared in squares (no root, no division):
+/// the Frobenius norm, then q + 2p of mᵀm ([`super::linalg::gram_q_p2`]).
+/// They are computed with an error of a few ε, the norm within 1e-13
+/// ([`norm2_fast`]); the margin 1e-12 keeps "below" true of the computed
+/// norm too.
+fn screen(m: &Matrix3<f64>, floor: f64) -> Screen {
+    const MARGIN: f64 = 1.0 + 1e-12;
+    // Thresholds on ‖m‖₂².
+    let below = (floor / MARGIN) * (floor / MARGIN);
+    let near = {
+        let n = floor * (1.0 + SLACK) / MARGIN;
+        n * n
+    };
+    let f2: f64 = m.iter().map(|v| v * v).sum();
+    if f2 < below {
+        return Screen::Below;
+    }
+    if f2 <= near {
+        return Screen::Near(f2.sqrt() * MARGIN);
+    }
+    let Some((q, p2)) = super::linalg::gram_q_p2(m) else {
+        return Screen::Exact(norm2_fast(m));
+    };
+    // q + 2p ≤ x without the root of p².
+    let at_most = |x: f64| q <= x && p2 <= 0.25 * (x - q) * (x - q);
+    if at_most(below) {
+        Screen::Below
+    } else if at_most(near) {
+        Screen::Near((q + 2.0 * p2.sqrt()).sqrt() * MARGIN)
+    } else {
+        Screen::Exact(norm2_fast(m))
     }
 }
 

@@ -12,6 +12,7 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+mod decimal;
 mod staging;
 pub use staging::{check_destination, probe_destination, write_atomic, Staging, OUTPUT_MARKERS};
 
@@ -89,21 +90,30 @@ impl crate::scenario::Visit for SignalsOf {
     }
 }
 
-/// Streams samples into a CSV writer.
+/// Streams samples into `trace.csv`: the header through the csv crate,
+/// the rows (numbers only, which never need quoting) straight into the
+/// writer, each number printed as `{}` prints it ([`decimal`]).
 struct TraceWriter<W: std::io::Write> {
-    w: csv::Writer<W>,
+    w: W,
     layout: TraceLayout,
     row: Vec<f64>,
+    line: Vec<u8>,
+    scratch: Vec<u8>,
 }
 
 impl<W: std::io::Write> TraceWriter<W> {
     fn new(inner: W, layout: TraceLayout) -> Result<Self> {
         let mut w = csv::Writer::from_writer(inner);
         w.write_record(&layout.columns)?;
+        let w = w
+            .into_inner()
+            .map_err(|e| anyhow::anyhow!("writing trace.csv: {e}"))?;
         Ok(Self {
             w,
             layout,
             row: Vec::new(),
+            line: Vec::new(),
+            scratch: Vec::new(),
         })
     }
 
@@ -117,15 +127,20 @@ impl<W: std::io::Write> TraceWriter<W> {
                 s.t
             );
         }
-        self.w
-            .write_record(self.row.iter().map(|v| format!("{v}")))?;
+        self.line.clear();
+        for (i, &v) in self.row.iter().enumerate() {
+            if i > 0 {
+                self.line.push(b',');
+            }
+            decimal::push_display(&mut self.line, v, &mut self.scratch);
+        }
+        self.line.push(b'\n');
+        self.w.write_all(&self.line)?;
         Ok(())
     }
 
     fn finish(self) -> Result<W> {
-        self.w
-            .into_inner()
-            .map_err(|e| anyhow::anyhow!("writing trace.csv: {e}"))
+        Ok(self.w)
     }
 }
 
@@ -333,7 +348,10 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     let csv_path = stage.path().join("trace.csv");
     let file =
         fs::File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
-    let mut w = TraceWriter::new(std::io::BufWriter::new(file), TraceLayout::of(s))?;
+    let mut w = TraceWriter::new(
+        std::io::BufWriter::with_capacity(1 << 16, file),
+        TraceLayout::of(s),
+    )?;
     let decimate = s.output.decimate.max(1) as u64;
     let steps = s.sim_config().steps;
     let keep_every = decimate.max((steps + 1).div_ceil(MAX_KEPT));
@@ -369,7 +387,13 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     };
     let mut files = vec!["trace.csv", "summary.json"];
     let json = serde_json::to_string_pretty(&summary(s, &run))?;
-    write_atomic(&stage.path().join("summary.json"), json.as_bytes())?;
+    // Straight into the staging folder, which is what makes the output
+    // whole or absent (write_atomic's own temporary file, rename and fsync
+    // would add nothing to that, and its fsync cost more than the rest of
+    // the file system work; trace.csv beside it is not synced either).
+    let summary_path = stage.path().join("summary.json");
+    fs::write(&summary_path, json.as_bytes())
+        .with_context(|| format!("writing {}", summary_path.display()))?;
     if plot {
         trace_figure(s, &run).png(&stage.path().join("trace.png"))?;
         files.push("trace.png");
