@@ -94,9 +94,8 @@ impl<T: Real> BiasedPlant<T> {
     /// ẋ under the held command `u` (valve direction `sgn u`).
     #[inline]
     pub fn rhs(&self, x: &[T; 3], u: T, dx: &mut [T; 3]) {
-        let (bb, _) = self.model.b(x, sgn(u));
+        let (bb, d) = self.model.b_and_d(x, sgn(u));
         let b = bb * self.b_factor;
-        let d = self.model.d(x);
         dx[0] = x[1];
         dx[1] = x[2];
         dx[2] = -self.a[0] * x[0] - self.a[1] * x[1] - self.a[2] * x[2] + b * u - d;

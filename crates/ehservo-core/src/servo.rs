@@ -471,6 +471,28 @@ impl<T: Real> NominalModel<T> {
         self.b_per_kg * self.params.flow_gain(T::ZERO, T::ZERO).0
     }
 
+    /// `(b(x, s), d(x))` in one evaluation: the load's sine and cosine
+    /// from one `sin_cos`, Tl once. The same bits as [`Self::b`] and
+    /// [`Self::d`] (the same operations in the same order; `sin_cos` gives
+    /// `sin`'s and `cos`'s bits); `s` is a sign (−1, 0, 1).
+    #[inline]
+    pub fn b_and_d(&self, x: &[T; 3], s: T) -> (T, T) {
+        let (p, l) = (&self.params, &self.load);
+        let (sin_kt, cos_kt) = (l.wavenumber * x[0]).sin_cos();
+        // Load::torque and Load::torque_rate.
+        let mut tl = l.amplitude * sin_kt;
+        let mut tl_rate = l.amplitude * l.wavenumber * cos_kt * x[1];
+        if let Some(f) = &l.friction {
+            tl += f.torque(x[1]);
+            tl_rate += f.slope(x[1]) * x[2];
+        }
+        // Self::load_pressure, ::b and ::d.
+        let pl = (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + tl) / p.dm;
+        let b = self.b_per_kg * p.flow_gain(pl, s).0;
+        let d = self.d_per_torque * tl + tl_rate / p.jt;
+        (b, d)
+    }
+
     /// `d(t) = 4βe·Kce·Tl/(Vt·Jt) + Ṫl/Jt` of (9) at state `x`.
     #[inline]
     pub fn d(&self, x: &[T; 3]) -> T {

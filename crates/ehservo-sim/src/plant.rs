@@ -218,7 +218,7 @@ pub trait Plant {
         v: &Variation,
     ) -> f64 {
         let m = self.nominal();
-        let (b, d) = NominalTerms::new(m).b_and_d(x, sgn(u));
+        let (b, d) = m.b_and_d(x, sgn(u));
         lumped(x, u_eq, b_bar, v, b, d)
     }
 
@@ -254,60 +254,17 @@ fn lumped(x: &[f64; 3], u_eq: f64, b_bar: f64, v: &Variation, b: f64, d: f64) ->
     v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2] - (b_true - b_bar) * u_eq + d
 }
 
-/// The nominal model's `b(x, s)` and `d(x)` evaluated together: the load
-/// torque Tl that both contain is computed once, and sin(kθ) and cos(kθ)
-/// with one `sincos` (one argument reduction instead of three). The
-/// expressions are those of `NominalModel::b` and `NominalModel::d`, in the
-/// same order, so the results are the same bits (`libm::sincos` is
-/// `libm::sin` and `libm::cos` in one; the test
-/// `b_and_d_are_the_nominal_models_bit_for_bit` holds it to that).
-#[derive(Debug, Clone, Copy)]
-struct NominalTerms {
-    model: NominalModel,
-    b_per_kg: f64,
-    d_per_torque: f64,
-}
-
-impl NominalTerms {
-    fn new(model: &NominalModel) -> Self {
-        Self {
-            model: *model,
-            b_per_kg: model.params.b_per_kg(),
-            d_per_torque: model.params.d_per_torque(),
-        }
-    }
-
-    /// `(b(x, s), d(x))`; `s` is a sign (−1, 0, 1).
-    #[inline]
-    fn b_and_d(&self, x: &[f64; 3], s: f64) -> (f64, f64) {
-        let (p, l) = (&self.model.params, &self.model.load);
-        let (sin_kt, cos_kt) = libm::sincos(l.wavenumber * x[0]);
-        // Load::torque and Load::torque_rate.
-        let mut tl = l.amplitude * sin_kt;
-        let mut tl_rate = l.amplitude * l.wavenumber * cos_kt * x[1];
-        if let Some(f) = &l.friction {
-            tl += f.torque(x[1]);
-            tl_rate += f.slope(x[1]) * x[2];
-        }
-        // NominalModel::load_pressure, ::b and ::d.
-        let pl = (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + tl) / p.dm;
-        let b = self.b_per_kg * p.flow_gain(pl, s).0;
-        let d = self.d_per_torque * tl + tl_rate / p.jt;
-        (b, d)
-    }
-}
-
 /// The third-order model (8)–(9).
 #[derive(Debug, Clone, Copy)]
 pub struct ThirdOrderPlant {
-    terms: NominalTerms,
+    model: NominalModel,
 }
 
 impl ThirdOrderPlant {
     /// From validated physical parameters and load.
     pub fn new(params: ServoParams, load: Load) -> Self {
         Self {
-            terms: NominalTerms::new(&NominalModel::new(params, load)),
+            model: NominalModel::new(params, load),
         }
     }
 }
@@ -324,29 +281,16 @@ impl Plant for ThirdOrderPlant {
         *s
     }
 
-    /// `b` and `d` at x in one evaluation ([`NominalTerms::b_and_d`]): one
+    /// `b` and `d` at x in one evaluation ([`NominalModel::b_and_d`]): one
     /// `sincos` per stage instead of two sines and a cosine.
     #[inline]
     fn deriv(&self, _t: f64, x: &[f64; 3], u: f64, v: &Variation, dx: &mut [f64; 3]) {
-        let (b, d) = self.terms.b_and_d(x, sgn(u));
+        let (b, d) = self.model.b_and_d(x, sgn(u));
         self.deriv_with(x, u, v, b, d, dx);
     }
 
     fn nominal(&self) -> &NominalModel {
-        &self.terms.model
-    }
-
-    #[inline]
-    fn lumped_uncertainty(
-        &self,
-        x: &[f64; 3],
-        u: f64,
-        u_eq: f64,
-        b_bar: f64,
-        v: &Variation,
-    ) -> f64 {
-        let (b, d) = self.terms.b_and_d(x, sgn(u));
-        lumped(x, u_eq, b_bar, v, b, d)
+        &self.model
     }
 
     /// b and d once for both when the input and the command have the same
@@ -364,12 +308,12 @@ impl Plant for ThirdOrderPlant {
         b_bar: f64,
     ) -> f64 {
         let s = sgn(u);
-        let (b, d) = self.terms.b_and_d(x, s);
+        let (b, d) = self.model.b_and_d(x, s);
         // Signs are exactly −1, 0 or +1 (never −0): compare their bits.
         if sgn(u_plant).to_bits() == s.to_bits() {
             self.deriv_with(x, u_plant, v, b, d, dx);
         } else {
-            let (bp, dp) = self.terms.b_and_d(x, sgn(u_plant));
+            let (bp, dp) = self.model.b_and_d(x, sgn(u_plant));
             self.deriv_with(x, u_plant, v, bp, dp, dx);
         }
         lumped(x, u_eq, b_bar, v, b, d)
@@ -380,7 +324,7 @@ impl ThirdOrderPlant {
     /// ẋ from the nominal `b(x, sgn u)` and `d(x)`.
     #[inline]
     fn deriv_with(&self, x: &[f64; 3], u: f64, v: &Variation, b: f64, d: f64, dx: &mut [f64; 3]) {
-        let a = &self.terms.model.coeffs;
+        let a = &self.model.coeffs;
         let b = (1.0 + v.db_rel) * b;
         dx[0] = x[1];
         dx[1] = x[2];
@@ -591,7 +535,7 @@ mod tests {
             for (i, w) in xs.windows(3).enumerate().step_by(7) {
                 let x = [w[0] * 1e-2, w[1], w[2] * 1e2];
                 for s in [-1.0, 0.0, 1.0] {
-                    let (b, d) = plant.terms.b_and_d(&x, s);
+                    let (b, d) = plant.model.b_and_d(&x, s);
                     assert_eq!(b.to_bits(), m.b(&x, s).0.to_bits(), "b at {x:?}, {s}");
                     assert_eq!(d.to_bits(), m.d(&x).to_bits(), "d at {x:?}");
                 }
