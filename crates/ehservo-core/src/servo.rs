@@ -433,7 +433,12 @@ impl<T: Real> NominalModel<T> {
     /// `(b̄, floored)`.
     #[inline]
     pub fn gain_for(&self, x: &[T; 3], v: T, floor: T) -> (T, bool) {
-        self.floored_gain(self.load_pressure(x), sgn(v), floor)
+        let (b, clamped) = self.b(x, sgn(v));
+        if clamped || b < floor {
+            (b.max(floor), true)
+        } else {
+            (b, false)
+        }
     }
 
     /// The nominal gains b̄ of [`NominalModel::gain_for`] for both valve

@@ -384,13 +384,18 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         let g3 = &g[2];
         let mut wphi_k = T::ZERO;
         for (i1, &g1) in g[0].iter().enumerate() {
-            let mut u = T::ZERO;
-            for (i2, &g2) in g[1].iter().enumerate() {
+            let t = |i2: usize| {
                 let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
                 let wr = &w[j..j + N_LEVELS];
-                let t = ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3]))
-                    + wr[4] * g3[4];
-                u += g2 * t;
+                ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3])) + wr[4] * g3[4]
+            };
+            // u = Σ g2·t from its first term rather than from 0 + first term:
+            // they differ only when every term is −0 (u = −0 against +0), and
+            // u only enters wphi_k += g1·u, where wphi_k (from 0 + …) is never
+            // −0, so wphi_k + g1·(±0) is the same.
+            let mut u = g[1][0] * t(0);
+            for (i2, &g2) in g[1].iter().enumerate().skip(1) {
+                u += g2 * t(i2);
             }
             wphi_k += g1 * u;
         }
