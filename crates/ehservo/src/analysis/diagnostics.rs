@@ -29,6 +29,115 @@ pub struct RunDiagnostics {
     /// Median over the samples of c/(γ1·(α − ᾱ)): the right half holds iff
     /// ‖E‖ is below it.
     pub right_half_limit_median: f64,
+    /// Assumption A5 and Remark 6's set against the run.
+    pub weights: WeightCheck,
+}
+
+/// Assumption A5 ((19) with (21)–(22)) and Remark 6's invariant set, checked
+/// against the samples of a run.
+///
+/// (19) says the lumped uncertainty Δ = W̄ᵀΦ + ε with ‖W̄‖ ≤ Wmax (21) and
+/// |ε| ≤ ε0‖Φ‖ + ε1 (22). By Cauchy–Schwarz, |Δ| ≤ ‖W̄‖‖Φ‖ + ε0‖Φ‖ + ε1 at
+/// every sample, so any W̄ that meets (19) and (22) along the run has
+/// ‖W̄‖ ≥ max_k (|Δ_k| − ε1)/‖Φ_k‖ − ε0: when that exceeds Wmax, A5 fails
+/// with the stated Wmax. Remark 6 keeps ‖W̄ − W‖ below
+/// r(‖Φ‖) = Wmax/2 + sqrt(Wmax²/4 + (ε0‖Φ‖ + ε1)/η), hence
+/// ‖W‖ ≤ Wmax + r(‖Φ‖); a sample with a larger ‖W‖ lies outside that set.
+#[derive(Debug, Clone, Serialize)]
+pub struct WeightCheck {
+    /// max |Δ| over the samples (the "uncertainty" signal, s⁻³ units of θ⃛).
+    pub uncertainty_max: f64,
+    /// max ‖Φ‖ over the samples.
+    pub phi_norm_max: f64,
+    /// The least ‖W̄‖ any W̄ meeting (19) and (22) along the run can have.
+    pub w_bar_required: f64,
+    /// Wmax of the scenario (21).
+    pub w_max: f64,
+    /// `w_bar_required ≤ w_max`.
+    pub a5_holds: bool,
+    /// max ‖W‖ over the samples.
+    pub w_norm_max: f64,
+    /// Wmax + r(‖Φ‖) at the sample of the largest ‖W‖ (None: η = 0, the
+    /// set is unbounded).
+    pub remark6_bound_at_w_max: Option<f64>,
+    /// First time ‖W‖ > Wmax + r(‖Φ‖) (None: never, or η = 0).
+    pub remark6_left_at_s: Option<f64>,
+    /// Share of the samples outside Remark 6's set.
+    pub remark6_outside_share: f64,
+    /// In words.
+    pub note: String,
+}
+
+fn weight_check(c: &SlidingConfig, trace: &[Sample]) -> WeightCheck {
+    let read = |smp: &Sample| {
+        (
+            smp.part("uncertainty"),
+            smp.part("phi_norm"),
+            smp.part("w_norm"),
+        )
+    };
+    let bound = |phi: f64| {
+        super::weights::invariant_radius(c.eta, c.w_max, c.eps0, c.eps1, phi).map(|r| c.w_max + r)
+    };
+    let (mut unc_max, mut phi_max, mut req) = (0.0f64, 0.0f64, f64::NEG_INFINITY);
+    let (mut w_max_run, mut w_at) = (f64::NEG_INFINITY, None);
+    let (mut left_at, mut outside) = (None, 0usize);
+    for smp in trace {
+        let (unc, phi, w) = read(smp);
+        unc_max = unc_max.max(unc.abs());
+        phi_max = phi_max.max(phi);
+        // ‖Φ‖ ≥ 1 (its first entry is 1); guard a zero all the same.
+        if phi > 0.0 {
+            req = req.max((unc.abs() - c.eps1) / phi - c.eps0);
+        }
+        if w > w_max_run {
+            w_max_run = w;
+            w_at = bound(phi);
+        }
+        if bound(phi).is_some_and(|b| w > b) {
+            outside += 1;
+            left_at.get_or_insert(smp.t);
+        }
+    }
+    let req = req.max(0.0);
+    let a5_holds = req <= c.w_max;
+    let share = outside as f64 / trace.len().max(1) as f64;
+    let mut note = if a5_holds {
+        format!(
+            "A5 is consistent with the run: a W̄ with ‖W̄‖ ≥ {req:.3} ≤ Wmax = {} can meet (19) and (22).",
+            c.w_max
+        )
+    } else {
+        format!(
+            "A5 fails with Wmax = {}: the lumped uncertainty of (19) reaches {unc_max:.4} while ‖Φ‖ ≤ {phi_max:.4}, \
+so any W̄ meeting (19) and (22) along this run needs ‖W̄‖ ≥ {req:.4} > Wmax ((21) is violated; the theorems' \
+hypotheses do not hold).",
+            c.w_max
+        )
+    };
+    match (left_at, w_at) {
+        (Some(t), Some(b)) => note.push_str(&format!(
+            " The run leaves Remark 6's set: ‖W‖ reaches {w_max_run:.4} (the set bounds it by {b:.4} there), \
+first outside at t = {t:.4} s, {:.1} % of the samples outside.",
+            100.0 * share
+        )),
+        (None, Some(_)) => note.push_str(&format!(
+            " ‖W‖ stays inside Remark 6's set (max {w_max_run:.4})."
+        )),
+        _ => note.push_str(" η = 0: Remark 6's set is unbounded, it constrains nothing."),
+    }
+    WeightCheck {
+        uncertainty_max: unc_max,
+        phi_norm_max: phi_max,
+        w_bar_required: req,
+        w_max: c.w_max,
+        a5_holds,
+        w_norm_max: w_max_run,
+        remark6_bound_at_w_max: w_at,
+        remark6_left_at_s: left_at,
+        remark6_outside_share: share,
+        note,
+    }
 }
 
 /// f of (29)–(31) for one sample, with the μ(t), γ2(t) and ‖Φ‖ the
@@ -151,6 +260,7 @@ pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
                 .map(|x| cc_of(parts.read(x)[2]) / (c.gamma1 * (c.alpha - c.alpha_bar)))
                 .collect(),
         ),
+        weights: weight_check(c, trace),
     })
 }
 
@@ -209,6 +319,40 @@ mod tests {
             ..Default::default()
         });
         assert!(f_of(&s, &smp).abs() < 1e-300);
+    }
+
+    #[test]
+    fn a5_and_remark6_against_hand_values() {
+        let s = paper_scenario(&[]);
+        let c = super::paper_law(&s).unwrap().1;
+        // Fig. 2: η = 0.25, Wmax = 4, ε0 = ε1 = 0.1.
+        let mut a = sample(SlidingParts {
+            uncertainty: -3000.0,
+            phi_norm: 21.7,
+            w_norm: 1.0,
+            ..Default::default()
+        });
+        a.t = 0.5;
+        // r(1) = 2 + sqrt(4 + 0.2/0.25) = 4.19089023, so ‖W‖ ≤ 8.19089023 at ‖Φ‖ = 1.
+        let mut b = sample(SlidingParts {
+            uncertainty: 1.0,
+            phi_norm: 1.0,
+            w_norm: 8.2,
+            ..Default::default()
+        });
+        b.t = 1.5;
+        let w = weight_check(c, &[a.clone(), b.clone()]);
+        // (3000 − 0.1)/21.7 − 0.1 = 138.1442396…
+        assert!((w.w_bar_required - (2999.9 / 21.7 - 0.1)).abs() < 1e-9);
+        assert!(!w.a5_holds);
+        assert_eq!(w.remark6_left_at_s, Some(1.5));
+        assert!((w.remark6_outside_share - 0.5).abs() < 1e-15);
+        assert!((w.remark6_bound_at_w_max.unwrap() - (6.0 + 4.8f64.sqrt())).abs() < 1e-12);
+        // Inside: a small uncertainty and ‖W‖ under the bound.
+        b.w_norm = 8.19;
+        a.uncertainty = 10.0;
+        let w = weight_check(c, &[a, b]);
+        assert!(w.a5_holds && w.remark6_left_at_s.is_none());
     }
 
     #[test]

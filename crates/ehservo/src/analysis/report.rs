@@ -396,6 +396,36 @@ impl RunDiagnostics {
             sig(self.right_half_limit_median, 3),
             sig(self.norm_e_median, 3)
         );
+        heading(&mut t, "Along the run: assumption A5 and Remark 6");
+        let w = &self.weights;
+        for (label, v) in [
+            ("max |uncertainty of (19)|", sig(w.uncertainty_max, 4)),
+            ("max ‖Φ‖", sig(w.phi_norm_max, 4)),
+            ("least ‖W̄‖ meeting (19), (22)", sig(w.w_bar_required, 4)),
+            (
+                "A5 with Wmax",
+                format!(
+                    "{} (Wmax = {})",
+                    if w.a5_holds { "holds" } else { "FAILS" },
+                    sig(w.w_max, 3)
+                ),
+            ),
+            ("max ‖W‖ of the run", sig(w.w_norm_max, 4)),
+            (
+                "Remark 6's set",
+                match w.remark6_left_at_s {
+                    Some(t0) => format!(
+                        "LEFT at t = {} s ({} of the samples outside)",
+                        sig(t0, 4),
+                        pc(w.remark6_outside_share)
+                    ),
+                    None => "not left".into(),
+                },
+            ),
+        ] {
+            let _ = writeln!(t, "  {}{v}", pad(label, 36));
+        }
+        let _ = writeln!(t, "  note: {}", w.note);
         t
     }
 }

@@ -63,11 +63,12 @@ pub(super) fn measure(s: &Scenario, keep_trace: bool) -> Result<(CaseMetrics, Op
     Ok((cm, if keep_trace { Some(r) } else { None }))
 }
 
+/// Runs every sensitivity variation on top of each case's converged set-up
+/// under the chosen reading (`base`: case → (its metrics, its overrides)).
 pub(super) fn sensitivity(
     m: &Manifest,
     dir: &Path,
-    reading: usize,
-    base: &BTreeMap<String, CaseMetrics>,
+    base: &BTreeMap<String, (CaseMetrics, Vec<String>)>,
     progress: bool,
 ) -> Result<Vec<SensitivityRow>> {
     // (sensitivity, case, seed) jobs, each a scenario loaded up front.
@@ -80,7 +81,7 @@ pub(super) fn sensitivity(
                 None => vec![None],
             };
             for seed in seeds {
-                let mut set = m.reading[reading].set.clone();
+                let mut set = base[case].1.clone();
                 set.extend(sv.set.iter().cloned());
                 if let Some(k) = seed {
                     set.push(format!("uncertainty.seed={k}"));
@@ -109,7 +110,7 @@ pub(super) fn sensitivity(
             None => rows.push(SensitivityRow {
                 id: sv.id.clone(),
                 case: case.clone(),
-                baseline: base[case],
+                baseline: base[case].0,
                 variant: cm,
                 seeds_e_max_deg: if seed.is_some() {
                     vec![cm.base.e_max_deg]
@@ -122,8 +123,10 @@ pub(super) fn sensitivity(
     Ok(rows)
 }
 
+/// The boundary searches under every reading (`sets`: reading id, the
+/// converged overrides of the Fig. 3 case and of the Fig. 2 case).
 pub(super) fn boundaries(
-    m: &Manifest,
+    sets: &[(String, Vec<String>, Vec<String>)],
     dir: &Path,
     progress: bool,
 ) -> Result<(Vec<Boundary>, Vec<Boundary>)> {
@@ -134,12 +137,12 @@ pub(super) fn boundaries(
     let nn_grid: Vec<f64> = (0..=40).map(|i| i as f64 * 0.25).collect();
     // (reading id, bias reading, base scenario with the reading applied)
     let mut tasks: Vec<(String, Option<BiasReading>, Scenario)> = Vec::new();
-    for r in &m.reading {
-        let vsc_base = load("fig3.toml", &r.set)?;
+    for (id, fig3_set, fig2_set) in sets {
+        let vsc_base = load("fig3.toml", fig3_set)?;
         for br in [BiasReading::R1, BiasReading::R2] {
-            tasks.push((r.id.clone(), Some(br), vsc_base.clone()));
+            tasks.push((id.clone(), Some(br), vsc_base.clone()));
         }
-        tasks.push((r.id.clone(), None, load("fig2.toml", &r.set)?));
+        tasks.push((id.clone(), None, load("fig2.toml", fig2_set)?));
     }
     let pb = bar(progress, tasks.len() as u64, "boundaries");
     let results: Vec<Boundary> = tasks

@@ -1,5 +1,6 @@
 //! Scoring the paper's claims against measured metrics.
 
+use super::convergence::Estimate;
 use super::derived::{format_metric, CaseMetrics};
 use super::manifest::{Claim, ClaimKind};
 use serde::Serialize;
@@ -9,11 +10,16 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Status {
-    /// The measurement agrees with the claim.
+    /// The measurement agrees with the claim, by more than its numerical
+    /// margin.
     Agree,
-    /// It does not.
+    /// It does not, by more than its numerical margin.
     Differ,
-    /// It cannot be decided (a run diverged, a metric is undefined).
+    /// The numerical margin (discretisation error, round-off sensitivity)
+    /// straddles the claim's threshold, or the case did not converge: not
+    /// counted as agreement.
+    Undecided,
+    /// It cannot be scored (a run diverged, a metric is undefined).
     Undetermined,
 }
 
@@ -23,6 +29,7 @@ impl Status {
         match self {
             Status::Agree => "agree",
             Status::Differ => "differ",
+            Status::Undecided => "undecided",
             Status::Undetermined => "undetermined",
         }
     }
@@ -31,9 +38,9 @@ impl Status {
 /// A scored claim.
 #[derive(Debug, Clone, Serialize)]
 pub struct Verdict {
-    /// Agree, differ or undetermined.
+    /// Agree, differ, undecided or undetermined.
     pub status: Status,
-    /// The measured figure, formatted.
+    /// The measured figure (± its numerical margin), formatted.
     pub measured: String,
     /// How the measurement was compared.
     pub detail: String,
@@ -54,106 +61,235 @@ fn divergence(m: &CaseMetrics) -> String {
     }
 }
 
-/// Scores `claim` with the metrics of each case.
-pub fn evaluate(claim: &Claim, results: &BTreeMap<String, CaseMetrics>) -> Verdict {
-    let Some(m) = results.get(&claim.case) else {
+/// An interval [lo, hi] scored against a set: inside entirely (agree),
+/// outside entirely (differ), or across its edge (undecided).
+fn interval_status(lo: f64, hi: f64, inside: &dyn Fn(f64) -> bool) -> Status {
+    match (inside(lo), inside(hi)) {
+        (true, true) => Status::Agree,
+        (false, false) => Status::Differ,
+        _ => Status::Undecided,
+    }
+}
+
+/// `v ± δ` scored against the band [a, b] (a ≤ b).
+pub fn band_status(v: f64, d: f64, a: f64, b: f64) -> Status {
+    let (lo, hi) = (v - d, v + d);
+    if lo >= a && hi <= b {
+        Status::Agree
+    } else if hi < a || lo > b {
+        Status::Differ
+    } else {
+        Status::Undecided
+    }
+}
+
+/// A measured value with its numerical margin.
+#[derive(Debug, Clone, Copy)]
+struct Value {
+    v: f64,
+    d: f64,
+}
+
+/// Scores `claim` with the converged estimate of each case. A claim on a
+/// case that did not converge is undecided; otherwise the measured value ±
+/// its margin (see `convergence`) must lie wholly on one side of the claim.
+pub fn evaluate(claim: &Claim, results: &BTreeMap<String, Estimate>) -> Verdict {
+    let Some(me) = results.get(&claim.case) else {
         return undetermined(format!("case `{}` was not run", claim.case));
     };
-    let other = claim.other.as_ref().and_then(|o| results.get(o));
+    let oe = claim.other.as_ref().and_then(|o| results.get(o));
     let metric = claim.metric.as_deref().unwrap_or("");
-    let get = |c: &CaseMetrics, who: &str| -> Result<f64, Verdict> {
-        c.get(metric).ok_or_else(|| {
-            undetermined(if c.base.diverged {
-                format!("`{who}` {}: {metric} undefined", divergence(c))
-            } else {
-                format!("{metric} undefined for `{who}`")
-            })
+    let fm = |v: f64| format_metric(metric, v);
+    let fmd = |x: Value| {
+        if x.d > 0.0 {
+            format!("{} ± {}", fm(x.v), fm(x.d).trim_start_matches('+'))
+        } else {
+            fm(x.v)
+        }
+    };
+    // Undecided when what the claim reads (its metric, or the status) had
+    // not converged at the finest level.
+    let what = if metric.is_empty() { "status" } else { metric };
+    let unconverged = |e: &Estimate, who: &str| {
+        (!e.converged_on(what)).then(|| Verdict {
+            status: Status::Undecided,
+            measured: fm_or_status(e.best(), metric),
+            detail: format!(
+                "`{who}`: {what} still moving at the finest level run ({} of them, last {})",
+                e.levels.len(),
+                e.best_value()
+            ),
         })
     };
-    let status = |b: bool| if b { Status::Agree } else { Status::Differ };
-    let fm = |v: f64| format_metric(metric, v);
+    if let Some(v) = unconverged(me, &claim.case) {
+        return v;
+    }
+    if let Some(v) = oe.and_then(|o| unconverged(o, claim.other.as_deref().unwrap_or(""))) {
+        return v;
+    }
+    let m = me.best();
+    let get = |e: &Estimate, who: &str| -> Result<Value, Verdict> {
+        let c = e.best();
+        match (c.get(metric), e.margin(metric)) {
+            (Some(v), Some(d)) => Ok(Value { v, d }),
+            _ => Err(undetermined(if c.base.diverged {
+                format!("`{who}` {}: {metric} undefined", divergence(c))
+            } else {
+                format!("{metric} undefined for `{who}` (or under the perturbation)")
+            })),
+        }
+    };
     match claim.kind {
         ClaimKind::Bounded | ClaimKind::Unbounded => {
             let want_bounded = claim.kind == ClaimKind::Bounded;
+            let status = if !me.status_stable() {
+                Status::Undecided
+            } else if m.base.diverged != want_bounded {
+                Status::Agree
+            } else {
+                Status::Differ
+            };
             Verdict {
-                status: status(m.base.diverged != want_bounded),
+                status,
                 measured: divergence(m),
-                detail: if want_bounded {
-                    "expects bounded"
-                } else {
-                    "expects unbounded"
-                }
-                .into(),
+                detail: format!(
+                    "expects {}{}",
+                    if want_bounded { "bounded" } else { "unbounded" },
+                    if me.status_stable() {
+                        ""
+                    } else {
+                        "; the status changes with the level or the perturbation"
+                    }
+                ),
             }
         }
         ClaimKind::Approx | ClaimKind::AtLeast | ClaimKind::AtMost => {
-            let v = match get(m, &claim.case) {
-                Ok(v) => v,
+            let x = match get(me, &claim.case) {
+                Ok(x) => x,
                 Err(u) => return u,
             };
             let target = claim.value.unwrap_or(f64::NAN);
-            let (ok, detail) = match claim.kind {
+            let (status, detail) = match claim.kind {
                 ClaimKind::Approx => {
-                    let tol = claim.tol.unwrap_or(0.0);
+                    let tol = claim.tol.unwrap_or(0.0) * target.abs();
                     (
-                        (v - target).abs() <= tol * target.abs(),
+                        band_status(x.v, x.d, target - tol, target + tol),
                         format!(
                             "paper {} ± {:.0} %: measured/paper = {:.2}",
                             fm(target),
-                            100.0 * tol,
-                            v / target
+                            100.0 * claim.tol.unwrap_or(0.0),
+                            x.v / target
                         ),
                     )
                 }
-                ClaimKind::AtLeast => (v >= target, format!("expects ≥ {}", fm(target))),
-                _ => (v <= target, format!("expects ≤ {}", fm(target))),
+                ClaimKind::AtLeast => (
+                    interval_status(x.v - x.d, x.v + x.d, &|v| v >= target),
+                    format!("expects ≥ {}", fm(target)),
+                ),
+                _ => (
+                    interval_status(x.v - x.d, x.v + x.d, &|v| v <= target),
+                    format!("expects ≤ {}", fm(target)),
+                ),
             };
             Verdict {
-                status: status(ok),
-                measured: fm(v),
+                status,
+                measured: fmd(x),
                 detail,
             }
         }
         ClaimKind::Less | ClaimKind::Greater | ClaimKind::Ratio | ClaimKind::Similar => {
-            let Some(o) = other else {
+            let Some(o) = oe else {
                 return undetermined("the other case was not run".into());
             };
             let oname = claim.other.as_deref().unwrap_or("");
-            let v = match get(m, &claim.case) {
-                Ok(v) => v,
+            let x = match get(me, &claim.case) {
+                Ok(x) => x,
                 Err(u) => return u,
             };
-            let w = match get(o, oname) {
-                Ok(w) => w,
+            let y = match get(o, oname) {
+                Ok(y) => y,
                 Err(u) => return u,
             };
-            let measured = format!("{} vs {}", fm(v), fm(w));
-            let (ok, detail) = match claim.kind {
-                ClaimKind::Less => (v < w, format!("expects {} < {}", claim.case, oname)),
-                ClaimKind::Greater => (v > w, format!("expects {} > {}", claim.case, oname)),
-                ClaimKind::Ratio => {
-                    let target = claim.value.unwrap_or(f64::NAN);
+            let measured = format!("{} vs {}", fmd(x), fmd(y));
+            // The difference x − y with margin δx + δy; the ratio x/y with
+            // the first-order relative margin δx/|x| + δy/|y| (undecided
+            // when either margin reaches its value).
+            let diff = Value {
+                v: x.v - y.v,
+                d: x.d + y.d,
+            };
+            let ratio = || -> Option<Value> {
+                let rel = x.d / x.v.abs() + y.d / y.v.abs();
+                let r = x.v / y.v;
+                (rel < 1.0 && r.is_finite()).then(|| Value {
+                    v: r,
+                    d: r.abs() * rel,
+                })
+            };
+            let (status, detail) = match claim.kind {
+                ClaimKind::Less => (
+                    interval_status(diff.v - diff.d, diff.v + diff.d, &|v| v < 0.0),
+                    format!("expects {} < {}", claim.case, oname),
+                ),
+                ClaimKind::Greater => (
+                    interval_status(diff.v - diff.d, diff.v + diff.d, &|v| v > 0.0),
+                    format!("expects {} > {}", claim.case, oname),
+                ),
+                kind => {
+                    let (target, what) = if kind == ClaimKind::Ratio {
+                        (claim.value.unwrap_or(f64::NAN), "paper")
+                    } else {
+                        (1.0, "similar:")
+                    };
                     let tol = claim.tol.unwrap_or(0.0);
-                    let r = v / w;
-                    (
-                        (r - target).abs() <= tol * target,
-                        format!("ratio {r:.2}, paper {target} ± {:.0} %", 100.0 * tol),
-                    )
-                }
-                _ => {
-                    let tol = claim.tol.unwrap_or(0.0);
-                    let r = v / w;
-                    (
-                        (r - 1.0).abs() <= tol,
-                        format!("ratio {r:.2}, similar within ± {:.0} %", 100.0 * tol),
-                    )
+                    match ratio() {
+                        Some(r) => (
+                            band_status(r.v, r.d, target * (1.0 - tol), target * (1.0 + tol)),
+                            format!(
+                                "ratio {:.2} ± {:.2}, {what} {target} ± {:.0} %",
+                                r.v,
+                                r.d,
+                                100.0 * tol
+                            ),
+                        ),
+                        None => (
+                            Status::Undecided,
+                            "the margins reach the values: the ratio is not determined".into(),
+                        ),
+                    }
                 }
             };
             Verdict {
-                status: status(ok),
+                status,
                 measured,
                 detail,
             }
         }
+    }
+}
+
+fn fm_or_status(c: &CaseMetrics, metric: &str) -> String {
+    match c.get(metric) {
+        Some(v) if !metric.is_empty() => format_metric(metric, v),
+        _ => divergence(c),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_margin_across_the_band_edge_is_undecided() {
+        // Band 0.08 ± 25 % = [0.06, 0.10].
+        assert_eq!(band_status(0.08, 0.01, 0.06, 0.10), Status::Agree);
+        assert_eq!(band_status(0.095, 0.01, 0.06, 0.10), Status::Undecided);
+        assert_eq!(band_status(0.12, 0.01, 0.06, 0.10), Status::Differ);
+        assert_eq!(band_status(0.04, 0.019, 0.06, 0.10), Status::Differ);
+        assert_eq!(band_status(0.04, 0.021, 0.06, 0.10), Status::Undecided);
+        // v < 0 with v ∈ [−0.1, 0.05]: undecided; [−0.3, −0.1]: agree.
+        assert_eq!(interval_status(-0.1, 0.05, &|v| v < 0.0), Status::Undecided);
+        assert_eq!(interval_status(-0.3, -0.1, &|v| v < 0.0), Status::Agree);
+        assert_eq!(interval_status(0.1, 0.3, &|v| v < 0.0), Status::Differ);
     }
 }

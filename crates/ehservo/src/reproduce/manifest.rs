@@ -13,8 +13,21 @@ pub struct Reading {
     pub id: String,
     /// Human label.
     pub label: String,
-    /// `key.path=value` overrides.
+    /// `key.path=value` overrides: the model of the simulation.
     pub set: Vec<String>,
+    /// The discretisation parameter and its ladder (see `convergence`).
+    pub refine: Refine,
+}
+
+/// `[reading.refine]`: the discretisation parameter of a reading and the
+/// values it is refined through, the paper's printed set-up first.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Refine {
+    /// The scenario key (`simulation.substeps` or `simulation.step`).
+    pub key: String,
+    /// Its values, coarsest first.
+    pub levels: Vec<f64>,
 }
 
 /// One case: a scenario file.
@@ -112,6 +125,9 @@ pub struct Manifest {
     /// Sensitivity studies, in order.
     #[serde(default)]
     pub sensitivity: Vec<Sensitivity>,
+    /// When successive discretisations agree.
+    #[serde(default)]
+    pub convergence: super::convergence::Tolerance,
 }
 
 /// Most seeds one sensitivity study may ask for.
@@ -157,6 +173,47 @@ impl Manifest {
         }
         if self.reading.is_empty() {
             crate::bad_input!("no [[reading]]");
+        }
+        for r in &self.reading {
+            const KEYS: [&str; 2] = ["simulation.substeps", "simulation.step"];
+            if !KEYS.contains(&r.refine.key.as_str()) {
+                crate::bad_input!(
+                    "reading `{}`: refine.key `{}` is not one of {KEYS:?}",
+                    r.id,
+                    r.refine.key
+                );
+            }
+            if let Some(v) = r
+                .refine
+                .levels
+                .iter()
+                .find(|v| !(v.is_finite() && **v > 0.0))
+            {
+                crate::bad_input!(
+                    "reading `{}`: refine.levels: {v} is not finite and > 0",
+                    r.id
+                );
+            }
+            let substeps = r.refine.key.ends_with("substeps");
+            let finer = |a: f64, b: f64| if substeps { b > a } else { b < a };
+            if r.refine.levels.windows(2).any(|w| !finer(w[0], w[1])) {
+                crate::bad_input!(
+                    "reading `{}`: refine.levels must get finer at every level ({})",
+                    r.id,
+                    if substeps {
+                        "more sub-steps"
+                    } else {
+                        "smaller steps"
+                    }
+                );
+            }
+            if substeps && r.refine.levels.iter().any(|v| v.fract() != 0.0) {
+                crate::bad_input!(
+                    "reading `{}`: refine.levels: sub-steps must be whole numbers",
+                    r.id
+                );
+            }
+            self.convergence.check(r.refine.levels.len(), &r.id)?;
         }
         for c in &self.claim {
             if !cases.contains(c.case.as_str()) {

@@ -15,6 +15,7 @@
 pub mod breaking;
 mod cases;
 pub mod claims;
+pub mod convergence;
 pub mod derived;
 pub mod doc;
 pub mod figures;
@@ -31,6 +32,7 @@ use anyhow::{Context, Result};
 use breaking::Boundary;
 use cases::{bar, boundaries, measure, sensitivity};
 use claims::{Status, Verdict};
+use convergence::Estimate;
 use derived::CaseMetrics;
 use manifest::Manifest;
 use rayon::prelude::*;
@@ -61,8 +63,10 @@ pub struct CaseRun {
     pub case: String,
     /// Reading id.
     pub reading: String,
-    /// Metrics.
+    /// The converged metrics (the finest level run).
     pub metrics: CaseMetrics,
+    /// Every level run, the perturbed run, and whether it converged.
+    pub estimate: Estimate,
 }
 
 /// A claim scored under every reading.
@@ -119,33 +123,48 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
     let manifest = Manifest::load(&opts.paper_dir.join("manifest.toml"))?;
     let jobs = load_cases(&manifest, &opts.paper_dir)?;
 
-    // 1. Every case under every reading.
+    // 1. Every case under every reading, refined until converged.
     let pb = bar(opts.progress, jobs.len() as u64, "cases");
-    let measured: Vec<CaseMetrics> = jobs
+    let estimates: Vec<Estimate> = jobs
         .par_iter()
-        .map(|(_, _, s)| {
-            let r = measure(s, false).map(|x| x.0);
+        .map(|(ri, ci, _)| {
+            let (r, c) = (&manifest.reading[*ri], &manifest.case[*ci]);
+            let e = convergence::estimate(
+                &opts.paper_dir,
+                &c.file,
+                r,
+                &manifest.convergence,
+                convergence::checked_metrics(&manifest, &c.id),
+                &|s| measure(s, false).map(|x| x.0),
+            );
             pb.inc(1);
-            r
+            e
         })
         .collect::<Result<_>>()?;
     pb.finish_and_clear();
-    let mut by_reading: BTreeMap<String, BTreeMap<String, CaseMetrics>> = BTreeMap::new();
+    let mut by_reading: BTreeMap<String, BTreeMap<String, Estimate>> = BTreeMap::new();
     let mut runs = Vec::new();
-    for ((ri, ci, _), cm) in jobs.iter().zip(measured) {
+    for ((ri, ci, _), est) in jobs.iter().zip(estimates) {
         let (r, c) = (&manifest.reading[*ri].id, &manifest.case[*ci].id);
-        by_reading
-            .entry(r.clone())
-            .or_default()
-            .insert(c.clone(), cm);
         runs.push(CaseRun {
             case: c.clone(),
             reading: r.clone(),
-            metrics: cm,
+            metrics: *est.best(),
+            estimate: est.clone(),
         });
+        by_reading
+            .entry(r.clone())
+            .or_default()
+            .insert(c.clone(), est);
     }
+    // The overrides that give each case's converged result, per reading.
+    let converged_set = |ri: usize, case: &str| -> Vec<String> {
+        let r = &manifest.reading[ri];
+        convergence::set_at(r, by_reading[&r.id][case].best_value())
+    };
 
-    // 2. Claims, and the reading with the most agreements.
+    // 2. Claims (on the converged results), and the reading with the most
+    // agreements.
     let mut claims = Vec::new();
     for c in &manifest.claim {
         let verdicts = manifest
@@ -183,25 +202,49 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         .iter()
         .position(|r| r.id == primary)
         .unwrap_or(0);
-    let sensitivity = sensitivity(
-        &manifest,
-        &opts.paper_dir,
-        primary_idx,
-        &by_reading[&primary],
-        opts.progress,
-    )?;
+    let baseline: BTreeMap<String, (CaseMetrics, Vec<String>)> = manifest
+        .case
+        .iter()
+        .map(|c| {
+            let e = &by_reading[&primary][&c.id];
+            (c.id.clone(), (*e.best(), converged_set(primary_idx, &c.id)))
+        })
+        .collect();
+    let sensitivity = sensitivity(&manifest, &opts.paper_dir, &baseline, opts.progress)?;
 
     // 4. Boundaries.
     let (vsc_breaking, nn_margin) = if opts.skip_boundaries {
         (Vec::new(), Vec::new())
     } else {
-        boundaries(&manifest, &opts.paper_dir, opts.progress)?
+        let sets: Vec<(String, Vec<String>, Vec<String>)> = (0..manifest.reading.len())
+            .map(|ri| {
+                (
+                    manifest.reading[ri].id.clone(),
+                    converged_set(ri, "fig3"),
+                    converged_set(ri, "fig2"),
+                )
+            })
+            .collect();
+        boundaries(&sets, &opts.paper_dir, opts.progress)?
     };
 
     // 5. What the theory says of the Fig. 2 case, reading by reading.
-    let theory: Vec<(String, crate::analysis::Analysis)> = jobs
+    let fig2_file = manifest
+        .case
         .iter()
-        .filter(|(_, ci, _)| manifest.case[*ci].id == "fig2")
+        .find(|c| c.id == "fig2")
+        .map(|c| &c.file);
+    let converged_jobs: Vec<(usize, usize, Scenario)> = jobs
+        .iter()
+        .map(|(ri, ci, _)| {
+            let set = converged_set(*ri, &manifest.case[*ci].id);
+            let s = Scenario::load(&opts.paper_dir.join(&manifest.case[*ci].file), &set)?;
+            Ok((*ri, *ci, s))
+        })
+        .collect::<Result<_>>()?;
+    let theory: Vec<(String, crate::analysis::Analysis)> = converged_jobs
+        .iter()
+        .filter(|(_, ci, _)| Some(&manifest.case[*ci].file) == fig2_file)
         .map(|(ri, _, s)| {
             (
                 manifest.reading[*ri].id.clone(),
@@ -209,7 +252,7 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
             )
         })
         .collect();
-    let fig2_diagnostics = jobs
+    let fig2_diagnostics = converged_jobs
         .iter()
         .find(|(ri, ci, _)| *ri == primary_idx && manifest.case[*ci].id == "fig2")
         .map(|(_, _, s)| -> Result<_> {
@@ -246,8 +289,10 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
             .position(|r| r.id == primary)
             .unwrap_or(0);
         let label = manifest.reading[primary_idx].label.clone();
-        let pjobs: Vec<&(usize, usize, Scenario)> =
-            jobs.iter().filter(|j| j.0 == primary_idx).collect();
+        let pjobs: Vec<&(usize, usize, Scenario)> = converged_jobs
+            .iter()
+            .filter(|j| j.0 == primary_idx)
+            .collect();
         let pb = bar(opts.progress, pjobs.len() as u64, "figure runs");
         let traces: Vec<(String, RunResult)> = pjobs
             .par_iter()

@@ -178,6 +178,7 @@ measured effect: `docs/paper-notes.md`.",
         .collect();
     d.push(Block::Table(head, rows));
 
+    super::convergence::section(&mut d, m, rep);
     sensitivity_section(&mut d, m, rep);
     theory_section(&mut d, rep);
 

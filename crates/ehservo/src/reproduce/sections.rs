@@ -210,6 +210,10 @@ pub(super) fn theory_section(d: &mut Doc, rep: &Reproduction) {
             100.0 * dg.condition4_right,
             100.0 * dg.dead_zone
         ));
+        items.push(format!(
+            "Assumption A5 and Remark 6 along the same run: {}",
+            dg.weights.note
+        ));
     }
     d.push(Block::List(items));
     d.push(Block::Para(
