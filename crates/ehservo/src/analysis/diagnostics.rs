@@ -341,7 +341,7 @@ mod tests {
             ..Default::default()
         });
         b.t = 1.5;
-        let w = weight_check(c, &[a.clone(), b.clone()]);
+        let w = weight_check(c, &[a, b]);
         // (3000 − 0.1)/21.7 − 0.1 = 138.1442396…
         assert!((w.w_bar_required - (2999.9 / 21.7 - 0.1)).abs() < 1e-9);
         assert!(!w.a5_holds);
@@ -349,8 +349,19 @@ mod tests {
         assert!((w.remark6_outside_share - 0.5).abs() < 1e-15);
         assert!((w.remark6_bound_at_w_max.unwrap() - (6.0 + 4.8f64.sqrt())).abs() < 1e-12);
         // Inside: a small uncertainty and ‖W‖ under the bound.
-        b.w_norm = 8.19;
-        a.uncertainty = 10.0;
+        let mut a = sample(SlidingParts {
+            uncertainty: 10.0,
+            phi_norm: 21.7,
+            w_norm: 1.0,
+            ..Default::default()
+        });
+        a.t = 0.5;
+        let b = sample(SlidingParts {
+            uncertainty: 1.0,
+            phi_norm: 1.0,
+            w_norm: 8.19,
+            ..Default::default()
+        });
         let w = weight_check(c, &[a, b]);
         assert!(w.a5_holds && w.remark6_left_at_s.is_none());
     }
