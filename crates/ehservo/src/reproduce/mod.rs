@@ -12,6 +12,7 @@
 //!    `claims.csv` and `results.json` are written through a staging
 //!    directory.
 
+pub mod b_question;
 pub mod breaking;
 mod cases;
 pub mod claims;

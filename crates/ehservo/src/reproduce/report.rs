@@ -179,6 +179,7 @@ measured effect: `docs/paper-notes.md`.",
     d.push(Block::Table(head, rows));
 
     super::convergence::section(&mut d, m, rep);
+    super::b_question::section(&mut d, m, rep);
     sensitivity_section(&mut d, m, rep);
     theory_section(&mut d, rep);
 
