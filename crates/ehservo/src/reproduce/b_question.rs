@@ -15,7 +15,11 @@ const BFULL: &str = "uncertainty.b_reference=1.0";
 /// (reading with the text's convention, reading with Δb = β) pairs.
 pub fn pairs(m: &Manifest) -> Vec<(&str, &str)> {
     let mut v = Vec::new();
-    for full in m.reading.iter().filter(|r| r.set.iter().any(|s| s == BFULL)) {
+    for full in m
+        .reading
+        .iter()
+        .filter(|r| r.set.iter().any(|s| s == BFULL))
+    {
         let rest: Vec<&String> = full.set.iter().filter(|s| *s != BFULL).collect();
         if let Some(text) = m.reading.iter().find(|r| {
             r.refine.key == full.refine.key
@@ -32,11 +36,13 @@ fn e_max(rep: &Reproduction, reading: &str, case: &str) -> String {
     rep.runs
         .iter()
         .find(|r| r.reading == reading && r.case == case)
-        .map(|r| match (r.metrics.base.diverged_at_s, r.metrics.base.e_max_deg) {
-            (Some(t), _) => format!("unbounded at {t:.2} s"),
-            (None, Some(e)) => format!("{e:.4}°"),
-            _ => "—".into(),
-        })
+        .map(
+            |r| match (r.metrics.base.diverged_at_s, r.metrics.base.e_max_deg) {
+                (Some(t), _) => format!("unbounded at {t:.2} s"),
+                (None, Some(e)) => format!("{e:.4}°"),
+                _ => "—".into(),
+            },
+        )
         .unwrap_or_else(|| "—".into())
 }
 
