@@ -224,8 +224,9 @@ fn reproduce_writes_the_whole_report() {
     );
     assert!(!md.contains("NaN") && !html.contains("NaN"));
     // The traditional VSC's breaking point under the literal sampled reading,
-    // R1 (bounds of Fig. 2): measured 0.3742–0.3743, against the paper's
-    // "bounded at 40 %, unbounded above 45 %".
+    // R1 (bounds of Fig. 2): first unbounded at 0.3744 (bracket
+    // 0.3738–0.3744 from the 0.005 scan), against the paper's "bounded at
+    // 40 %, unbounded above 45 %".
     let b = rep
         .vsc_breaking
         .iter()
@@ -236,8 +237,36 @@ fn reproduce_writes_the_whole_report() {
         .unwrap();
     within(
         "VSC breaking point (sampled, R1)",
-        b.found.first_fail,
+        b.found.bounded.first_fail,
         0.3743,
         0.002,
     );
+    // Bounded is not tracking: the sampled VSC never keeps max |e| below
+    // 0.5° (10 % of 5°) under R1; its e_max at zero bias is 6.6°.
+    assert_eq!(b.found.tracking.first_fail, Some(0.0));
+    assert_eq!(b.found.tracking.last_pass, None);
+    // With Δb = β the sampled R1 boundary is not monotone: first unbounded
+    // at 0.329, bounded again at 0.333, unbounded for good above 0.344.
+    let b = rep
+        .vsc_breaking
+        .iter()
+        .find(|b| {
+            b.reading == "sampled-bfull"
+                && b.bias_reading == Some(ehservo::reproduce::breaking::BiasReading::R1)
+        })
+        .unwrap();
+    assert!(b.found.bounded.non_monotone);
+    within(
+        "first unbounded (sampled-bfull, R1)",
+        b.found.bounded.first_fail,
+        0.329,
+        0.005,
+    );
+    within(
+        "last bounded (sampled-bfull, R1)",
+        b.found.bounded.last_pass,
+        0.344,
+        0.005,
+    );
+    assert!(b.found.bounded.transitions.len() >= 3);
 }
