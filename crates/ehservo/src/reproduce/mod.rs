@@ -21,6 +21,7 @@ pub mod figures;
 pub mod manifest;
 mod report;
 mod sections;
+pub mod stochastic;
 
 pub use cases::load_cases;
 
@@ -52,6 +53,8 @@ pub struct Options {
     pub skip_boundaries: bool,
     /// Skip the figures (faster; for tests).
     pub skip_figures: bool,
+    /// Seeds of the random cases instead of the manifest's `[stochastic]`.
+    pub seeds: Option<u32>,
 }
 
 /// One case run under one reading.
@@ -108,6 +111,8 @@ pub struct Reproduction {
     pub nn_margin: Vec<Boundary>,
     /// How much each ambiguity moves the results.
     pub sensitivity: Vec<SensitivityRow>,
+    /// The claims on random cases, over many seeds.
+    pub stochastic: stochastic::Stochastic,
     /// `ehservo analyze` of the Fig. 2 case under every reading.
     pub theory: Vec<(String, crate::analysis::Analysis)>,
     /// Condition 4) and the dead zone along Fig. 2 under the chosen reading.
@@ -191,6 +196,15 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         opts.progress,
     )?;
 
+    let stochastic = stochastic::run(
+        &manifest,
+        &jobs,
+        primary_idx,
+        &by_reading[&primary],
+        opts.seeds,
+        opts.progress,
+    )?;
+
     // 4. Boundaries.
     let (vsc_breaking, nn_margin) = if opts.skip_boundaries {
         (Vec::new(), Vec::new())
@@ -231,6 +245,7 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         vsc_breaking,
         nn_margin,
         sensitivity,
+        stochastic,
         theory,
         fig2_diagnostics,
     };
@@ -294,6 +309,7 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         for r in rendered {
             figs.push(r?);
         }
+        figs.extend(stochastic::write_figures(&manifest, &rep.stochastic, &dir)?);
     }
 
     let doc = report(&manifest, &rep, &figs);

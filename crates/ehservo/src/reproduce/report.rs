@@ -169,6 +169,8 @@ measured effect: `docs/paper-notes.md`.",
     sensitivity_section(&mut d, m, rep);
     theory_section(&mut d, rep);
 
+    d.blocks
+        .extend(super::stochastic::report_blocks(m, &rep.stochastic));
     for b in super::breaking::report_blocks(&rep.vsc_breaking, &rep.nn_margin) {
         d.push(b);
     }
