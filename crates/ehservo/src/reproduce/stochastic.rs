@@ -65,7 +65,8 @@ pub fn quantile(sorted: &[f64], p: f64) -> Option<f64> {
     })
 }
 
-/// The interval a claim's per-seed quantity must fall in.
+/// The interval a claim's per-seed quantity must fall in (an infinite end
+/// is written as null in results.json).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Band {
     /// Lower end (may be −∞).
