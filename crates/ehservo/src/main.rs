@@ -326,6 +326,7 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                 progress: !quiet && std::io::stderr().is_terminal(),
                 skip_boundaries: false,
                 skip_figures: false,
+                seeds: None,
             };
             let start = Instant::now();
             let rep = ehservo::reproduce::reproduce(&opts)?;

@@ -123,6 +123,11 @@ pub(super) fn sensitivity(
     Ok(rows)
 }
 
+/// The VSC's scan over the bias fraction and the NNBVSC's over the a_i bias
+/// (brackets bisected to a fifth of the step, [`breaking::Scan::new`]).
+pub(super) const VSC_SCAN: (f64, f64, f64) = (0.0, 1.5, 0.005);
+pub(super) const NN_SCAN: (f64, f64, f64) = (0.0, 10.0, 0.1);
+
 /// The boundary searches under every reading (`sets`: reading id, the
 /// converged overrides of the Fig. 3 case and of the Fig. 2 case).
 pub(super) fn boundaries(
@@ -133,8 +138,6 @@ pub(super) fn boundaries(
     let load = |file: &str, set: &[String]| {
         Scenario::load(&dir.join(file), set).map_err(anyhow::Error::from)
     };
-    let vsc_grid: Vec<f64> = (0..=30).map(|i| i as f64 * 0.05).collect();
-    let nn_grid: Vec<f64> = (0..=40).map(|i| i as f64 * 0.25).collect();
     // (reading id, bias reading, base scenario with the reading applied)
     let mut tasks: Vec<(String, Option<BiasReading>, Scenario)> = Vec::new();
     for (id, fig3_set, fig2_set) in sets {
@@ -148,23 +151,31 @@ pub(super) fn boundaries(
     let results: Vec<Boundary> = tasks
         .par_iter()
         .map(|(rid, br, base)| {
+            let b_ref = base.uncertainty.b_reference;
             let found = match br {
                 Some(b) => {
-                    let (b, b_ref) = (*b, base.uncertainty.b_reference);
-                    // R2 tells the controller β = b_ref·x·b̄, which must stay < b̄.
-                    let grid: Vec<f64> = vsc_grid
-                        .iter()
-                        .copied()
-                        .filter(|&x| b == BiasReading::R1 || b_ref * x < 1.0)
-                        .collect();
-                    breaking::search(base, &grid, &|x| breaking::vsc_sets(b, b_ref, x), None, 10)?
+                    let (start, mut end, step) = VSC_SCAN;
+                    if *b == BiasReading::R2 {
+                        // R2 tells the controller β = b_ref·x·b̄, which must stay < b̄.
+                        end = end.min(1.0 / b_ref - 1e-6);
+                    }
+                    let grid = breaking::Scan::new(start, end, step);
+                    breaking::search(base, grid, &|x| breaking::vsc_sets(*b, b_ref, x))?
                 }
-                None => breaking::search(base, &nn_grid, &breaking::nn_sets, Some(0.5), 10)?,
+                None => {
+                    let (start, end, step) = NN_SCAN;
+                    breaking::search(
+                        base,
+                        breaking::Scan::new(start, end, step),
+                        &breaking::nn_sets,
+                    )?
+                }
             };
             pb.inc(1);
             Ok(Boundary {
                 reading: rid.clone(),
                 bias_reading: *br,
+                b_reference: b_ref,
                 found,
             })
         })

@@ -112,6 +112,14 @@ pub struct Sensitivity {
     pub seeds: Option<u32>,
 }
 
+/// How the claims on cases with a random variation are judged.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StochasticCfg {
+    /// Seeds 0..seeds−1 of every case whose scenario has a random part.
+    pub seeds: u32,
+}
+
 /// The whole manifest.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -128,6 +136,9 @@ pub struct Manifest {
     /// When successive discretisations agree.
     #[serde(default)]
     pub convergence: super::convergence::Tolerance,
+    /// Claims on random cases judged over many seeds (none: not done).
+    #[serde(default)]
+    pub stochastic: Option<StochasticCfg>,
 }
 
 /// Most seeds one sensitivity study may ask for.
@@ -253,6 +264,14 @@ impl Manifest {
             ) && c.tol.is_none()
             {
                 crate::bad_input!("claim `{}`: kind needs `tol`", c.id);
+            }
+        }
+        if let Some(st) = &self.stochastic {
+            if st.seeds == 0 || st.seeds > MAX_SEEDS {
+                crate::bad_input!(
+                    "[stochastic] seeds = {} is outside 1..={MAX_SEEDS}",
+                    st.seeds
+                );
             }
         }
         for s in &self.sensitivity {

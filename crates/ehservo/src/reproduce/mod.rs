@@ -23,6 +23,7 @@ pub mod figures;
 pub mod manifest;
 mod report;
 mod sections;
+pub mod stochastic;
 
 pub use cases::load_cases;
 
@@ -55,6 +56,8 @@ pub struct Options {
     pub skip_boundaries: bool,
     /// Skip the figures (faster; for tests).
     pub skip_figures: bool,
+    /// Seeds of the random cases instead of the manifest's `[stochastic]`.
+    pub seeds: Option<u32>,
 }
 
 /// One case run under one reading.
@@ -113,6 +116,8 @@ pub struct Reproduction {
     pub nn_margin: Vec<Boundary>,
     /// How much each ambiguity moves the results.
     pub sensitivity: Vec<SensitivityRow>,
+    /// The claims on random cases, over many seeds.
+    pub stochastic: stochastic::Stochastic,
     /// `ehservo analyze` of the Fig. 2 case under every reading.
     pub theory: Vec<(String, crate::analysis::Analysis)>,
     /// Condition 4) and the dead zone along Fig. 2 under the chosen reading.
@@ -164,6 +169,38 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         convergence::set_at(r, by_reading[&r.id][case].best_value())
     };
 
+    let fig2_file = manifest
+        .case
+        .iter()
+        .find(|c| c.id == "fig2")
+        .map(|c| &c.file);
+    let converged_jobs: Vec<(usize, usize, Scenario)> = jobs
+        .iter()
+        .map(|(ri, ci, _)| {
+            let set = converged_set(*ri, &manifest.case[*ci].id);
+            let s = Scenario::load(&opts.paper_dir.join(&manifest.case[*ci].file), &set)?;
+            Ok((*ri, *ci, s))
+        })
+        .collect::<Result<_>>()?;
+    // Claims on random cases are judged over many seeds, under every
+    // reading (each case at its converged level).
+    let seeded: Vec<stochastic::Stochastic> = (0..manifest.reading.len())
+        .map(|ri| {
+            let base: BTreeMap<String, CaseMetrics> = by_reading[&manifest.reading[ri].id]
+                .iter()
+                .map(|(k, e)| (k.clone(), *e.best()))
+                .collect();
+            stochastic::run(
+                &manifest,
+                &converged_jobs,
+                ri,
+                &base,
+                opts.seeds,
+                opts.progress,
+            )
+        })
+        .collect::<Result<_>>()?;
+
     // 2. Claims (on the converged results), and the reading with the most
     // agreements.
     let mut claims = Vec::new();
@@ -171,7 +208,14 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         let verdicts = manifest
             .reading
             .iter()
-            .map(|r| (r.id.clone(), claims::evaluate(c, &by_reading[&r.id])))
+            .zip(&seeded)
+            .map(|(r, st)| {
+                let v = match st.claims.iter().find(|d| d.claim == c.id) {
+                    Some(d) => stochastic::verdict(c, d),
+                    None => claims::evaluate(c, &by_reading[&r.id]),
+                };
+                (r.id.clone(), v)
+            })
             .collect();
         claims.push(ClaimRow {
             id: c.id.clone(),
@@ -230,19 +274,6 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
     };
 
     // 5. What the theory says of the Fig. 2 case, reading by reading.
-    let fig2_file = manifest
-        .case
-        .iter()
-        .find(|c| c.id == "fig2")
-        .map(|c| &c.file);
-    let converged_jobs: Vec<(usize, usize, Scenario)> = jobs
-        .iter()
-        .map(|(ri, ci, _)| {
-            let set = converged_set(*ri, &manifest.case[*ci].id);
-            let s = Scenario::load(&opts.paper_dir.join(&manifest.case[*ci].file), &set)?;
-            Ok((*ri, *ci, s))
-        })
-        .collect::<Result<_>>()?;
     let theory: Vec<(String, crate::analysis::Analysis)> = converged_jobs
         .iter()
         .filter(|(_, ci, _)| Some(&manifest.case[*ci].file) == fig2_file)
@@ -275,6 +306,7 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         vsc_breaking,
         nn_margin,
         sensitivity,
+        stochastic: seeded[primary_idx].clone(),
         theory,
         fig2_diagnostics,
     };
@@ -340,6 +372,7 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         for r in rendered {
             figs.push(r?);
         }
+        figs.extend(stochastic::write_figures(&manifest, &rep.stochastic, &dir)?);
     }
 
     let doc = report(&manifest, &rep, &figs);

@@ -1,7 +1,6 @@
 //! The outputs built from a [`Reproduction`]: the report document and
 //! `claims.csv`.
 
-use super::breaking::{BiasReading, Boundary};
 use super::derived::format_metric;
 use super::doc::{Block, Doc};
 use super::manifest::Manifest;
@@ -31,17 +30,6 @@ pub(super) fn claims_csv(m: &Manifest, rep: &Reproduction) -> Result<String> {
     Ok(String::from_utf8(
         w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?,
     )?)
-}
-
-fn fmt_boundary(b: &Boundary) -> String {
-    match (b.found.last_ok, b.found.first_fail) {
-        (_, None) => "never over the scan".into(),
-        (None, Some(x)) => format!("already at {x:.3}"),
-        (Some(lo), Some(hi)) => format!(
-            "{:.3} (bounded at {lo:.4}, fails at {hi:.4})",
-            0.5 * (lo + hi)
-        ),
-    }
 }
 
 pub(super) fn report(m: &Manifest, rep: &Reproduction, figs: &[(String, String)]) -> Doc {
@@ -183,86 +171,10 @@ measured effect: `docs/paper-notes.md`.",
     sensitivity_section(&mut d, m, rep);
     theory_section(&mut d, rep);
 
-    if !rep.vsc_breaking.is_empty() {
-        d.push(Block::Heading(
-            2,
-            "The traditional VSC's breaking point".into(),
-        ));
-        d.push(Block::Para(
-            "The paper: bounded at 40 % bias, unbounded above 45 %. The bias fraction x at which Theorem 1's \
-controller first becomes unbounded (10 s horizon), scanned over x = 0, 0.05, …, 1.5 and bisected to 1e-4. R1: the \
-controller keeps the bounds of Fig. 2 while the true variation is x; R2: the controller is told the true size x."
-                .into(),
-        ));
-        let rows = rep
-            .vsc_breaking
-            .iter()
-            .map(|b| {
-                vec![
-                    format!("`{}`", b.reading),
-                    format!("{:?}", b.bias_reading.unwrap_or(BiasReading::R1)),
-                    fmt_boundary(b),
-                    if b.found.non_monotone {
-                        "yes: bounded again further up"
-                    } else {
-                        "no"
-                    }
-                    .into(),
-                    if b.found
-                        .first_fail
-                        .is_some_and(|x| x > 0.40 && x <= 0.45 + 1e-9)
-                    {
-                        "agree"
-                    } else {
-                        "differ"
-                    }
-                    .into(),
-                ]
-            })
-            .collect();
-        d.push(Block::Table(
-            vec![
-                "reading".into(),
-                "bias reading".into(),
-                "first unbounded x".into(),
-                "non-monotone".into(),
-                "paper's 40–45 %".into(),
-            ],
-            rows,
-        ));
-    }
-    if !rep.nn_margin.is_empty() {
-        d.push(Block::Heading(2, "The NNBVSC's margin".into()));
-        d.push(Block::Para(
-            "The largest a_i bias fraction (Δb kept at 0.5β) at which the NNBVSC still tracks, i.e. stays bounded \
-with max |e| after 2 s below 0.5°; scanned over 0, 0.25, …, 10 and bisected."
-                .into(),
-        ));
-        let rows = rep
-            .nn_margin
-            .iter()
-            .map(|b| {
-                vec![
-                    format!("`{}`", b.reading),
-                    match b.found.last_ok {
-                        Some(x) if b.found.first_fail.is_none() => {
-                            format!("≥ {x:.2} (the whole scan)")
-                        }
-                        Some(x) => format!("{x:.3}"),
-                        None => "none".into(),
-                    },
-                    if b.found.non_monotone { "yes" } else { "no" }.into(),
-                ]
-            })
-            .collect();
-        d.push(Block::Table(
-            vec![
-                "reading".into(),
-                "largest a_i bias still tracking".into(),
-                "non-monotone".into(),
-            ],
-            rows,
-        ));
+    d.blocks
+        .extend(super::stochastic::report_blocks(m, &rep.stochastic));
+    for b in super::breaking::report_blocks(&rep.vsc_breaking, &rep.nn_margin) {
+        d.push(b);
     }
 
     if !figs.is_empty() {
