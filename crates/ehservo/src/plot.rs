@@ -221,16 +221,16 @@ struct Bounds {
 }
 
 impl Bounds {
-    fn to_plot(&self, p: (f64, f64)) -> (f64, f64) {
+    fn plot_coords(&self, p: (f64, f64)) -> (f64, f64) {
         (p.0, if self.log_y { p.1.log10() } else { p.1 })
     }
 
-    fn from_plot(&self, p: (f64, f64)) -> (f64, f64) {
+    fn data_coords(&self, p: (f64, f64)) -> (f64, f64) {
         (p.0, if self.log_y { 10f64.powf(p.1) } else { p.1 })
     }
 
     fn inside(&self, p: (f64, f64)) -> bool {
-        let q = self.to_plot(p);
+        let q = self.plot_coords(p);
         q.0 >= self.x0 && q.0 <= self.x1 && q.1 >= self.y0 && q.1 <= self.y1
     }
 
@@ -273,7 +273,7 @@ impl Bounds {
         }
         let mut cur: Vec<(f64, f64)> = Vec::new();
         for w in run.windows(2) {
-            let (a, b) = (self.to_plot(w[0]), self.to_plot(w[1]));
+            let (a, b) = (self.plot_coords(w[0]), self.plot_coords(w[1]));
             let lerp = |t: f64| (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1));
             match self.clip_segment(a, b) {
                 Some((t0, t1)) => {
@@ -281,9 +281,9 @@ impl Bounds {
                         if !cur.is_empty() {
                             out.push(std::mem::take(&mut cur));
                         }
-                        cur.push(self.from_plot(lerp(t0)));
+                        cur.push(self.data_coords(lerp(t0)));
                     }
-                    cur.push(self.from_plot(lerp(t1)));
+                    cur.push(self.data_coords(lerp(t1)));
                     if t1 < 1.0 {
                         out.push(std::mem::take(&mut cur));
                     }
@@ -459,8 +459,8 @@ where
                 let Some(lower) = &s.lower else { continue };
                 let clamp = |y: f64| {
                     let (lo, hi) = (
-                        bounds.from_plot((0.0, bounds.y0)).1,
-                        bounds.from_plot((0.0, bounds.y1)).1,
+                        bounds.data_coords((0.0, bounds.y0)).1,
+                        bounds.data_coords((0.0, bounds.y1)).1,
                     );
                     y.clamp(lo, hi)
                 };
@@ -605,8 +605,8 @@ where
                 }
             }
             let (ylo, yhi) = (
-                bounds.from_plot((0.0, bounds.y0)).1,
-                bounds.from_plot((0.0, bounds.y1)).1,
+                bounds.data_coords((0.0, bounds.y0)).1,
+                bounds.data_coords((0.0, bounds.y1)).1,
             );
             for m in p.marks.iter().filter(|m| m.x >= x0 && m.x <= x1) {
                 let st = ShapeStyle::from(&RGBColor(90, 90, 90)).stroke_width(1);
