@@ -346,7 +346,9 @@ fn tick_decimals(at: &[f64]) -> usize {
 /// A tick label: `decimals` after the point, scientific notation for very
 /// large or very small steps, and never "−0".
 fn tick_label(v: f64, decimals: usize, sci: bool) -> String {
-    let s = if sci {
+    let s = if sci && v == 0.0 {
+        "0".to_string()
+    } else if sci {
         format!("{v:.1e}")
     } else {
         format!("{v:.decimals$}")
@@ -362,7 +364,11 @@ fn linear_ticks(at: Vec<f64>) -> impl Fn(&f64) -> String {
     let big = at.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let d = tick_decimals(&at);
     let sci = big >= 1e5 || d > 5;
-    move |v| tick_label(*v, d, sci)
+    // A tick computed as 0 ± rounding prints as 0.
+    move |v| {
+        let v = if v.abs() <= 1e-9 * big { 0.0 } else { *v };
+        tick_label(v, d, sci)
+    }
 }
 
 /// A tick formatter for a logarithmic axis.
@@ -615,11 +621,11 @@ where
                     .map_err(|e| anyhow!("drawing a mark: {e}"))?;
                 chart
                     .draw_series(std::iter::once(
-                        EmptyElement::at((m.x, yhi))
+                        EmptyElement::at((m.x, ylo))
                             + Text::new(
                                 typeset(&m.text),
-                                (-6, 4),
-                                TextStyle::from(font(13)).pos(Pos::new(HPos::Right, VPos::Top)),
+                                (-6, -4),
+                                TextStyle::from(font(13)).pos(Pos::new(HPos::Right, VPos::Bottom)),
                             ),
                     ))
                     .map_err(|e| anyhow!("drawing a mark: {e}"))?;
@@ -933,6 +939,10 @@ mod tests {
         assert_eq!(f(&2.0), "2");
         // Ticks 0, 0.25, 0.5: two decimals, not one ("0.3").
         assert_eq!(linear_ticks(vec![0.0, 0.25, 0.5])(&0.25), "0.25");
+        // Scientific notation for large ticks, but a plain 0.
+        let f = linear_ticks(vec![-2e5, -1e-11, 2e5]);
+        assert_eq!(f(&-1e-11), "0");
+        assert_eq!(f(&2e5), "2.0e5");
     }
 
     #[test]

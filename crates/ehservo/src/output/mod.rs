@@ -343,7 +343,7 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
             "(rad/s³)",
             d_series,
         ));
-        if has("w_norm") {
+        if run.metrics.w_norm_max.is_some() {
             panels.push(panel(
                 "(f) norm of the weights ‖W‖",
                 "‖W‖",
@@ -360,6 +360,13 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
             .map(|(n, (i, g))| Series::new(g.key, t.clone(), col(&|x| x.values[i]), n))
             .collect();
         panels.push(panel("(d) the parts of the law", "(V)", parts));
+    }
+    // A diverged run: every time history is clipped to its bounded part,
+    // and the divergence marked (the last steps would flatten the rest).
+    if run.outcome.diverged.is_some() {
+        for p in panels.iter_mut() {
+            crate::reproduce::figures::clip_diverged(p, run);
+        }
     }
     let rows = panels.len().div_ceil(2);
     Figure {

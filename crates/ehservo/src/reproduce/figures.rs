@@ -281,14 +281,21 @@ fn panel(title: &str, y_label: &str, series: Vec<Series>) -> Panel {
     }
 }
 
-/// For a run that diverged: a y range around its bounded part (the 2–98 %
-/// quantiles of `f` before the divergence, widened by half their spread) and
-/// a mark at the divergence. The line is clipped to the range.
-fn clip_diverged(p: &mut Panel, r: &RunResult, f: &dyn Fn(&Sample) -> f64) {
+/// For a run that diverged: a y range around the bounded part of the
+/// panel's lines (the 2–98 % quantiles of all their values, widened by half
+/// their spread) and a mark at the divergence. The lines are clipped to the
+/// range.
+pub(crate) fn clip_diverged(p: &mut Panel, r: &RunResult) {
     let Some(d) = r.outcome.diverged else {
         return;
     };
-    let mut v: Vec<f64> = r.trace.iter().map(f).filter(|x| x.is_finite()).collect();
+    let mut v: Vec<f64> = p
+        .series
+        .iter()
+        .flat_map(|s| s.y.iter().chain(s.lower.iter().flatten()))
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
     if v.len() >= 10 {
         v.sort_by(f64::total_cmp);
         let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
@@ -309,7 +316,7 @@ fn u_panel(title: &str, r: &RunResult) -> Panel {
         "u (V)",
         vec![series("", &r.trace, |s| s.u, 0, Dash::Solid)],
     );
-    clip_diverged(&mut p, r, &|s| s.u);
+    clip_diverged(&mut p, r);
     p
 }
 
@@ -321,7 +328,7 @@ fn sigma_panel(title: &str, r: &RunResult) -> Panel {
         "σ (rad/s²)",
         vec![series("", &r.trace, f, 0, Dash::Solid)],
     );
-    clip_diverged(&mut p, r, &f);
+    clip_diverged(&mut p, r);
     p
 }
 
@@ -413,7 +420,7 @@ pub fn paper_figures(
             "e (deg)",
             vec![series("", &r.trace, e_deg, 0, Dash::Solid)],
         );
-        clip_diverged(&mut e, r, &e_deg);
+        clip_diverged(&mut e, r);
         out.push(PaperFigure {
             stem: "fig3".into(),
             caption: format!(
@@ -492,7 +499,7 @@ pub fn paper_figures(
             ));
         }
         let mut full = panel("(a) u(t)", "u (V)", full);
-        clip_diverged(&mut full, r, &|s| s.u);
+        clip_diverged(&mut full, r);
         let mut near = panel(
             &format!("(b) the first {} s (every sample)", num(zoom)),
             "u (V)",
@@ -626,7 +633,7 @@ pub fn paper_figures(
                 series("half bias, half random", &f8.trace, e_deg, 1, Dash::DashDot),
             ],
         );
-        clip_diverged(&mut e, f8, &e_deg);
+        clip_diverged(&mut e, f8);
         let mut u = panel(
             "(b) u(t)",
             "u (V)",
@@ -641,7 +648,7 @@ pub fn paper_figures(
                 ),
             ],
         );
-        clip_diverged(&mut u, f8, &|s| s.u);
+        clip_diverged(&mut u, f8);
         out.push(PaperFigure {
             stem: "fig8".into(),
             caption: format!(
