@@ -6,8 +6,10 @@
 //! being finite.
 
 use anyhow::{anyhow, Context, Result};
+use plotters::coord::ranged1d::{BoldPoints, Ranged};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
 use std::path::Path;
 use std::sync::Once;
@@ -38,19 +40,22 @@ pub enum Dash {
     Points,
 }
 
-/// One line.
+/// One line, or (with `lower`) a shaded band.
 #[derive(Debug, Clone)]
 pub struct Series {
     /// Legend text (empty: no legend entry).
     pub label: String,
     /// Abscissae.
     pub x: Vec<f64>,
-    /// Ordinates.
+    /// Ordinates (the upper edge of a band).
     pub y: Vec<f64>,
     /// Colour index into the palette.
     pub color: usize,
     /// Line style.
     pub dash: Dash,
+    /// When set, the series is a band shaded between `lower` and `y` (an
+    /// envelope), drawn light under every line.
+    pub lower: Option<Vec<f64>>,
 }
 
 impl Series {
@@ -62,6 +67,21 @@ impl Series {
             y,
             color,
             dash: Dash::Solid,
+            lower: None,
+        }
+    }
+
+    /// A band between `lower` and `upper`, shaded in palette colour `color`.
+    pub fn band(
+        label: impl Into<String>,
+        x: Vec<f64>,
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+        color: usize,
+    ) -> Self {
+        Self {
+            lower: Some(lower),
+            ..Self::new(label, x, upper, color)
         }
     }
 
@@ -70,6 +90,21 @@ impl Series {
         self.dash = dash;
         self
     }
+
+    /// The same series in the `i`-th style of [`cycle`] (colour and dash).
+    pub fn cycled(mut self, i: usize) -> Self {
+        (self.color, self.dash) = cycle(i);
+        self
+    }
+}
+
+/// A vertical marker line with a note (e.g. "unbounded at t = 1.23 s").
+#[derive(Debug, Clone)]
+pub struct Mark {
+    /// Where, on the x axis.
+    pub x: f64,
+    /// The note written beside the line.
+    pub text: String,
 }
 
 /// One panel: axes, labels and series.
@@ -85,9 +120,16 @@ pub struct Panel {
     pub series: Vec<Series>,
     /// Logarithmic y axis.
     pub log_y: bool,
+    /// Fixed x range (a zoom); default: the data's.
+    pub x_range: Option<(f64, f64)>,
+    /// Fixed y range; default: the data's inside the x range (padded).
+    /// Lines are clipped to the plotting area either way.
+    pub y_range: Option<(f64, f64)>,
+    /// Vertical marker lines.
+    pub marks: Vec<Mark>,
 }
 
-/// A figure: a title and a grid of panels.
+/// A figure: a title, a grid of panels and a footer.
 #[derive(Debug, Clone)]
 pub struct Figure {
     /// Title across the top.
@@ -100,20 +142,52 @@ pub struct Figure {
     pub panels: Vec<Panel>,
     /// Size in pixels.
     pub size: (u32, u32),
+    /// Small print across the bottom, one line per `\n` (e.g. the reading
+    /// the runs were made under); empty: none.
+    pub footer: String,
 }
 
-const PALETTE: [RGBColor; 6] = [
+impl Default for Figure {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            rows: 1,
+            cols: 1,
+            panels: Vec::new(),
+            size: (1200, 600),
+            footer: String::new(),
+        }
+    }
+}
+
+/// Ten colours distinct on screen and in print (Tableau 10, its grey
+/// replaced by black).
+const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
     RGBColor(255, 127, 14),
     RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(188, 189, 34),
+    RGBColor(0, 0, 0),
 ];
+
+/// Line styles [`cycle`] goes through, one per round of the palette.
+const DASHES: [Dash; 4] = [Dash::Solid, Dash::Dashed, Dash::DashDot, Dash::Dotted];
 
 /// Palette colour `i` (wraps).
 pub fn color(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
+}
+
+/// The `i`-th of 40 distinguishable styles, (palette colour, dash): the ten
+/// colours solid, then the ten dashed, dash-dotted and dotted.
+pub fn cycle(i: usize) -> (usize, Dash) {
+    let n = PALETTE.len();
+    (i % n, DASHES[(i / n) % DASHES.len()])
 }
 
 /// Contiguous runs of finite points.
@@ -134,6 +208,98 @@ fn finite_runs(x: &[f64], y: &[f64], log_y: bool) -> Runs {
         runs.push(cur);
     }
     runs
+}
+
+/// The plotting area in data coordinates; y in log10 when `log_y`.
+#[derive(Debug, Clone, Copy)]
+struct Bounds {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    log_y: bool,
+}
+
+impl Bounds {
+    fn plot_coords(&self, p: (f64, f64)) -> (f64, f64) {
+        (p.0, if self.log_y { p.1.log10() } else { p.1 })
+    }
+
+    fn data_coords(&self, p: (f64, f64)) -> (f64, f64) {
+        (p.0, if self.log_y { 10f64.powf(p.1) } else { p.1 })
+    }
+
+    fn inside(&self, p: (f64, f64)) -> bool {
+        let q = self.plot_coords(p);
+        q.0 >= self.x0 && q.0 <= self.x1 && q.1 >= self.y0 && q.1 <= self.y1
+    }
+
+    /// Liang–Barsky: the part of the segment a→b inside the box, as
+    /// parameters 0 ≤ t0 ≤ t1 ≤ 1 (None: wholly outside).
+    fn clip_segment(&self, a: (f64, f64), b: (f64, f64)) -> Option<(f64, f64)> {
+        let (d0, d1) = (b.0 - a.0, b.1 - a.1);
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        for (p, q) in [
+            (-d0, a.0 - self.x0),
+            (d0, self.x1 - a.0),
+            (-d1, a.1 - self.y0),
+            (d1, self.y1 - a.1),
+        ] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return None;
+                }
+            } else {
+                let r = q / p;
+                if p < 0.0 {
+                    t0 = t0.max(r);
+                } else {
+                    t1 = t1.min(r);
+                }
+            }
+        }
+        (t0 <= t1).then_some((t0, t1))
+    }
+
+    /// The visible pieces of a polyline: a piece ends where the line leaves
+    /// the box and a new one starts where it comes back.
+    fn clip(&self, run: &[(f64, f64)]) -> Runs {
+        let mut out: Runs = Vec::new();
+        if run.len() == 1 {
+            if self.inside(run[0]) {
+                out.push(run.to_vec());
+            }
+            return out;
+        }
+        let mut cur: Vec<(f64, f64)> = Vec::new();
+        for w in run.windows(2) {
+            let (a, b) = (self.plot_coords(w[0]), self.plot_coords(w[1]));
+            let lerp = |t: f64| (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1));
+            match self.clip_segment(a, b) {
+                Some((t0, t1)) => {
+                    if cur.is_empty() || t0 > 0.0 {
+                        if !cur.is_empty() {
+                            out.push(std::mem::take(&mut cur));
+                        }
+                        cur.push(self.data_coords(lerp(t0)));
+                    }
+                    cur.push(self.data_coords(lerp(t1)));
+                    if t1 < 1.0 {
+                        out.push(std::mem::take(&mut cur));
+                    }
+                }
+                None => {
+                    if !cur.is_empty() {
+                        out.push(std::mem::take(&mut cur));
+                    }
+                }
+            }
+        }
+        if !cur.is_empty() {
+            out.push(cur);
+        }
+        out
+    }
 }
 
 fn range(vals: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
@@ -160,7 +326,84 @@ fn pad(lo: f64, hi: f64) -> (f64, f64) {
     }
 }
 
-fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<()>
+/// Text as drawn: plotters places no combining marks, so "b̄" (b and a
+/// combining macron) is spelt out; Markdown code quotes are dropped.
+fn typeset(s: &str) -> String {
+    s.replace("b\u{304}", "nominal b").replace('`', "")
+}
+
+/// Decimals enough to tell the ticks `at` apart (and no more).
+fn tick_decimals(at: &[f64]) -> usize {
+    (0..=9)
+        .find(|&d| {
+            let s = 10f64.powi(d as i32);
+            at.iter()
+                .all(|v| (v * s - (v * s).round()).abs() < 1e-6 * s.max(1.0))
+        })
+        .unwrap_or(9)
+}
+
+/// A tick label: `decimals` after the point, scientific notation for very
+/// large or very small steps, and never "−0".
+fn tick_label(v: f64, decimals: usize, sci: bool) -> String {
+    let s = if sci && v == 0.0 {
+        "0".to_string()
+    } else if sci {
+        format!("{v:.1e}")
+    } else {
+        format!("{v:.decimals$}")
+    };
+    match s.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| matches!(c, '0' | '.' | 'e')) => rest.to_string(),
+        _ => s,
+    }
+}
+
+/// A tick formatter for the linear axis whose ticks are `at`.
+fn linear_ticks(at: Vec<f64>) -> impl Fn(&f64) -> String {
+    let big = at.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let d = tick_decimals(&at);
+    let sci = big >= 1e5 || d > 5;
+    // A tick computed as 0 ± rounding prints as 0.
+    move |v| {
+        let v = if v.abs() <= 1e-9 * big { 0.0 } else { *v };
+        tick_label(v, d, sci)
+    }
+}
+
+/// A tick formatter for a logarithmic axis.
+fn log_tick(v: &f64) -> String {
+    let e = v.log10();
+    if (e - e.round()).abs() < 1e-9 && !(-3.0..=4.0).contains(&e.round()) {
+        format!("1e{}", e.round() as i32)
+    } else if *v >= 1e-3 && *v < 1e5 {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
+/// The dash pattern of a legend swatch 24 px long: up to five pieces
+/// (from, to) in pixels.
+fn swatch_pieces(dash: Dash) -> Vec<(i32, i32)> {
+    match dash {
+        Dash::Solid => vec![(0, 24)],
+        Dash::Dashed => vec![(0, 6), (9, 15), (18, 24)],
+        Dash::DashDot => vec![(0, 8), (11, 13), (16, 24)],
+        Dash::Dotted => vec![(0, 2), (5, 7), (10, 12), (15, 17), (20, 22)],
+        Dash::Points => Vec::new(),
+    }
+}
+
+/// Draws a panel. `segments`: draw solid lines segment by segment (the
+/// bitmap backend joins a wide polyline with unbounded miters, which throw
+/// spikes across the figure where a line turns back on itself).
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    p: &Panel,
+    segments: bool,
+) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
@@ -170,49 +413,156 @@ where
         .enumerate()
         .map(|(i, s)| (i, finite_runs(&s.x, &s.y, p.log_y)))
         .collect();
-    let pts = || runs.iter().flat_map(|(_, r)| r.iter().flatten());
-    let (x0, x1) = range(pts().map(|p| p.0)).unwrap_or((0.0, 1.0));
-    let (y0, y1) = range(pts().map(|p| p.1)).unwrap_or((0.0, 1.0));
+    let lowers: Vec<(usize, Runs)> = p
+        .series
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| s.lower.as_ref().map(|l| (i, finite_runs(&s.x, l, p.log_y))))
+        .collect();
+    let pts = || {
+        runs.iter()
+            .chain(lowers.iter())
+            .flat_map(|(_, r)| r.iter().flatten())
+    };
+    let (x0, x1) = p
+        .x_range
+        .or_else(|| range(pts().map(|p| p.0).chain(p.marks.iter().map(|m| m.x))))
+        .unwrap_or((0.0, 1.0));
     let (x0, x1) = if x1 > x0 { (x0, x1) } else { pad(x0, x1) };
+    let in_x = |q: &&(f64, f64)| q.0 >= x0 && q.0 <= x1;
+    let (y0, y1) = p
+        .y_range
+        .or_else(|| range(pts().filter(in_x).map(|p| p.1)))
+        .unwrap_or((0.0, 1.0));
     let font = |s: u32| (FAMILY, s).into_font();
     let mut builder = ChartBuilder::on(area);
     builder
-        .caption(&p.title, font(18))
+        .caption(typeset(&p.title), font(18))
         .margin(8)
         .x_label_area_size(40)
-        .y_label_area_size(70);
+        .y_label_area_size(80);
     macro_rules! finish {
-        ($chart:expr) => {{
+        ($chart:expr, $bounds:expr, $yfmt:expr) => {{
             let mut chart = $chart;
+            let bounds: Bounds = $bounds;
+            let xfmt = linear_ticks(chart.as_coord_spec().x_spec().key_points(BoldPoints(10)));
             chart
                 .configure_mesh()
-                .x_desc(&p.x_label)
-                .y_desc(&p.y_label)
+                .x_labels(10)
+                .y_labels(8)
+                .x_label_formatter(&xfmt)
+                .y_label_formatter(&$yfmt)
+                .x_desc(typeset(&p.x_label))
+                .y_desc(typeset(&p.y_label))
                 .label_style(font(13))
                 .axis_desc_style(font(14))
                 .light_line_style(RGBColor(235, 235, 235))
                 .draw()
                 .map_err(|e| anyhow!("drawing axes: {e}"))?;
             let mut any_label = false;
+            // Bands first, under the lines; clamped to the area.
+            for s in p.series.iter() {
+                let Some(lower) = &s.lower else { continue };
+                let clamp = |y: f64| {
+                    let (lo, hi) = (
+                        bounds.data_coords((0.0, bounds.y0)).1,
+                        bounds.data_coords((0.0, bounds.y1)).1,
+                    );
+                    y.clamp(lo, hi)
+                };
+                let c = color(s.color);
+                let mut drawn = false;
+                let keep = |i: &usize| {
+                    let (x, a, b) = (s.x[*i], lower[*i], s.y[*i]);
+                    x >= x0
+                        && x <= x1
+                        && a.is_finite()
+                        && b.is_finite()
+                        && (!p.log_y || (a > 0.0 && b > 0.0))
+                };
+                let idx: Vec<usize> = (0..s.x.len().min(lower.len()).min(s.y.len())).collect();
+                for piece in idx.split(|i| !keep(i)).filter(|r| r.len() > 1) {
+                    let mut poly: Vec<(f64, f64)> =
+                        piece.iter().map(|&i| (s.x[i], clamp(s.y[i]))).collect();
+                    poly.extend(piece.iter().rev().map(|&i| (s.x[i], clamp(lower[i]))));
+                    let anno = chart
+                        .draw_series(std::iter::once(Polygon::new(poly, c.mix(0.25).filled())))
+                        .map_err(|e| anyhow!("drawing a band: {e}"))?;
+                    let s_dash = s.dash;
+                    if !drawn && !s.label.is_empty() {
+                        any_label = true;
+                        anno.label(typeset(&s.label)).legend(move |(x, y)| {
+                            let (dash, band) = (s_dash, true);
+                            let pieces = swatch_pieces(dash);
+                            let line = ShapeStyle::from(&c).stroke_width(2);
+                            let hidden = ShapeStyle::from(&TRANSPARENT);
+                            let piece = |k: usize| {
+                                let (a, b, st) = match pieces.get(k) {
+                                    Some(&(a, b)) if !band => (a, b, line),
+                                    _ => (0, 1, hidden),
+                                };
+                                PathElement::new(vec![(a, 0), (b, 0)], st)
+                            };
+                            EmptyElement::at((x, y))
+                                + piece(0)
+                                + piece(1)
+                                + piece(2)
+                                + piece(3)
+                                + piece(4)
+                                + Rectangle::new(
+                                    [(0, -5), (24, 5)],
+                                    if band { c.mix(0.3).filled() } else { hidden },
+                                )
+                                + Circle::new(
+                                    (12, 0),
+                                    4,
+                                    if dash == Dash::Points && !band {
+                                        line.filled()
+                                    } else {
+                                        hidden
+                                    },
+                                )
+                        });
+                    }
+                    drawn = true;
+                }
+            }
             for (i, r) in &runs {
                 let s = &p.series[*i];
+                if s.lower.is_some() {
+                    continue;
+                }
                 let c = color(s.color);
-                let style =
-                    ShapeStyle::from(&c).stroke_width(if s.dash == Dash::Solid { 2 } else { 2 });
+                let style = ShapeStyle::from(&c).stroke_width(2);
                 let mut first = true;
-                for run in r {
+                let pieces: Runs = if s.dash == Dash::Points {
+                    r.iter()
+                        .map(|run| run.iter().copied().filter(|q| bounds.inside(*q)).collect())
+                        .collect()
+                } else {
+                    r.iter().flat_map(|run| bounds.clip(run)).collect()
+                };
+                for run in pieces.iter().filter(|r| !r.is_empty()) {
+                    let dashed =
+                        |a: u32, b: u32| DashedLineSeries::new(run.iter().copied(), a, b, style);
                     let anno = match s.dash {
+                        Dash::Solid if segments => chart
+                            .draw_series(
+                                run.windows(2)
+                                    .map(|w| PathElement::new(vec![w[0], w[1]], style)),
+                            )
+                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
                         Dash::Solid => chart
                             .draw_series(LineSeries::new(run.iter().copied(), style))
                             .map_err(|e| anyhow!("drawing a line: {e}"))?,
                         Dash::Dashed => chart
-                            .draw_series(DashedLineSeries::new(run.iter().copied(), 10, 6, style))
+                            .draw_series(dashed(10, 6))
                             .map_err(|e| anyhow!("drawing a line: {e}"))?,
                         Dash::Dotted => chart
-                            .draw_series(DashedLineSeries::new(run.iter().copied(), 2, 4, style))
+                            .draw_series(dashed(2, 4))
                             .map_err(|e| anyhow!("drawing a line: {e}"))?,
                         Dash::DashDot => chart
-                            .draw_series(DashedLineSeries::new(run.iter().copied(), 12, 4, style))
+                            .draw_series(dashed(12, 4))
                             .map_err(|e| anyhow!("drawing a line: {e}"))?,
                         Dash::Points => chart
                             .draw_series(
@@ -221,22 +571,70 @@ where
                             )
                             .map_err(|e| anyhow!("drawing points: {e}"))?,
                     };
+                    let s_dash = s.dash;
                     if first && !s.label.is_empty() {
                         any_label = true;
-                        anno.label(s.label.clone()).legend(move |(x, y)| {
-                            PathElement::new(
-                                vec![(x, y), (x + 20, y)],
-                                ShapeStyle::from(&c).stroke_width(2),
-                            )
+                        anno.label(typeset(&s.label)).legend(move |(x, y)| {
+                            let (dash, band) = (s_dash, false);
+                            let pieces = swatch_pieces(dash);
+                            let line = ShapeStyle::from(&c).stroke_width(2);
+                            let hidden = ShapeStyle::from(&TRANSPARENT);
+                            let piece = |k: usize| {
+                                let (a, b, st) = match pieces.get(k) {
+                                    Some(&(a, b)) if !band => (a, b, line),
+                                    _ => (0, 1, hidden),
+                                };
+                                PathElement::new(vec![(a, 0), (b, 0)], st)
+                            };
+                            EmptyElement::at((x, y))
+                                + piece(0)
+                                + piece(1)
+                                + piece(2)
+                                + piece(3)
+                                + piece(4)
+                                + Rectangle::new(
+                                    [(0, -5), (24, 5)],
+                                    if band { c.mix(0.3).filled() } else { hidden },
+                                )
+                                + Circle::new(
+                                    (12, 0),
+                                    4,
+                                    if dash == Dash::Points && !band {
+                                        line.filled()
+                                    } else {
+                                        hidden
+                                    },
+                                )
                         });
                     }
                     first = false;
                 }
             }
+            let (ylo, yhi) = (
+                bounds.data_coords((0.0, bounds.y0)).1,
+                bounds.data_coords((0.0, bounds.y1)).1,
+            );
+            for m in p.marks.iter().filter(|m| m.x >= x0 && m.x <= x1) {
+                let st = ShapeStyle::from(&RGBColor(90, 90, 90)).stroke_width(1);
+                chart
+                    .draw_series(DashedLineSeries::new([(m.x, ylo), (m.x, yhi)], 6, 4, st))
+                    .map_err(|e| anyhow!("drawing a mark: {e}"))?;
+                chart
+                    .draw_series(std::iter::once(
+                        EmptyElement::at((m.x, ylo))
+                            + Text::new(
+                                typeset(&m.text),
+                                (-6, -4),
+                                TextStyle::from(font(13)).pos(Pos::new(HPos::Right, VPos::Bottom)),
+                            ),
+                    ))
+                    .map_err(|e| anyhow!("drawing a mark: {e}"))?;
+            }
             if any_label {
                 chart
                     .configure_series_labels()
                     .label_font(font(13))
+                    .legend_area_size(30)
                     .background_style(WHITE.mix(0.85))
                     .border_style(BLACK)
                     .position(SeriesLabelPosition::UpperRight)
@@ -252,19 +650,47 @@ where
         } else {
             (y0 / 10.0, y1 * 10.0)
         };
-        finish!(builder
-            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-            .map_err(|e| anyhow!("building a chart: {e}"))?);
+        let bounds = Bounds {
+            x0,
+            x1,
+            y0: y0.log10(),
+            y1: y1.log10(),
+            log_y: true,
+        };
+        finish!(
+            builder
+                .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+                .map_err(|e| anyhow!("building a chart: {e}"))?,
+            bounds,
+            log_tick
+        );
     } else {
-        let (y0, y1) = pad(y0, y1);
-        finish!(builder
+        let (y0, y1) = if p.y_range.is_some() && y1 > y0 {
+            (y0, y1)
+        } else {
+            pad(y0, y1)
+        };
+        let bounds = Bounds {
+            x0,
+            x1,
+            y0,
+            y1,
+            log_y: false,
+        };
+        let chart = builder
             .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| anyhow!("building a chart: {e}"))?);
+            .map_err(|e| anyhow!("building a chart: {e}"))?;
+        let yfmt = linear_ticks(chart.as_coord_spec().y_spec().key_points(BoldPoints(8)));
+        finish!(chart, bounds, yfmt);
     }
     Ok(())
 }
 
-fn draw_figure<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, f: &Figure) -> Result<()>
+fn draw_figure<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    f: &Figure,
+    segments: bool,
+) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
@@ -273,12 +699,28 @@ where
     let body = if f.title.is_empty() {
         root.clone()
     } else {
-        root.titled(&f.title, (FAMILY, 22).into_font())
+        root.titled(&typeset(&f.title), (FAMILY, 22).into_font())
             .map_err(|e| anyhow!("{e}"))?
+    };
+    let body = if f.footer.is_empty() {
+        body
+    } else {
+        let lines: Vec<&str> = f.footer.lines().collect();
+        let (_, h) = body.dim_in_pixel();
+        let (main, foot) = body.split_vertically(h.saturating_sub(6 + 20 * lines.len() as u32));
+        for (i, line) in lines.iter().enumerate() {
+            foot.draw(&Text::new(
+                typeset(line),
+                (12, 4 + 20 * i as i32),
+                (FAMILY, 14).into_font().color(&RGBColor(60, 60, 60)),
+            ))
+            .map_err(|e| anyhow!("{e}"))?;
+        }
+        main
     };
     let areas = body.split_evenly((f.rows.max(1), f.cols.max(1)));
     for (area, panel) in areas.iter().zip(f.panels.iter()) {
-        draw_panel(area, panel)?;
+        draw_panel(area, panel, segments)?;
     }
     root.present().map_err(|e| anyhow!("{e}"))?;
     Ok(())
@@ -288,13 +730,13 @@ impl Figure {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
         let root = BitMapBackend::new(path, self.size).into_drawing_area();
-        draw_figure(root, self).with_context(|| format!("rendering {}", path.display()))
+        draw_figure(root, self, true).with_context(|| format!("rendering {}", path.display()))
     }
 
     /// Renders to an SVG file.
     pub fn svg(&self, path: &Path) -> Result<()> {
         let root = SVGBackend::new(path, self.size).into_drawing_area();
-        draw_figure(root, self).with_context(|| format!("rendering {}", path.display()))
+        draw_figure(root, self, false).with_context(|| format!("rendering {}", path.display()))
     }
 }
 
@@ -645,5 +1087,54 @@ impl Histogram {
     pub fn svg(&self, path: &Path) -> Result<()> {
         let root = SVGBackend::new(path, self.size).into_drawing_area();
         draw_histogram(root, self).with_context(|| format!("rendering {}", path.display()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_never_read_negative_zero() {
+        // Ticks −0.1, −0.05, 0, 0.05: two decimals; 0 computed as −1e-17.
+        let f = linear_ticks(vec![-0.1, -0.05, -1e-17, 0.05]);
+        assert_eq!(f(&-1e-17), "0.00");
+        assert_eq!(f(&-0.05), "-0.05");
+        let f = linear_ticks(vec![-2.0, 0.0, 2.0]);
+        assert_eq!(f(&-0.0), "0");
+        assert_eq!(f(&2.0), "2");
+        // Ticks 0, 0.25, 0.5: two decimals, not one ("0.3").
+        assert_eq!(linear_ticks(vec![0.0, 0.25, 0.5])(&0.25), "0.25");
+        // Scientific notation for large ticks, but a plain 0.
+        let f = linear_ticks(vec![-2e5, -1e-11, 2e5]);
+        assert_eq!(f(&-1e-11), "0");
+        assert_eq!(f(&2e5), "2.0e5");
+    }
+
+    #[test]
+    fn lines_are_clipped_to_the_box() {
+        let b = Bounds {
+            x0: 0.0,
+            x1: 10.0,
+            y0: -1.0,
+            y1: 1.0,
+            log_y: false,
+        };
+        // Up through y = 1 at x = 1, out to y = 3, back in at x = 3.
+        let runs = b.clip(&[(0.0, 0.0), (2.0, 2.0), (4.0, 0.0)]);
+        assert_eq!(runs.len(), 2);
+        assert_eq!(runs[0], vec![(0.0, 0.0), (1.0, 1.0)]);
+        assert_eq!(runs[1], vec![(3.0, 1.0), (4.0, 0.0)]);
+        assert!(b.clip(&[(0.0, 5.0), (10.0, 5.0)]).is_empty());
+    }
+
+    #[test]
+    fn forty_distinct_styles() {
+        let styles: Vec<(usize, Dash)> = (0..40).map(cycle).collect();
+        for (i, a) in styles.iter().enumerate() {
+            assert!(styles[..i].iter().all(|b| b != a), "style {i} repeats");
+        }
+        assert_eq!(cycle(0), (0, Dash::Solid));
+        assert_eq!(cycle(10), (0, Dash::Dashed));
     }
 }

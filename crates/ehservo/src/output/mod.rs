@@ -2,7 +2,7 @@
 //! staging directory first, moved into place only when complete.
 
 use crate::metrics::Metrics;
-use crate::plot::{Dash, Figure, Panel, Series};
+use crate::plot::{Dash, Figure, Mark, Panel, Series};
 use crate::run::RunResult;
 use crate::scenario::Scenario;
 use crate::simulation::{Divergence, Sample};
@@ -269,28 +269,62 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         y_label: y.into(),
         series,
         log_y: false,
+        ..Default::default()
     };
     let mut u_series = vec![Series::new("u", t.clone(), col(&|x| x.u), 0)];
     if !s.actuator.is_identity() {
         u_series.push(Series::new("valve", t.clone(), col(&|x| x.u_plant), 1).dash(Dash::Dashed));
     }
+    let theta = panel(
+        "(a) θd (dotted) and θ",
+        "angle (deg)",
+        vec![
+            Series::new("θd", t.clone(), col(&|x| x.theta_d_deg()), 1).dash(Dash::Dotted),
+            Series::new("θ", t.clone(), col(&|x| x.theta_deg()), 0),
+        ],
+    );
+    let mut e_panel = panel(
+        &match run.metrics.e_max_deg {
+            Some(e) => format!(
+                "(b) tracking error e = θd − θ; max |e| after {} s: {e:.4}°",
+                s.simulation.settle
+            ),
+            None => "(b) tracking error e = θd − θ".into(),
+        },
+        "e (deg)",
+        vec![Series::new("", t.clone(), col(&|x| x.e_deg()), 0)],
+    );
+    // The error after the transient is the headline (e_max): the y axis is
+    // scaled to it and the transient clipped, with t_s marked.
+    let settle = s.simulation.settle;
+    let after: Vec<f64> = run
+        .trace
+        .iter()
+        .filter(|x| x.t >= settle - 1e-9)
+        .map(|x| x.e_deg())
+        .filter(|v| v.is_finite())
+        .collect();
+    if run.outcome.diverged.is_none() && !after.is_empty() {
+        let lo = after.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = after.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let m = 0.15 * (hi - lo).max(1e-9);
+        e_panel.y_range = Some((lo - m, hi + m));
+        e_panel.marks.push(Mark {
+            x: settle,
+            text: "transient ends".into(),
+        });
+    }
     let mut panels = vec![
-        panel(
-            "(a) θd (dotted) and θ",
-            "angle (deg)",
-            vec![
-                Series::new("θd", t.clone(), col(&|x| x.theta_d_deg()), 1).dash(Dash::Dotted),
-                Series::new("θ", t.clone(), col(&|x| x.theta_deg()), 0),
-            ],
-        ),
-        panel("(b) control input u", "u (V)", u_series),
+        theta,
+        e_panel,
+        panel("(c) control input u", "u (V)", u_series),
     ];
     let signals = run.trace.first().map(|x| x.signals).unwrap_or(&[]);
     let has = |key: &str| signals.iter().any(|g| g.key == key);
     if has("sigma") && has("uncertainty") {
         // The paper's Fig. 2 panels for the sliding-mode laws.
         let mut d_series = vec![Series::new(
-            "Σ Δa_i x_i − Δb u_eq + d − ξ",
+            "Σ Δaᵢxᵢ − Δb·u(eq) + d − ξ",
             t.clone(),
             col(&|x| x.part("uncertainty")),
             1,
@@ -300,22 +334,24 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
             d_series.push(Series::new("WᵀΦ", t.clone(), col(&|x| x.part("wphi")), 0));
         }
         panels.push(panel(
-            "(c) switching function σ",
+            "(d) switching function σ",
             "σ (rad/s²)",
             vec![Series::new("", t.clone(), col(&|x| x.part("sigma")), 0)],
         ));
         panels.push(panel(
-            "(d) lumped uncertainty (19) and its estimate",
+            "(e) lumped uncertainty (19) and its estimate",
             "(rad/s³)",
             d_series,
         ));
+        if run.metrics.w_norm_max.is_some() {
+            panels.push(panel(
+                "(f) norm of the weights ‖W‖",
+                "‖W‖",
+                vec![Series::new("", t.clone(), col(&|x| x.part("w_norm")), 0)],
+            ));
+        }
     } else {
-        // Any other law: the error, and the law's parts in volts.
-        panels.push(panel(
-            "(c) tracking error e",
-            "e (deg)",
-            vec![Series::new("", t.clone(), col(&|x| x.e_deg()), 0)],
-        ));
+        // Any other law: the law's parts in volts.
         let parts: Vec<Series> = signals
             .iter()
             .enumerate()
@@ -325,12 +361,25 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
             .collect();
         panels.push(panel("(d) the parts of the law", "(V)", parts));
     }
+    // A diverged run: every time history is clipped to its bounded part,
+    // and the divergence marked (the last steps would flatten the rest).
+    if run.outcome.diverged.is_some() {
+        for p in panels.iter_mut() {
+            crate::reproduce::figures::clip_diverged(p, run);
+        }
+    }
+    let rows = panels.len().div_ceil(2);
     Figure {
         title,
-        rows: 2,
+        rows,
         cols: 2,
-        size: (1400, 1000),
+        size: (1400, 500 * rows as u32),
         panels,
+        footer: format!(
+            "True variation: {}, {}",
+            crate::reproduce::figures::a_variation(&s.uncertainty),
+            crate::reproduce::figures::b_variation(&s.uncertainty)
+        ),
     }
 }
 

@@ -10,6 +10,13 @@
 //! | `w_drift` | (‖W‖(T) − ‖W‖(T/2))/‖W‖(T/2): growth of the weights over the second half of the whole run |
 //! | `w128_pp` | peak-to-peak of w_128 over the last 5 s — "more oscillatory weight" |
 //! | `e_hf_share` | share of the energy of e above 1.5× the reference frequency, over a whole number of reference periods ending at T — "higher frequencies" |
+//! | `chattering_10ms` | c[u] = sqrt(Σ Δu_n²)/sqrt(Σ u_n²) over the samples on the common grid t_n = n·0.01 s (the paper's sample interval) with t_n ≥ t_s, Δu_n = u_n − u_{n−1} — "u is smooth / chatters" |
+//!
+//! SPEC §9's `chattering` sums over every sample, so it depends on the step:
+//! for the same smooth u, Δu per sample shrinks with h and c[u] with it
+//! (0.0063 at 1 ms against 0.063 at 10 ms for a 1 Hz sine). Readings with
+//! different steps are compared on `chattering_10ms`, which every reading's
+//! step (a divisor of 0.01 s) samples identically.
 //!
 //! Each is `None` when it is undefined (diverged run, no network, zero
 //! variance), never NaN.
@@ -35,17 +42,23 @@ pub struct CaseMetrics {
     pub w128_pp: Option<f64>,
     /// Share of e's energy above 1.5·f_ref.
     pub e_hf_share: Option<f64>,
+    /// c[u] on the common 10 ms grid after t_s.
+    pub chattering_10ms: Option<f64>,
 }
 
 /// The derived metrics' names (the base ones are [`Metrics::NAMES`]).
-const DERIVED: [&str; 6] = [
+const DERIVED: [&str; 7] = [
     "sigma_rms",
     "capture_corr",
     "capture_gain",
     "w_drift",
     "w128_pp",
     "e_hf_share",
+    "chattering_10ms",
 ];
+
+/// The common grid of `chattering_10ms`: the paper's sample interval (s).
+pub const CHATTER_GRID: f64 = 0.01;
 
 /// Whether `name` is a metric [`CaseMetrics::get`] knows.
 pub fn is_metric(name: &str) -> bool {
@@ -80,6 +93,7 @@ impl CaseMetrics {
             "w_drift" => self.w_drift,
             "w128_pp" => self.w128_pp,
             "e_hf_share" => self.e_hf_share,
+            "chattering_10ms" => self.chattering_10ms,
             _ => self.base.get(name),
         }
     }
@@ -174,6 +188,8 @@ impl CaseMetrics {
             None
         };
 
+        let chattering_10ms = chattering_on_grid(trace, settle, CHATTER_GRID);
+
         Self {
             base,
             sigma_rms,
@@ -182,8 +198,39 @@ impl CaseMetrics {
             w_drift,
             w128_pp,
             e_hf_share,
+            chattering_10ms,
         }
     }
+}
+
+/// c[u] over the samples on the grid t_n = n·`grid` with t_n ≥ `settle`;
+/// Δu_n needs the sample at n − 1 (the first one after t_s uses the one
+/// before it, as SPEC §9). A sample is on the grid when t is within 1e-6
+/// of a grid step of n·grid (t_k = k·h is rounded, never exactly n·grid).
+fn chattering_on_grid(trace: &[Sample], settle: f64, grid: f64) -> Option<f64> {
+    let tol = 1e-6 * grid;
+    let (mut u_sq, mut du_sq, mut pairs) = (0.0, 0.0, 0usize);
+    let mut prev: Option<(i64, f64)> = None;
+    for s in trace {
+        let n = (s.t / grid).round();
+        if (s.t - n * grid).abs() > tol {
+            continue;
+        }
+        let n = n as i64;
+        if s.t >= settle - tol {
+            u_sq += s.u * s.u;
+            if let Some((m, pu)) = prev {
+                if m == n - 1 {
+                    du_sq += (s.u - pu) * (s.u - pu);
+                    pairs += 1;
+                }
+            }
+        }
+        prev = Some((n, s.u));
+    }
+    (u_sq > 0.0 && pairs > 0)
+        .then(|| (du_sq / u_sq).sqrt())
+        .filter(|c| c.is_finite())
 }
 
 /// Share of the energy of e above 1.5·f_ref over the largest whole number of
@@ -267,6 +314,36 @@ mod tests {
         });
         let refs: Vec<&Sample> = s.iter().filter(|x| x.t >= 2.0 - 1e-9).collect();
         assert!((hf_share(&refs, 1.0, 10.0).unwrap() - 0.2).abs() < 1e-9);
+    }
+
+    /// The same smooth u = sin 2πt sampled at 1 ms and at 10 ms: SPEC §9's
+    /// per-sample index differs tenfold, the 10 ms-grid one not at all.
+    /// On the grid Δu_n ≈ 2π·0.01·cos 2πt_n, so c[u] ≈ 2π·0.01 = 0.0628
+    /// (mean squares of sin and cos equal over whole periods).
+    #[test]
+    fn chattering_on_the_common_grid_ignores_the_step() {
+        let pi2 = 2.0 * std::f64::consts::PI;
+        let trace = |h: f64, n: usize| -> Vec<Sample> {
+            (0..n)
+                .map(|k| {
+                    let t = k as f64 * h;
+                    Sample {
+                        k: k as u64,
+                        t,
+                        u: (pi2 * t).sin(),
+                        ..Default::default()
+                    }
+                })
+                .collect()
+        };
+        let fine = chattering_on_grid(&trace(0.001, 10_001), 2.0, 0.01).unwrap();
+        let coarse = chattering_on_grid(&trace(0.01, 1001), 2.0, 0.01).unwrap();
+        assert!((fine - coarse).abs() < 1e-12, "{fine} vs {coarse}");
+        assert!((coarse - 0.0628).abs() < 2e-3, "{coarse}");
+        // A trace thinned to every 20 ms has no neighbours on the grid.
+        let mut even = trace(0.01, 1001);
+        even.retain(|s| s.k % 2 == 0);
+        assert_eq!(chattering_on_grid(&even, 2.0, 0.01), None);
     }
 
     #[test]

@@ -130,7 +130,7 @@ impl Doc {
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>\
 body{{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;line-height:1.45;color:#222}}\
 table{{border-collapse:collapse;margin:1em 0;font-size:0.92em}}th,td{{border:1px solid #ccc;padding:4px 8px;vertical-align:top}}\
-th{{background:#f3f3f3}}td.agree{{background:#e6f4e6}}td.differ{{background:#fbe6e6}}td.undetermined{{background:#f5f0dc}}\
+th{{background:#f3f3f3}}td.agree{{background:#e6f4e6}}td.differ{{background:#fbe6e6}}td.undetermined,td.undecided{{background:#f5f0dc}}\
 figure{{margin:1.5em 0}}figure img{{max-width:100%;border:1px solid #ddd}}figcaption{{font-style:italic;color:#444}}\
 code{{background:#f4f4f4;padding:0 3px}}</style></head><body>\n",
             html_escape(title)
@@ -160,7 +160,9 @@ code{{background:#f4f4f4;padding:0 3px}}</style></head><body>\n",
                         s.push_str("<tr>");
                         for c in r {
                             let class = match c.as_str() {
-                                "agree" | "differ" | "undetermined" => format!(" class=\"{c}\""),
+                                "agree" | "differ" | "undetermined" | "undecided" => {
+                                    format!(" class=\"{c}\"")
+                                }
                                 _ => String::new(),
                             };
                             let _ = write!(s, "<td{class}>{}</td>", html_inline(c));

@@ -1,16 +1,146 @@
 //! The paper's figures, rebuilt from the runs of the chosen reading: the
 //! same panels, signals, units (degrees where the paper uses them) and line
 //! styles as the paper's captions describe.
+//!
+//! Every figure states, in its footer, the reading its runs were made under
+//! and the size of the b variation of its cases, both taken from the loaded
+//! scenarios (never from the paper's captions). Long oscillating signals
+//! (the 60 s weights of Figs. 6–7) are drawn as an envelope per reference
+//! period (min–max shaded, mean as a line) beside a zoom on the last
+//! periods; a diverging run is clipped to its bounded part and marked.
 
 use super::breaking::Boundary;
-use crate::plot::{Dash, Figure, Panel, Series};
+use super::manifest::Reading;
+use crate::plot::{Dash, Figure, Mark, Panel, Series};
 use crate::run::RunResult;
+use crate::scenario::Scenario;
 use crate::simulation::Sample;
+use ehservo_sim::plant::UncertaintySpec;
 use std::collections::BTreeMap;
 
 /// Longest series drawn; longer ones are reduced by min/max per bucket, which
 /// keeps every peak (an SVG with 60 000 points per line helps nobody).
 const MAX_POINTS: usize = 4000;
+
+/// β as a multiple of |b̄| (SPEC §2, the paper's reference size of the b
+/// variation).
+const BETA_OVER_B: f64 = 0.5;
+
+/// A number with at most three decimals and no trailing zeros.
+fn num(v: f64) -> String {
+    let s = format!("{v:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+/// The size of the true b variation in the paper's terms, e.g. "Δb = β",
+/// "Δb = 0.5β ± 0.5β random".
+pub fn b_size(u: &UncertaintySpec) -> String {
+    let beta = |f: f64| {
+        let k = u.b_reference * f / BETA_OVER_B;
+        if (k - 1.0).abs() < 1e-12 {
+            "β".to_string()
+        } else {
+            format!("{}β", num(k))
+        }
+    };
+    let mut s = format!("Δb = {}", beta(u.b_bias));
+    if u.b_random != 0.0 {
+        s.push_str(&format!(" ± {} random", beta(u.b_random.abs())));
+    }
+    s
+}
+
+/// The convention behind [`b_size`], e.g. "b_reference = 1: b fractions
+/// of b̄".
+pub fn b_convention(u: &UncertaintySpec) -> String {
+    let of = if (u.b_reference - BETA_OVER_B).abs() < 1e-12 {
+        "β = 0.5·b̄".to_string()
+    } else if (u.b_reference - 1.0).abs() < 1e-12 {
+        "b̄".to_string()
+    } else {
+        format!("{}·b̄", num(u.b_reference))
+    };
+    format!("b_reference = {}: b fractions of {of}", num(u.b_reference))
+}
+
+/// [`b_size`] and [`b_convention`]: "Δb = β (b_reference = 1: b fractions
+/// of b̄)".
+pub fn b_variation(u: &UncertaintySpec) -> String {
+    format!("{} ({})", b_size(u), b_convention(u))
+}
+
+/// The a_i variation of a scenario, e.g. "100 % aᵢ bias".
+pub fn a_variation(u: &UncertaintySpec) -> String {
+    let mut s = format!("{} % aᵢ bias", num(100.0 * u.a_bias));
+    if u.a_random != 0.0 {
+        s.push_str(&format!(" + {} % random", num(100.0 * u.a_random)));
+    }
+    s
+}
+
+/// What the figures' runs were made under.
+pub struct FigureContext<'a> {
+    /// The reading (manifest entry).
+    pub reading: &'a Reading,
+    /// The scenario of every case, under that reading.
+    pub scenarios: BTreeMap<String, &'a Scenario>,
+}
+
+impl FigureContext<'_> {
+    /// The footer of a figure made from `cases`: the reading, then the b
+    /// variation (per case where the cases differ) and its convention.
+    fn footer(&self, cases: &[&str]) -> String {
+        let mut sizes: Vec<(String, Vec<&str>)> = Vec::new();
+        let mut conventions: Vec<String> = Vec::new();
+        for c in cases {
+            let Some(s) = self.scenarios.get(*c) else {
+                continue;
+            };
+            let b = b_size(&s.uncertainty);
+            match sizes.iter_mut().find(|(t, _)| *t == b) {
+                Some((_, cs)) => cs.push(c),
+                None => sizes.push((b, vec![c])),
+            }
+            let conv = b_convention(&s.uncertainty);
+            if !conventions.contains(&conv) {
+                conventions.push(conv);
+            }
+        }
+        let b = match sizes.len() {
+            0 => String::new(),
+            1 => sizes[0].0.clone(),
+            _ => sizes
+                .iter()
+                .map(|(b, cs)| format!("{}: {b}", cs.join(", ")))
+                .collect::<Vec<_>>()
+                .join("; "),
+        };
+        format!(
+            "Reading {}: {}\nTrue b variation: {b} ({})",
+            self.reading.id,
+            self.reading.label,
+            conventions.join("; ")
+        )
+    }
+
+    fn uncertainty(&self, case: &str) -> Option<&UncertaintySpec> {
+        self.scenarios.get(case).map(|s| &s.uncertainty)
+    }
+
+    /// One reference period (s) of a case (1 s if unknown).
+    fn period(&self, case: &str) -> f64 {
+        self.scenarios
+            .get(case)
+            .map(|s| s.reference.frequency_hz)
+            .filter(|f| *f > 0.0)
+            .map_or(1.0, |f| 1.0 / f)
+    }
+}
 
 fn series(
     label: &str,
@@ -61,28 +191,145 @@ fn decimate(trace: &[Sample], f: &dyn Fn(&Sample) -> f64) -> (Vec<f64>, Vec<f64>
     (x, y)
 }
 
+/// Min, max and mean of `f` over consecutive windows of `window` seconds,
+/// at each window's centre.
+struct Envelope {
+    n: Vec<usize>,
+    t: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    mean: Vec<f64>,
+}
+
+fn envelope(trace: &[Sample], f: &dyn Fn(&Sample) -> f64, window: f64) -> Envelope {
+    let mut e = Envelope {
+        n: Vec::new(),
+        t: Vec::new(),
+        lo: Vec::new(),
+        hi: Vec::new(),
+        mean: Vec::new(),
+    };
+    let Some(t0) = trace.first().map(|s| s.t) else {
+        return e;
+    };
+    // Window index of a sample; the tolerance puts t = k·window (rounded)
+    // at the start of window k.
+    let index = |t: f64| ((t - t0) / window + 1e-9).floor() as i64;
+    let mut i = 0;
+    while i < trace.len() {
+        let k = index(trace[i].t);
+        let j = i + trace[i..]
+            .iter()
+            .position(|s| index(s.t) != k)
+            .unwrap_or(trace.len() - i);
+        let vals: Vec<f64> = trace[i..j]
+            .iter()
+            .map(f)
+            .filter(|v| v.is_finite())
+            .collect();
+        // A window cut short by the end of the run (the lone sample at
+        // t = T) would draw a spurious step: windows of fewer than half the
+        // first one's samples are left out.
+        let full = e.n.first().copied().unwrap_or(vals.len());
+        if !vals.is_empty() && 2 * vals.len() >= full {
+            e.n.push(vals.len());
+            e.t.push(t0 + (k as f64 + 0.5) * window);
+            e.lo.push(vals.iter().copied().fold(f64::INFINITY, f64::min));
+            e.hi.push(vals.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+            e.mean.push(vals.iter().sum::<f64>() / vals.len() as f64);
+        }
+        i = j;
+    }
+    e
+}
+
+/// The envelope of `f` over one case, as a shaded band and its mean line.
+fn envelope_series(
+    label: &str,
+    trace: &[Sample],
+    f: &dyn Fn(&Sample) -> f64,
+    window: f64,
+    color: usize,
+    dash: Dash,
+) -> [Series; 2] {
+    let e = envelope(trace, f, window);
+    [
+        Series::band("", e.t.clone(), e.lo, e.hi, color),
+        Series::new(label, e.t, e.mean, color).dash(dash),
+    ]
+}
+
+/// The samples of the last `span` seconds.
+fn tail(trace: &[Sample], span: f64) -> &[Sample] {
+    let end = trace.last().map_or(0.0, |s| s.t);
+    let from = trace.partition_point(|s| s.t < end - span - 1e-9);
+    &trace[from..]
+}
+
+/// The samples with t ≤ `span`.
+fn head(trace: &[Sample], span: f64) -> &[Sample] {
+    &trace[..trace.partition_point(|s| s.t <= span + 1e-9)]
+}
+
 fn panel(title: &str, y_label: &str, series: Vec<Series>) -> Panel {
     Panel {
         title: title.into(),
         x_label: "t (s)".into(),
         y_label: y_label.into(),
         series,
-        log_y: false,
+        ..Default::default()
     }
 }
 
+/// For a run that diverged: a y range around the bounded part of the
+/// panel's lines (the 2–98 % quantiles of all their values, widened by half
+/// their spread) and a mark at the divergence. The lines are clipped to the
+/// range.
+pub(crate) fn clip_diverged(p: &mut Panel, r: &RunResult) {
+    let Some(d) = r.outcome.diverged else {
+        return;
+    };
+    let mut v: Vec<f64> = p
+        .series
+        .iter()
+        .flat_map(|s| s.y.iter().chain(s.lower.iter().flatten()))
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
+    if v.len() >= 10 {
+        v.sort_by(f64::total_cmp);
+        let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+        let (lo, hi) = (q(0.02), q(0.98));
+        let m = 0.5 * (hi - lo).max(1e-12);
+        p.y_range = Some((lo - m, hi + m));
+    }
+    p.marks.push(Mark {
+        x: d.t,
+        text: format!("unbounded at t = {:.2} s", d.t),
+    });
+}
+
 /// A panel of u(t) (V).
-fn u_panel(title: &str, t: &[Sample]) -> Panel {
-    panel(title, "u (V)", vec![series("", t, |s| s.u, 0, Dash::Solid)])
+fn u_panel(title: &str, r: &RunResult) -> Panel {
+    let mut p = panel(
+        title,
+        "u (V)",
+        vec![series("", &r.trace, |s| s.u, 0, Dash::Solid)],
+    );
+    clip_diverged(&mut p, r);
+    p
 }
 
 /// A panel of σ(t) (rad/s²).
-fn sigma_panel(title: &str, t: &[Sample]) -> Panel {
-    panel(
+fn sigma_panel(title: &str, r: &RunResult) -> Panel {
+    let f = |s: &Sample| s.part("sigma");
+    let mut p = panel(
         title,
         "σ (rad/s²)",
-        vec![series("", t, |s| s.part("sigma"), 0, Dash::Solid)],
-    )
+        vec![series("", &r.trace, f, 0, Dash::Solid)],
+    );
+    clip_diverged(&mut p, r);
+    p
 }
 
 fn status(r: &RunResult) -> String {
@@ -107,27 +354,36 @@ pub struct PaperFigure {
 }
 
 /// Builds every figure whose cases are present in `runs`.
-pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) -> Vec<PaperFigure> {
+pub fn paper_figures(
+    runs: &BTreeMap<String, RunResult>,
+    ctx: &FigureContext<'_>,
+) -> Vec<PaperFigure> {
     let mut out = Vec::new();
     let get = |id: &str| runs.get(id);
-    let size2x2 = (1400, 1000);
+    let rid = &ctx.reading.id;
+    let b_of = |case: &str| ctx.uncertainty(case).map(b_size).unwrap_or_default();
+    let a_of = |case: &str| ctx.uncertainty(case).map(a_variation).unwrap_or_default();
 
     if let Some(r) = get("fig2") {
         let t = &r.trace;
         out.push(PaperFigure {
             stem: "fig2".into(),
             caption: format!(
-                "Fig. 2 — NNBVSC, 100 % a_i bias, Δb = 0.5β, Tl = 2 sin 4θ ({reading_label}){}",
+                "Fig. 2 — NNBVSC, {}, {}, Tl = 2 sin 4θ (reading `{rid}`){}",
+                a_of("fig2"),
+                b_of("fig2"),
                 status(r)
             ),
             figure: Figure {
                 title: format!(
-                    "Fig. 2: NNBVSC, p = (90, 2600, 24000), η = 0.25, ᾱ = 5, γ1 = 100{}",
+                    "Fig. 2: NNBVSC, p = (90, 2600, 24000), η = 0.25, ᾱ = 5, γ₁ = 100; {}{}",
+                    b_of("fig2"),
                     status(r)
                 ),
                 rows: 2,
                 cols: 2,
-                size: size2x2,
+                size: (1400, 1000),
+                footer: ctx.footer(&["fig2"]),
                 panels: vec![
                     panel(
                         "(a) θd (···) and θ (—)",
@@ -137,10 +393,10 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
                             series("θ", t, |s| s.theta_deg(), 0, Dash::Solid),
                         ],
                     ),
-                    u_panel("(b) u(t)", t),
-                    sigma_panel("(c) σ(t)", t),
+                    u_panel("(b) u(t)", r),
+                    sigma_panel("(c) σ(t)", r),
                     panel(
-                        "(d) Σ Δa_i x_i − Δb u_eq + d − ξ (---) and WᵀΦ (—)",
+                        "(d) Σ Δaᵢxᵢ − Δb·u(eq) + d − ξ (---) and WᵀΦ (—)",
                         "(rad/s³)",
                         vec![
                             series(
@@ -159,38 +415,39 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
     }
 
     if let Some(r) = get("fig3") {
-        let t = &r.trace;
+        let mut e = panel(
+            "(a) θd − θ",
+            "e (deg)",
+            vec![series("", &r.trace, e_deg, 0, Dash::Solid)],
+        );
+        clip_diverged(&mut e, r);
         out.push(PaperFigure {
             stem: "fig3".into(),
             caption: format!(
-                "Fig. 3 — traditional VSC, 40 % bias, Tl = 2 sin 4θ ({reading_label}){}",
+                "Fig. 3 — traditional VSC, {}, {}, Tl = 2 sin 4θ (reading `{rid}`){}",
+                a_of("fig3"),
+                b_of("fig3"),
                 status(r)
             ),
             figure: Figure {
                 title: format!(
-                    "Fig. 3: traditional VSC (Theorem 1), 40 % bias{}",
+                    "Fig. 3: traditional VSC (Theorem 1), {}{}",
+                    a_of("fig3"),
                     status(r)
                 ),
                 rows: 3,
                 cols: 1,
                 size: (1200, 1100),
-                panels: vec![
-                    panel(
-                        "(a) θd − θ",
-                        "e (deg)",
-                        vec![series("", t, e_deg, 0, Dash::Solid)],
-                    ),
-                    u_panel("(b) u(t)", t),
-                    sigma_panel("(c) σ(t)", t),
-                ],
+                footer: ctx.footer(&["fig3"]),
+                panels: vec![e, u_panel("(b) u(t)", r), sigma_panel("(c) σ(t)", r)],
             },
         });
     }
 
     let fig4: Vec<(&str, &str, Dash)> = vec![
-        ("fig2", "γ1 = 100, η = 0.25 (—)", Dash::Solid),
-        ("gamma1-200", "γ1 = 200, η = 0.25 (---)", Dash::Dashed),
-        ("eta0", "γ1 = 100, η = 0 (-·-)", Dash::DashDot),
+        ("fig2", "γ₁ = 100, η = 0.25 (—)", Dash::Solid),
+        ("gamma1-200", "γ₁ = 200, η = 0.25 (---)", Dash::Dashed),
+        ("eta0", "γ₁ = 100, η = 0 (-·-)", Dash::DashDot),
     ];
     if fig4.iter().all(|(id, _, _)| runs.contains_key(*id)) {
         let s: Vec<Series> = fig4
@@ -198,75 +455,145 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
             .enumerate()
             .map(|(i, (id, label, dash))| series(label, &runs[*id].trace, e_deg, i, *dash))
             .collect();
+        let ids: Vec<&str> = fig4.iter().map(|f| f.0).collect();
         out.push(PaperFigure {
             stem: "fig4".into(),
             caption: format!(
-                "Fig. 4 — tracking error of the NNBVSC for three settings ({reading_label})"
+                "Fig. 4 — tracking error of the NNBVSC for three settings, {} (reading `{rid}`)",
+                b_of("fig2")
             ),
             figure: Figure {
                 title: "Fig. 4: tracking error θd − θ of the NNBVSC, Fig. 2 case".into(),
-                rows: 1,
-                cols: 1,
-                size: (1200, 600),
+                size: (1200, 650),
+                footer: ctx.footer(&ids),
                 panels: vec![panel("θd − θ", "e (deg)", s)],
+                ..Default::default()
             },
         });
     }
 
     if let Some(r) = get("gamma1-200") {
-        let mut s = vec![series("γ1 = 200", &r.trace, |s| s.u, 0, Dash::Solid)];
+        let zoom = 0.1;
+        let mut full = vec![series("γ₁ = 200", &r.trace, |s| s.u, 0, Dash::Solid)];
+        let mut near = vec![series(
+            "γ₁ = 200",
+            head(&r.trace, zoom),
+            |s| s.u,
+            0,
+            Dash::Solid,
+        )];
         if let Some(f2) = get("fig2") {
-            s.push(series(
-                "γ1 = 100 (Fig. 2(b))",
+            full.push(series(
+                "γ₁ = 100 (Fig. 2(b))",
                 &f2.trace,
                 |s| s.u,
                 1,
                 Dash::Dashed,
             ));
+            near.push(series(
+                "γ₁ = 100 (Fig. 2(b))",
+                head(&f2.trace, zoom),
+                |s| s.u,
+                1,
+                Dash::Dashed,
+            ));
         }
+        let mut full = panel("(a) u(t)", "u (V)", full);
+        clip_diverged(&mut full, r);
+        let mut near = panel(
+            &format!("(b) the first {} s (every sample)", num(zoom)),
+            "u (V)",
+            near,
+        );
+        near.x_range = Some((0.0, zoom));
         out.push(PaperFigure {
             stem: "fig5".into(),
             caption: format!(
-                "Fig. 5 — control input with γ1 = 200 (Fig. 2(b) dashed for comparison) ({reading_label}){}",
+                "Fig. 5 — control input with γ₁ = 200 (Fig. 2(b) dashed for comparison), {}; (b) zooms on the first {} s, where the two differ (reading `{rid}`){}",
+                b_of("gamma1-200"),
+                num(zoom),
                 status(r)
             ),
             figure: Figure {
-                title: "Fig. 5: control input of the NNBVSC, Fig. 2 case with γ1 = 200".into(),
-                rows: 1,
+                title: "Fig. 5: control input of the NNBVSC, Fig. 2 case with γ₁ = 200".into(),
+                rows: 2,
                 cols: 1,
-                size: (1200, 600),
-                panels: vec![panel("u(t)", "u (V)", s)],
+                size: (1200, 900),
+                footer: ctx.footer(&["gamma1-200", "fig2"]),
+                panels: vec![full, near],
             },
         });
     }
+
+    // Figs. 6 and 7: 60 s of weights oscillating at the reference frequency
+    // — an envelope per period over the whole run, and every sample of the
+    // last periods.
+    let zoom_periods = 3.0;
+    let weights = |cases: &[(&str, &str, Dash)],
+                   key: &'static str,
+                   name: &str,
+                   letters: (&str, &str)|
+     -> [Panel; 2] {
+        let f = move |s: &Sample| s.part(key);
+        let period = ctx.period(cases[0].0);
+        let mut env = Vec::new();
+        let mut last = Vec::new();
+        for (i, (id, label, dash)) in cases.iter().enumerate() {
+            let r = &runs[*id];
+            env.extend(envelope_series(label, &r.trace, &f, period, i, *dash));
+            last.push(series(
+                label,
+                tail(&r.trace, zoom_periods * period),
+                f,
+                i,
+                *dash,
+            ));
+        }
+        [
+            panel(
+                &format!(
+                    "({}) {name}(t): min–max per {} s (shaded) and mean (line)",
+                    letters.0,
+                    num(period)
+                ),
+                name,
+                env,
+            ),
+            panel(
+                &format!(
+                    "({}) {name}(t), the last {} s (every sample)",
+                    letters.1,
+                    num(zoom_periods * period)
+                ),
+                name,
+                last,
+            ),
+        ]
+    };
 
     let fig6: Vec<(&str, &str, Dash)> = vec![
         ("abar5", "η = 0.25, ᾱ = 5 (—)", Dash::Solid),
         ("eta0-long", "η = 0, ᾱ = 5 (---)", Dash::Dashed),
         ("eta0-abar0", "η = 0, ᾱ = 0 (-·-)", Dash::DashDot),
-        ("eta05", "η = 0.5, ᾱ = 5 (-··-)", Dash::Dotted),
+        ("eta05", "η = 0.5, ᾱ = 5 (···)", Dash::Dotted),
     ];
     if fig6.iter().all(|(id, _, _)| runs.contains_key(*id)) {
-        let mk = |f: fn(&Sample) -> f64| -> Vec<Series> {
-            fig6.iter()
-                .enumerate()
-                .map(|(i, (id, label, dash))| series(label, &runs[*id].trace, f, i, *dash))
-                .collect()
-        };
+        let [a, b] = weights(&fig6, "w_1", "w₁", ("a", "b"));
+        let [c, d] = weights(&fig6, "w_128", "w₁₂₈", ("c", "d"));
+        let ids: Vec<&str> = fig6.iter().map(|f| f.0).collect();
         out.push(PaperFigure {
             stem: "fig6".into(),
             caption: format!(
-                "Fig. 6 — typical weights w_1 and w_128 for four (η, ᾱ) settings ({reading_label})"
+                "Fig. 6 — typical weights w₁ and w₁₂₈ for four (η, ᾱ) settings, {}: envelope per reference period over the whole run, and the last periods in full (reading `{rid}`)",
+                b_of("abar5")
             ),
             figure: Figure {
                 title: "Fig. 6: typical weights of the NNBVSC, Fig. 2 case".into(),
                 rows: 2,
-                cols: 1,
-                size: (1200, 1000),
-                panels: vec![
-                    panel("(a) w_1(t)", "w_1", mk(|s| s.part("w_1"))),
-                    panel("(b) w_128(t)", "w_128", mk(|s| s.part("w_128"))),
-                ],
+                cols: 2,
+                size: (1500, 1000),
+                footer: ctx.footer(&ids),
+                panels: vec![a, b, c, d],
             },
         });
     }
@@ -275,36 +602,59 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
         ("abar5", "ᾱ = 5 (—)", Dash::Solid),
         ("abar50", "ᾱ = 50 (---)", Dash::Dashed),
         ("abar150", "ᾱ = 150 (-·-)", Dash::DashDot),
-        ("abar220", "ᾱ = 220 (-··-)", Dash::Dotted),
+        ("abar220", "ᾱ = 220 (···)", Dash::Dotted),
     ];
     if fig7.iter().all(|(id, _, _)| runs.contains_key(*id)) {
-        let s: Vec<Series> = fig7
-            .iter()
-            .enumerate()
-            .map(|(i, (id, label, dash))| {
-                series(label, &runs[*id].trace, |s| s.part("w_128"), i, *dash)
-            })
-            .collect();
+        let [a, b] = weights(&fig7, "w_128", "w₁₂₈", ("a", "b"));
+        let ids: Vec<&str> = fig7.iter().map(|f| f.0).collect();
         out.push(PaperFigure {
             stem: "fig7".into(),
             caption: format!(
-                "Fig. 7 — typical weight w_128 for four dead-zone sizes ᾱ ({reading_label})"
+                "Fig. 7 — typical weight w₁₂₈ for four dead-zone sizes ᾱ, {}: envelope per reference period, and the last periods in full (reading `{rid}`)",
+                b_of("abar5")
             ),
             figure: Figure {
-                title: "Fig. 7: w_128 of the NNBVSC, Fig. 2 case, for four ᾱ".into(),
+                title: "Fig. 7: w₁₂₈ of the NNBVSC, Fig. 2 case, for four ᾱ".into(),
                 rows: 1,
-                cols: 1,
-                size: (1200, 600),
-                panels: vec![panel("w_128(t)", "w_128", s)],
+                cols: 2,
+                size: (1500, 620),
+                footer: ctx.footer(&ids),
+                panels: vec![a, b],
             },
         });
     }
 
     if let (Some(f2), Some(f8)) = (get("fig2"), get("fig8")) {
+        let mut e = panel(
+            "(a) θd − θ",
+            "e (deg)",
+            vec![
+                series("Fig. 2 case", &f2.trace, e_deg, 0, Dash::Solid),
+                series("half bias, half random", &f8.trace, e_deg, 1, Dash::DashDot),
+            ],
+        );
+        clip_diverged(&mut e, f8);
+        let mut u = panel(
+            "(b) u(t)",
+            "u (V)",
+            vec![
+                series("Fig. 2 case", &f2.trace, |s| s.u, 0, Dash::Solid),
+                series(
+                    "half bias, half random",
+                    &f8.trace,
+                    |s| s.u,
+                    1,
+                    Dash::DashDot,
+                ),
+            ],
+        );
+        clip_diverged(&mut u, f8);
         out.push(PaperFigure {
             stem: "fig8".into(),
             caption: format!(
-                "Fig. 8 — Fig. 2 case (—) and half bias, half random variation (-·-) ({reading_label}){}",
+                "Fig. 8 — Fig. 2 case (—) and half bias, half random variation (-·-): {}, {} (reading `{rid}`){}",
+                a_of("fig8"),
+                b_of("fig8"),
                 status(f8)
             ),
             figure: Figure {
@@ -312,24 +662,8 @@ pub fn paper_figures(runs: &BTreeMap<String, RunResult>, reading_label: &str) ->
                 rows: 2,
                 cols: 1,
                 size: (1200, 1000),
-                panels: vec![
-                    panel(
-                        "(a) θd − θ",
-                        "e (deg)",
-                        vec![
-                            series("Fig. 2 case", &f2.trace, e_deg, 0, Dash::Solid),
-                            series("half bias, half random", &f8.trace, e_deg, 1, Dash::DashDot),
-                        ],
-                    ),
-                    panel(
-                        "(b) u(t)",
-                        "u (V)",
-                        vec![
-                            series("Fig. 2 case", &f2.trace, |s| s.u, 0, Dash::Solid),
-                            series("half bias, half random", &f8.trace, |s| s.u, 1, Dash::DashDot),
-                        ],
-                    ),
-                ],
+                footer: ctx.footer(&["fig2", "fig8"]),
+                panels: vec![e, u],
             },
         });
     }
@@ -474,6 +808,7 @@ pub fn boundary_figure(stem: &str, title: &str, x_label: &str, bs: &[Boundary]) 
                 y_label: "max |e| after 2 s (deg, log)".into(),
                 series,
                 log_y: true,
+                ..Default::default()
             });
         }
     }
@@ -490,6 +825,7 @@ diverged run; dotted: the tracking limit"
             cols: nc,
             size: (900 * nc as u32, 120 + 480 * nr as u32),
             panels,
+            ..Default::default()
         },
     }
 }

@@ -321,7 +321,6 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
             .iter()
             .position(|r| r.id == primary)
             .unwrap_or(0);
-        let label = manifest.reading[primary_idx].label.clone();
         let pjobs: Vec<&(usize, usize, Scenario)> = converged_jobs
             .iter()
             .filter(|j| j.0 == primary_idx)
@@ -338,7 +337,14 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
             .collect::<Result<_>>()?;
         pb.finish_and_clear();
         let traces: BTreeMap<String, RunResult> = traces.into_iter().collect();
-        let mut all = figures::paper_figures(&traces, &label);
+        let ctx = figures::FigureContext {
+            reading: &manifest.reading[primary_idx],
+            scenarios: pjobs
+                .iter()
+                .map(|j| (manifest.case[j.1].id.clone(), &j.2))
+                .collect(),
+        };
+        let mut all = figures::paper_figures(&traces, &ctx);
         if !rep.vsc_breaking.is_empty() {
             all.push(figures::boundary_figure(
                 "vsc-breaking",

@@ -122,11 +122,13 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
                 size: (1100, 650),
                 panels: vec![Panel {
                     title: "histogram".into(),
-                    x_label: "e_max (deg)".into(),
+                    x_label: "max |e| after t_s (deg)".into(),
                     y_label: "runs".into(),
                     series,
                     log_y: false,
+                    ..Default::default()
                 }],
+                ..Default::default()
             };
             save(&f, dir, "emax_hist")?;
         }
@@ -221,13 +223,15 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
                 title: "points on the top line: unbounded runs".into(),
                 x_label: axis.column(),
                 y_label: if log_y {
-                    "e_max (deg, log)".into()
+                    "max |e| after t_s (deg, log)".into()
                 } else {
-                    "e_max (deg)".into()
+                    "max |e| after t_s (deg)".into()
                 },
                 series,
                 log_y,
+                ..Default::default()
             }],
+            ..Default::default()
         };
         save(&f, dir, &format!("emax_vs_{}", file_safe(&axis.column())))?;
     }
@@ -287,7 +291,7 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
                 ys: ys.clone(),
                 z,
                 log_z: true,
-                z_label: "e_max (deg)".into(),
+                z_label: "max |e| after t_s (deg)".into(),
                 size: (1100, 750),
             };
             let stem = if gi == 0 {
