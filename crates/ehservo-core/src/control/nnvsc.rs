@@ -303,20 +303,16 @@ impl<T: Real> NnVsc<T> {
     }
 }
 
-impl<T: Real> Controller<T> for NnVsc<T> {
-    type State = NnState<T>;
-    type Parts = SlidingParts<T>;
-
-    fn initial_state(&self) -> NnState<T> {
-        NnState::zero()
-    }
-
-    #[inline]
-    fn law(
+impl<T: Real> NnVsc<T> {
+    /// The law, handing Ẇ and ∫e' to `sink` (by rows of five weights, then
+    /// the bias and z weights): [`Controller::law`] writes ξ̇ with it,
+    /// [`Controller::law_euler`] ξ + dt·ξ̇.
+    #[inline(always)]
+    fn eval<S: Sink<T>, const ONE_PASS: bool>(
         &self,
         m: &Measurement<T>,
         s: &NnState<T>,
-        ds: &mut NnState<T>,
+        sink: &mut S,
     ) -> Output<SlidingParts<T>, T> {
         let p = &self.params;
         let x = &m.x;
@@ -376,32 +372,44 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
         // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
         // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
-        // WᵀΦ first, in a pass of its own: v, b̄ and u wait for it. Nothing
-        // waits for Ẇ, so its pass comes last (in one fused pass its
-        // products delayed WᵀΦ's chain). Each result is computed by the
-        // same operations in the same order as in the fused pass.
+        // ONE_PASS = false: WᵀΦ first, in a pass of its own (v, b̄ and u
+        // wait for it), Ẇ in a pass after the law (nothing waits for it; on
+        // an out-of-order host its products in the same pass delayed WᵀΦ's
+        // chain). ONE_PASS = true: each row of W is loaded once, for its
+        // term of WᵀΦ and its Ẇ (an in-order core, where the loads are the
+        // cost). Either way every result is computed by the same operations
+        // in the same order.
         let w = &s.w;
         let g3 = &g[2];
+        let a = sd * self.inv_h;
+        let bw = p.eta * sd.abs() * self.inv_h;
         let mut wphi_k = T::ZERO;
         for (i1, &g1) in g[0].iter().enumerate() {
-            let t = |i2: usize| {
-                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
-                let wr = &w[j..j + N_LEVELS];
-                ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3])) + wr[4] * g3[4]
-            };
             // u = Σ g2·t from its first term rather than from 0 + first term:
             // they differ only when every term is −0 (u = −0 against +0), and
             // u only enters wphi_k += g1·u, where wphi_k (from 0 + …) is never
             // −0, so wphi_k + g1·(±0) is the same.
-            let mut u = g[1][0] * t(0);
-            for (i2, &g2) in g[1].iter().enumerate().skip(1) {
-                u += g2 * t(i2);
+            let mut u = T::ZERO;
+            for (i2, &g2) in g[1].iter().enumerate() {
+                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                let wr = &w[j..j + N_LEVELS];
+                let t = ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3]))
+                    + wr[4] * g3[4];
+                if ONE_PASS {
+                    // σΔ does not depend on W: the row's Ẇ right away, while
+                    // its weights are in registers.
+                    sink.row(j, wr, a * (g1 * g2), g3, bw);
+                }
+                u = if i2 == 0 { g2 * t } else { u + g2 * t };
             }
             wphi_k += g1 * u;
         }
         let mut wphi = w[0] + wphi_k;
         for (i, &zi) in m.z.iter().enumerate() {
             wphi += w[1 + N_KERNELS + i] * zi;
+        }
+        if ONE_PASS {
+            sink.tail(w, a, &m.z, bw);
         }
 
         let v = n + wphi + sw_v;
@@ -412,25 +420,16 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         let u_eq = (n + wphi) / b_bar;
         let u_sw = sw_num / (b_bar * self.one_minus_bb);
 
-        let a = sd * self.inv_h;
-        let bw = p.eta * sd.abs() * self.inv_h;
-        let dw = &mut ds.w;
-        for (i1, &g1) in g[0].iter().enumerate() {
-            for (i2, &g2) in g[1].iter().enumerate() {
-                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
-                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
-                let ag = a * (g1 * g2);
-                for ((d, &wi), &gi) in dr.iter_mut().zip(wr).zip(g3) {
-                    *d = ag * gi - bw * wi;
+        if !ONE_PASS {
+            for (i1, &g1) in g[0].iter().enumerate() {
+                for (i2, &g2) in g[1].iter().enumerate() {
+                    let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                    sink.row(j, &w[j..j + N_LEVELS], a * (g1 * g2), g3, bw);
                 }
             }
+            sink.tail(w, a, &m.z, bw);
         }
-        dw[0] = a - bw * w[0]; // Φ_0 = 1
-        for (i, &zi) in m.z.iter().enumerate() {
-            let k = 1 + N_KERNELS + i;
-            dw[k] = a * zi - bw * w[k];
-        }
-        ds.int_e = st.e; // ∫e' = e
+        sink.int_e(s.int_e, st.e); // ∫e' = e
 
         Output {
             u: u_eq + u_sw,
@@ -451,6 +450,134 @@ impl<T: Real> Controller<T> for NnVsc<T> {
                 ..SlidingParts::default()
             },
         }
+    }
+}
+
+/// Where [`NnVsc::eval`] puts ξ̇ = (e, Ẇ).
+trait Sink<T: Real> {
+    /// The five weights `j..j + 5` (`wr`), whose Ẇ is `ag·g3[i] − bw·wr[i]`.
+    fn row(&mut self, j: usize, wr: &[T], ag: T, g3: &[T; N_LEVELS], bw: T);
+    /// The bias weight (Ẇ = a − bw·w[0], Φ_0 = 1) and the z weights
+    /// (Ẇ = a·z_i − bw·w[k]).
+    fn tail(&mut self, w: &[T; N_PHI], a: T, z: &[T; 4], bw: T);
+    /// ∫e' = e (`int_e` is the state's ∫e).
+    fn int_e(&mut self, int_e: T, e: T);
+}
+
+/// Writes ξ̇.
+struct Derivative<'a, T>(&'a mut NnState<T>);
+
+impl<T: Real> Sink<T> for Derivative<'_, T> {
+    #[inline(always)]
+    fn row(&mut self, j: usize, wr: &[T], ag: T, g3: &[T; N_LEVELS], bw: T) {
+        for ((d, &wi), &gi) in self.0.w[j..j + N_LEVELS].iter_mut().zip(wr).zip(g3) {
+            *d = ag * gi - bw * wi;
+        }
+    }
+    #[inline(always)]
+    fn tail(&mut self, w: &[T; N_PHI], a: T, z: &[T; 4], bw: T) {
+        let dw = &mut self.0.w;
+        dw[0] = a - bw * w[0];
+        for (i, &zi) in z.iter().enumerate() {
+            let k = 1 + N_KERNELS + i;
+            dw[k] = a * zi - bw * w[k];
+        }
+    }
+    #[inline(always)]
+    fn int_e(&mut self, _int_e: T, e: T) {
+        self.0.int_e = e;
+    }
+}
+
+/// Writes ξ + dt·ξ̇, each component as [`OdeState::euler_from`] computes
+/// it (`w + dt·ẇ`), and sums the results v per lane (one lane per column
+/// of a row, so the sums do not wait on each other). A sum is finite only
+/// if every v in it is (±∞ and NaN propagate through finite additions,
+/// ∞ − ∞ is NaN); a non-finite sum (an overflowing sum of finite v, or a
+/// non-finite v) is settled by a scan of `next` (rare: faults only). One
+/// addition per weight instead of the 0·v test's multiplication and
+/// addition.
+struct Euler<'a, T> {
+    next: &'a mut NnState<T>,
+    dt: T,
+    lane: [T; N_LEVELS],
+}
+
+impl<T: Real> Sink<T> for Euler<'_, T> {
+    #[inline(always)]
+    fn row(&mut self, j: usize, wr: &[T], ag: T, g3: &[T; N_LEVELS], bw: T) {
+        let dr = &mut self.next.w[j..j + N_LEVELS];
+        for (((n, &wi), &gi), l) in dr.iter_mut().zip(wr).zip(g3).zip(&mut self.lane) {
+            let v = wi + self.dt * (ag * gi - bw * wi);
+            *n = v;
+            *l += v;
+        }
+    }
+    #[inline(always)]
+    fn tail(&mut self, w: &[T; N_PHI], a: T, z: &[T; 4], bw: T) {
+        let nw = &mut self.next.w;
+        let v = w[0] + self.dt * (a - bw * w[0]);
+        nw[0] = v;
+        self.lane[0] += v;
+        for (i, &zi) in z.iter().enumerate() {
+            let k = 1 + N_KERNELS + i;
+            let v = w[k] + self.dt * (a * zi - bw * w[k]);
+            nw[k] = v;
+            self.lane[1 + i] += v;
+        }
+    }
+    #[inline(always)]
+    fn int_e(&mut self, int_e: T, e: T) {
+        self.next.int_e = int_e + self.dt * e;
+    }
+}
+
+impl<T: Real> Euler<'_, T> {
+    /// Whether every component written is finite.
+    #[inline(always)]
+    fn finite(&self) -> bool {
+        let l = &self.lane;
+        let sum = ((l[0] + l[1]) + (l[2] + l[3])) + l[4];
+        self.next.int_e.is_finite() && (sum.is_finite() || self.next.all_finite())
+    }
+}
+
+impl<T: Real> Controller<T> for NnVsc<T> {
+    type State = NnState<T>;
+    type Parts = SlidingParts<T>;
+
+    fn initial_state(&self) -> NnState<T> {
+        NnState::zero()
+    }
+
+    #[inline]
+    fn law(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        ds: &mut NnState<T>,
+    ) -> Output<SlidingParts<T>, T> {
+        self.eval::<_, false>(m, s, &mut Derivative(ds))
+    }
+
+    /// The law and the Euler step in one: ξ + dt·ξ̇ is written as ξ̇'s
+    /// components are formed, so there is no ξ̇ buffer to zero, write and
+    /// read back, and each weight is loaded once.
+    #[inline]
+    fn law_euler(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        next: &mut NnState<T>,
+        dt: T,
+    ) -> (Output<SlidingParts<T>, T>, bool) {
+        let mut sink = Euler {
+            next,
+            dt,
+            lane: [T::ZERO; N_LEVELS],
+        };
+        let out = self.eval::<_, true>(m, s, &mut sink);
+        (out, sink.finite())
     }
 
     fn weights<'a>(&self, s: &'a NnState<T>) -> &'a [T] {
