@@ -793,4 +793,67 @@ mod tests {
             "eps1"
         );
     }
+
+    /// law_euler (one pass) is law + euler_from (the default) to the bit,
+    /// in f64 and f32, with weights of both signs; its finiteness verdict
+    /// too: an overflowing sum of finite results is still finite, an
+    /// overflowing weight is not.
+    #[test]
+    fn law_euler_is_law_then_euler_to_the_bit() {
+        fn check<T: Real>(c: &NnVsc<T>, dt: T, s: &NnState<T>, m: &Measurement<T>) -> bool {
+            let mut ds = NnState::zero();
+            let o = c.law(m, s, &mut ds);
+            let ok = ds.euler_from(s, dt);
+            let mut next = NnState::zero();
+            let (o2, ok2) = c.law_euler(m, s, &mut next, dt);
+            let bits = |o: &Output<SlidingParts<T>, T>| {
+                [o.u, o.wphi, o.sigma_delta, o.b_bar].map(|v| v.to_f64().to_bits())
+            };
+            assert_eq!((bits(&o), o.flags), (bits(&o2), o2.flags));
+            assert_eq!(ok, ok2);
+            assert_eq!(next.int_e.to_f64().to_bits(), ds.int_e.to_f64().to_bits());
+            for (a, b) in next.w.iter().zip(&ds.w) {
+                assert_eq!(a.to_f64().to_bits(), b.to_f64().to_bits());
+            }
+            ok
+        }
+        let c = paper_nn(Load::paper());
+        let c32 = c.cast::<f32>().unwrap();
+        let r = Sine::paper();
+        for k in 0..40 {
+            let t = 0.013 * f64::from(k);
+            let x = [0.02 * (t * 3.0).sin(), 0.3 * t.cos(), -5.0 + 0.7 * t];
+            let m = Measurement { t, x, z: r.z(t) };
+            let mut s = NnState::zero();
+            s.int_e = 1e-3 * t;
+            for (i, w) in s.w.iter_mut().enumerate() {
+                *w = (i as f64 * 0.37 + t).sin() * 0.8;
+            }
+            assert!(check(&c, 1e-4, &s, &m));
+            let m32 = Measurement {
+                t: t as f32,
+                x: x.map(|v| v as f32),
+                z: m.z.map(|v| v as f32),
+            };
+            let s32 = NnState {
+                int_e: s.int_e as f32,
+                w: s.w.map(|v| v as f32),
+            };
+            assert!(check(&c32, 1e-4f32, &s32, &m32));
+            // Finite results whose sum overflows (26 of 1e307 a lane; at
+            // t = 0, x = 0, η|σΔ| = 11.7, so η|σΔ|·W stays finite): finite.
+            let big = NnState {
+                int_e: 0.0,
+                w: [1e307; N_PHI],
+            };
+            let m0 = Measurement {
+                t: 0.0,
+                x: [0.0; 3],
+                z: r.z(0.0),
+            };
+            assert!(check(&c, 1e-12, &big, &m0));
+            // A result that overflows (dt·Ẇ[129] = 1e306·σΔ·θ⃛d): not finite.
+            assert!(!check(&c, 1e306, &s, &m0));
+        }
+    }
 }
