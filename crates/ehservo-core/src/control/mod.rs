@@ -179,8 +179,9 @@ pub trait Controller<T: Real = f64> {
     /// [`OdeState::euler_from`](crate::rk4::OdeState::euler_from) computes
     /// it) and returns the output and whether every component of `next` is
     /// finite. `next` is scratch: it is written whatever the outcome. The
-    /// default zeroes `next`, calls [`Controller::law`] into it and steps;
-    /// a controller may do it in one pass (the NNBVSC does, writing no ξ̇).
+    /// default zeroes `next`, calls [`Controller::law`] into it and steps
+    /// in place; a controller may skip the zeroing or fuse the two (the
+    /// NNBVSC skips it, and on a Cortex-M writes ξ + dt·ξ̇ in one pass).
     #[inline]
     fn law_euler(
         &self,
