@@ -175,10 +175,9 @@ pub trait Controller<T: Real = f64> {
     ) -> Output<Self::Parts, T>;
 
     /// The law followed by a forward-Euler step of the state: writes
-    /// `s + dt·ξ̇` into `next` (each component as
-    /// [`OdeState::euler_from`](crate::rk4::OdeState::euler_from) computes
-    /// it) and returns the output and whether every component of `next` is
-    /// finite. `next` is scratch: it is written whatever the outcome. The
+    /// `s + dt·ξ̇` into `next` (each component as [`OdeState::euler_from`]
+    /// computes it) and returns the output and whether every component of
+    /// `next` is finite. `next` is scratch: it is written whatever the outcome. The
     /// default zeroes `next`, calls [`Controller::law`] into it and steps
     /// in place; a controller may skip the zeroing or fuse the two (the
     /// NNBVSC skips it, and on a Cortex-M writes ξ + dt·ξ̇ in one pass).
