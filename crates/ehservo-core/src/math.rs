@@ -62,6 +62,12 @@ pub trait Real:
     /// (`exp(±SPAN)` must be finite and its reciprocal normal): 300 for
     /// f64, 80 for f32 (whose `exp` overflows past 88.7).
     const EXP_SPAN: Self;
+    /// Whether the RBF's factorised Gaussians, when one axis is outside
+    /// [`Real::EXP_SPAN`], fall back to direct exponentials for that axis
+    /// only (f32: one axis out of range costs 8 exponentials, not 15) or for
+    /// all three (f64: its results stay those of the reference, bit for
+    /// bit).
+    const RBF_AXIS_FALLBACK: bool;
     /// The type's name (`"f64"`, `"f32"`).
     const NAME: &'static str;
 
@@ -150,6 +156,7 @@ impl Real for f64 {
     real_common!(f64);
     const PI: Self = core::f64::consts::PI;
     const EXP_SPAN: Self = 300.0;
+    const RBF_AXIS_FALLBACK: bool = false;
     const NAME: &'static str = "f64";
     #[inline(always)]
     fn of(v: f64) -> Self {
@@ -192,6 +199,7 @@ impl Real for f32 {
     real_common!(f32);
     const PI: Self = core::f32::consts::PI;
     const EXP_SPAN: Self = 80.0;
+    const RBF_AXIS_FALLBACK: bool = true;
     const NAME: &'static str = "f32";
     #[inline(always)]
     fn of(v: f64) -> Self {

@@ -205,12 +205,19 @@ impl<T: Real> Rbf<T> {
     /// does, so it is that kernel to the bit) and one `q` per axis; the
     /// factors are `G·h1[i]`, `h2[i]`, `h3[i]` with `h[m + j] = C_|j|·q^j`,
     /// the ratio of each level's factor to the nearest one's (≤ 1).
+    ///
+    /// With [`Real::RBF_AXIS_FALLBACK`] (f32) only the axes outside the
+    /// range take the five direct exponentials: `G` is then the nearest
+    /// kernel over the axes in range and multiplies the first of them (one
+    /// axis out of range costs 8 exponentials, not 15); `None` only
+    /// when no axis is in range. Without it (f64) one axis out of range
+    /// gives `None`, and every factor is direct.
     #[inline]
     fn gaussians_spaced(&self, sp: &Spacing<T>, xt: &[T; 3]) -> Option<[[T; N_LEVELS]; 3]> {
-        const TOP: usize = N_LEVELS - 1;
         let mut m = [0; 3];
         let mut dist2 = T::ZERO;
         let mut arg_q = [T::ZERO; 3];
+        let mut direct = [false; 3];
         for k in 0..3 {
             // Nearest level: the number of midpoints at or below x̃ (NaN → 0;
             // the range check below then fails).
@@ -223,38 +230,70 @@ impl<T: Real> Rbf<T> {
             let in_range = d * d * self.inv_width_sq <= spaced_max()
                 && arg_q[k].abs() <= T::of(0.25) * spaced_max();
             if !in_range {
-                return None; // (also for NaN)
+                // (also for NaN)
+                if !T::RBF_AXIS_FALLBACK {
+                    return None;
+                }
+                direct[k] = true;
+                continue;
             }
             dist2 += d * d;
+        }
+        if T::RBF_AXIS_FALLBACK && direct != [false; 3] {
+            let first = direct.iter().position(|&dk| !dk)?;
+            let big_g = exp(-dist2 * self.inv_width_sq);
+            let mut g = [0, 1, 2].map(|k| {
+                if direct[k] {
+                    self.levels.map(|l| {
+                        let d = xt[k] - l;
+                        exp(-d * d * self.inv_width_sq)
+                    })
+                } else {
+                    Self::ratios(sp, m[k], exp(arg_q[k]))
+                }
+            });
+            for gf in g[first].iter_mut() {
+                *gf *= big_g;
+            }
+            return Some(g);
         }
         // The four exponentials back to back: independent, so they overlap.
         let big_g = exp(-dist2 * self.inv_width_sq);
         let q = [exp(arg_q[0]), exp(arg_q[1]), exp(arg_q[2])];
-        let mut g = [[T::ZERO; N_LEVELS]; 3];
-        for k in 0..3 {
-            let (q, qi) = (q[k], T::ONE / q[k]);
-            let (q2, qi2) = (q * q, qi * qi);
-            // q^j for j = −4..=4; the window j = i − m, i = 0..5, picked by
-            // a match (an indexed window would be stored and loaded back,
-            // and wide loads of narrow stores wait for the stores to retire).
-            let p = [qi2 * qi2, qi2 * qi, qi2, qi, T::ONE, q, q2, q2 * q, q2 * q2];
-            let p = match m[k] {
-                0 => [p[4], p[5], p[6], p[7], p[8]],
-                1 => [p[3], p[4], p[5], p[6], p[7]],
-                2 => [p[2], p[3], p[4], p[5], p[6]],
-                3 => [p[1], p[2], p[3], p[4], p[5]],
-                _ => [p[0], p[1], p[2], p[3], p[4]],
-            };
-            let w = TOP - m[k];
-            let c = &sp.c[w..w + N_LEVELS];
-            for ((gi, &ci), pi) in g[k].iter_mut().zip(c).zip(p) {
-                *gi = ci * pi;
-            }
-        }
-        for g1 in g[0].iter_mut() {
-            *g1 *= big_g;
-        }
-        Some(g)
+        Some([
+            Self::ratios(sp, m[0], q[0]).map(|h| h * big_g),
+            Self::ratios(sp, m[1], q[1]),
+            Self::ratios(sp, m[2], q[2]),
+        ])
+    }
+
+    /// `h[i] = C_|i−m|·q^(i−m)`, i = 0..5: an axis's factors relative to
+    /// its nearest level `m`'s.
+    #[inline(always)]
+    fn ratios(sp: &Spacing<T>, m: usize, q: T) -> [T; N_LEVELS] {
+        const TOP: usize = N_LEVELS - 1;
+        let qi = T::ONE / q;
+        let (q2, qi2) = (q * q, qi * qi);
+        // q^j for j = −4..=4; the window j = i − m, i = 0..5, picked by
+        // a match (an indexed window would be stored and loaded back,
+        // and wide loads of narrow stores wait for the stores to retire).
+        let p = [qi2 * qi2, qi2 * qi, qi2, qi, T::ONE, q, q2, q2 * q, q2 * q2];
+        let p = match m {
+            0 => [p[4], p[5], p[6], p[7], p[8]],
+            1 => [p[3], p[4], p[5], p[6], p[7]],
+            2 => [p[2], p[3], p[4], p[5], p[6]],
+            3 => [p[1], p[2], p[3], p[4], p[5]],
+            _ => [p[0], p[1], p[2], p[3], p[4]],
+        };
+        let w = TOP - m;
+        let c = &sp.c[w..w + N_LEVELS];
+        [
+            c[0] * p[0],
+            c[1] * p[1],
+            c[2] * p[2],
+            c[3] * p[3],
+            c[4] * p[4],
+        ]
     }
 
     /// ‖Φ‖ from the per-axis factors and z, without forming Φ: the kernels'

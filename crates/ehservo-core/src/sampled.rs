@@ -104,10 +104,10 @@ impl<T: Real> FaultPolicy<T> {
 
 /// A controller with its state, a fixed sample period and a fault policy.
 ///
-/// The state is double-buffered: the law writes ξ̇ into the spare buffer,
-/// one pass turns it into ξ + dt·ξ̇ while checking that every component is
-/// finite, and a good step makes it the current state (no copy of the
-/// state, no second pass).
+/// The state is double-buffered: the law writes ξ + dt·ξ̇ into the spare
+/// buffer, checking that every component is finite
+/// ([`Controller::law_euler`]), and a good step makes it the current state
+/// (no copy of the state, no second pass).
 #[derive(Clone)]
 pub struct SampledController<C: Controller<T>, T: Real = f64> {
     ctrl: C,
@@ -205,14 +205,15 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
         if bad_x || !t.is_finite() || z.iter().any(|v| !v.is_finite()) {
             return self.safe_output(flags::MEASUREMENT_FAULT);
         }
-        // The spare buffer receives ξ̇ (zeroed first, as a fresh ξ̇ would
-        // be), then becomes ξ + dt·ξ̇ in place.
+        // The spare buffer receives ξ + dt·ξ̇ ([`Controller::law_euler`]);
+        // it becomes the state only after a good step.
         let (state, next) = match &mut self.states {
             [a, b] if self.cur == 0 => (&*a, b),
             [a, b] => (&*b, a),
         };
-        *next = C::State::zero();
-        let mut out = self.ctrl.law(&Measurement { t, x, z }, state, next);
+        let (mut out, next_finite) =
+            self.ctrl
+                .law_euler(&Measurement { t, x, z }, state, next, self.dt);
         let fault = if !out.u.is_finite() {
             flags::NON_FINITE_CONTROL
         } else {
@@ -223,7 +224,7 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
             inspect(&self.ctrl, state, &mut out);
             // A non-finite ξ̇ makes ξ + dt·ξ̇ non-finite: one check covers
             // both, and refuses an overflow too.
-            if next.euler_from(state, self.dt) {
+            if next_finite {
                 0
             } else {
                 flags::NON_FINITE_STATE

@@ -207,3 +207,51 @@ fn f32_rbf_agrees_with_f64_direct() {
     println!("max |φ32 − φ64| = {worst:e}");
     assert!(worst < 1e-6, "{worst:e}");
 }
+
+/// f32's fallback for one axis out of the factorised range
+/// (`Real::RBF_AXIS_FALLBACK`): states with one or two axes far off the
+/// grid (normalised 4.5 to 40, where only the in-range axes keep the
+/// factorised form) agree with f64's direct Φ as closely as the grid's,
+/// ‖Φ‖ too; infinite coordinates give no NaN, a NaN coordinate NaN kernels.
+#[test]
+fn f32_rbf_axis_fallback_agrees_with_f64_direct() {
+    let r64 = Rbf::paper();
+    let r32 = r64.cast::<f32>().unwrap();
+    let s = r64.scale();
+    let (mut p64, mut p32) = ([0.0f64; N_PHI], [0.0f32; N_PHI]);
+    let z = [0.01, -0.2, 3.0, -40.0];
+    let mut worst = 0.0f64;
+    let mut n = 0;
+    for far in [4.5, 5.0, 5.6, 7.0, 12.0, 40.0, -4.6, -6.3, -25.0] {
+        for near in [-1.3, -0.37, 0.0, 0.21, 0.9, 2.2] {
+            for axes in [[0, 1], [1, 2], [2, 0], [0, 0], [2, 2]] {
+                let mut xt = [near, 0.5 * near + 0.1, -near];
+                xt[axes[0]] = far;
+                if axes[0] != axes[1] && far > 5.5 {
+                    xt[axes[1]] = -far; // two axes out
+                }
+                let x = [xt[0] * s[0], xt[1] * s[1], xt[2] * s[2]];
+                r64.phi_direct(&x, &z, &mut p64);
+                let n32 = r32.phi(&x.map(|v| v as f32), &z.map(|v| v as f32), &mut p32);
+                for (a, b) in p64[1..=N_KERNELS].iter().zip(&p32[1..=N_KERNELS]) {
+                    worst = worst.max((a - f64::from(*b)).abs());
+                }
+                let n64: f64 = p64.iter().map(|v| v * v).sum::<f64>().sqrt();
+                assert!(
+                    (f64::from(n32) - n64).abs() < 1e-6 * n64,
+                    "{xt:?}: ‖Φ‖ {n32} vs {n64}"
+                );
+                n += 1;
+            }
+        }
+    }
+    assert_eq!(n, 9 * 6 * 5);
+    assert!(worst < 1e-6, "{worst:e}");
+    for v in [f32::INFINITY, f32::NEG_INFINITY, f32::MAX] {
+        let norm = r32.phi(&[0.0, v, 0.01], &z.map(|v| v as f32), &mut p32);
+        assert!(norm.is_finite(), "{v}");
+        assert!(p32.iter().all(|p| !p.is_nan()), "{v}");
+    }
+    r32.phi(&[0.0, f32::NAN, 0.0], &z.map(|v| v as f32), &mut p32);
+    assert!(p32[1..=N_KERNELS].iter().all(|p| p.is_nan()));
+}

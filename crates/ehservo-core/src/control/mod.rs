@@ -174,6 +174,27 @@ pub trait Controller<T: Real = f64> {
         ds: &mut Self::State,
     ) -> Output<Self::Parts, T>;
 
+    /// The law followed by a forward-Euler step of the state: writes
+    /// `s + dt·ξ̇` into `next` (each component as [`OdeState::euler_from`]
+    /// computes it) and returns the output and whether every component of
+    /// `next` is finite. `next` is scratch: it is written whatever the outcome. The
+    /// default zeroes `next`, calls [`Controller::law`] into it and steps
+    /// in place; a controller may skip the zeroing or fuse the two (the
+    /// NNBVSC skips it, and on a Cortex-M writes ξ + dt·ξ̇ in one pass).
+    #[inline]
+    fn law_euler(
+        &self,
+        m: &Measurement<T>,
+        s: &Self::State,
+        next: &mut Self::State,
+        dt: T,
+    ) -> (Output<Self::Parts, T>, bool) {
+        *next = Self::State::zero();
+        let out = self.law(m, s, next);
+        let finite = next.euler_from(s, dt);
+        (out, finite)
+    }
+
     /// The network weights in `s` (empty for controllers without any).
     fn weights<'a>(&self, _s: &'a Self::State) -> &'a [T] {
         &[]
