@@ -312,6 +312,40 @@ atol = { e_max_deg = 0.002, sigma_rms = 0.01, chattering = 0.01, w_drift = 0.001
     for r in &rep.runs {
         assert!(r.estimate.levels.len() >= 2, "{} {}", r.case, r.reading);
     }
+    // Bounded is not tracking: sampled at 0.01 s with a converged plant and
+    // the Fig. 2 bounds (R1), the VSC stays bounded over the whole scan but
+    // never keeps max |e| below 0.5° (10 % of 5°): about 5.5° at zero bias.
+    let b = rep
+        .vsc_breaking
+        .iter()
+        .find(|b| {
+            b.reading == "sampled"
+                && b.bias_reading == Some(ehservo::reproduce::breaking::BiasReading::R1)
+        })
+        .unwrap();
+    assert_eq!(b.found.bounded.first_fail, None);
+    assert_eq!(b.found.tracking.first_fail, Some(0.0));
+    assert_eq!(b.found.tracking.last_pass, None);
+    // Fig. 8 over seeds 0..7 under the chosen reading: collected in seed
+    // order, so seed 1 is the manifest's own fig8 run.
+    let st = &rep.stochastic;
+    assert_eq!(st.reading, rep.primary_reading);
+    assert_eq!(st.cases.len(), 1);
+    assert_eq!(st.cases[0].case, "fig8");
+    assert_eq!(st.cases[0].e_max_deg.len(), 8);
+    let single = rep
+        .runs
+        .iter()
+        .find(|r| r.case == "fig8" && r.reading == rep.primary_reading)
+        .unwrap()
+        .metrics
+        .base
+        .e_max_deg;
+    assert_eq!(st.cases[0].e_max_deg[1], single);
+    let ids: Vec<&str> = st.claims.iter().map(|c| c.claim.as_str()).collect();
+    assert_eq!(ids, ["fig8-emax", "fig8-twice", "fig8-smooth"]);
+    assert!(md.contains("## Claims on random cases, over many seeds"));
+    assert!(out.join("figures/fig8-seeds.png").is_file());
 }
 
 #[test]
@@ -366,53 +400,4 @@ fn the_b_question_pairs_the_readings_that_differ_only_in_b() {
             ("continuous", "continuous-bfull")
         ]
     );
-    // Bounded is not tracking: the sampled VSC never keeps max |e| below
-    // 0.5° (10 % of 5°) under R1; its e_max at zero bias is 6.6°.
-    assert_eq!(b.found.tracking.first_fail, Some(0.0));
-    assert_eq!(b.found.tracking.last_pass, None);
-    // With Δb = β the sampled R1 boundary is not monotone: first unbounded
-    // at 0.329, bounded again at 0.333, unbounded for good above 0.344.
-    let b = rep
-        .vsc_breaking
-        .iter()
-        .find(|b| {
-            b.reading == "sampled-bfull"
-                && b.bias_reading == Some(ehservo::reproduce::breaking::BiasReading::R1)
-        })
-        .unwrap();
-    assert!(b.found.bounded.non_monotone);
-    within(
-        "first unbounded (sampled-bfull, R1)",
-        b.found.bounded.first_fail,
-        0.329,
-        0.005,
-    );
-    within(
-        "last bounded (sampled-bfull, R1)",
-        b.found.bounded.last_pass,
-        0.344,
-        0.005,
-    );
-    assert!(b.found.bounded.transitions.len() >= 3);
-
-    // Fig. 8 over seeds 0..7 under the chosen reading: collected in seed
-    // order, so seed 1 is the manifest's own fig8 run.
-    let st = &rep.stochastic;
-    assert_eq!(st.reading, rep.primary_reading);
-    assert_eq!(st.cases.len(), 1);
-    assert_eq!(st.cases[0].case, "fig8");
-    assert_eq!(st.cases[0].e_max_deg.len(), 8);
-    let single = rep
-        .runs
-        .iter()
-        .find(|r| r.case == "fig8" && r.reading == rep.primary_reading)
-        .unwrap()
-        .metrics
-        .base
-        .e_max_deg;
-    assert_eq!(st.cases[0].e_max_deg[1], single);
-    let ids: Vec<&str> = st.claims.iter().map(|c| c.claim.as_str()).collect();
-    assert_eq!(ids, ["fig8-emax", "fig8-twice", "fig8-smooth"]);
-    assert!(md.contains("## Claims on random cases, over many seeds"));
-    assert!(out.join("figures/fig8-seeds.png").is_file());
 }

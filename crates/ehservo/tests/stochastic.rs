@@ -74,6 +74,7 @@ fn cm(e_max: Option<f64>, chattering: Option<f64>) -> CaseMetrics {
         w_drift: None,
         w128_pp: None,
         e_hf_share: None,
+        chattering_10ms: None,
     }
 }
 
@@ -168,6 +169,7 @@ fn manifest_with(stochastic: &str) -> anyhow::Result<Manifest> {
         &p,
         format!(
             "claim = []\n[[reading]]\nid = \"r\"\nlabel = \"r\"\nset = []\n\
+             refine = {{ key = \"simulation.substeps\", levels = [1, 2, 4] }}\n\
              [[case]]\nid = \"fig8\"\nfile = \"fig8.toml\"\n{stochastic}"
         ),
     )

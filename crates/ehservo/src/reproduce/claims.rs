@@ -90,6 +90,28 @@ struct Value {
     d: f64,
 }
 
+/// Undecided when what `claim` reads (its metric, or the divergence status)
+/// had not converged at the finest level of its case or its other case.
+pub fn unconverged(claim: &Claim, results: &BTreeMap<String, Estimate>) -> Option<Verdict> {
+    let metric = claim.metric.as_deref().unwrap_or("");
+    let what = if metric.is_empty() { "status" } else { metric };
+    [Some(claim.case.as_str()), claim.other.as_deref()]
+        .into_iter()
+        .flatten()
+        .find_map(|who| {
+            let e = results.get(who)?;
+            (!e.converged_on(what)).then(|| Verdict {
+                status: Status::Undecided,
+                measured: format!("`{who}`: {}", fm_or_status(e.best(), metric)),
+                detail: format!(
+                    "`{who}`: {what} still moving at the finest level run ({} of them, last {})",
+                    e.levels.len(),
+                    e.best_value()
+                ),
+            })
+        })
+}
+
 /// Scores `claim` with the converged estimate of each case. A claim on a
 /// case that did not converge is undecided; otherwise the measured value ±
 /// its margin (see `convergence`) must lie wholly on one side of the claim.
@@ -107,24 +129,7 @@ pub fn evaluate(claim: &Claim, results: &BTreeMap<String, Estimate>) -> Verdict 
             fm(x.v)
         }
     };
-    // Undecided when what the claim reads (its metric, or the status) had
-    // not converged at the finest level.
-    let what = if metric.is_empty() { "status" } else { metric };
-    let unconverged = |e: &Estimate, who: &str| {
-        (!e.converged_on(what)).then(|| Verdict {
-            status: Status::Undecided,
-            measured: fm_or_status(e.best(), metric),
-            detail: format!(
-                "`{who}`: {what} still moving at the finest level run ({} of them, last {})",
-                e.levels.len(),
-                e.best_value()
-            ),
-        })
-    };
-    if let Some(v) = unconverged(me, &claim.case) {
-        return v;
-    }
-    if let Some(v) = oe.and_then(|o| unconverged(o, claim.other.as_deref().unwrap_or(""))) {
+    if let Some(v) = unconverged(claim, results) {
         return v;
     }
     let m = me.best();

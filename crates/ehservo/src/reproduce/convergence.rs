@@ -438,6 +438,7 @@ mod tests {
             w_drift: None,
             w128_pp: None,
             e_hf_share: None,
+            chattering_10ms: None,
         }
     }
 

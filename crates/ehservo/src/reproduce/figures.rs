@@ -801,7 +801,7 @@ pub fn boundary_figure(stem: &str, title: &str, x_label: &str, bs: &[Boundary]) 
                     if bref < 0.75 {
                         "β = 0.5·b̄ (text)"
                     } else {
-                        "b̄ (caption)"
+                        "b̄ (hypothesis Δb = β)"
                     }
                 ),
                 x_label: x_label.into(),

@@ -450,7 +450,7 @@ pub fn report_blocks(m: &Manifest, st: &Stochastic) -> Vec<Block> {
             "Cases with a random variation ({}) run for seeds 0–{} under the reading `{}`. Each claim is judged on the \
 distribution of its quantity over the seeds: it **agrees** when the median is inside the claim's band. The 5–95 % \
 range is of the defined values; the share in the band counts every seed (a diverged seed is outside). The claims \
-table above scores the case's single seed.",
+tables score these claims the same way under every reading (each at its converged level).",
             st.cases.iter().map(|c| format!("`{}`", c.case)).collect::<Vec<_>>().join(", "),
             n - 1,
             st.reading
