@@ -96,11 +96,29 @@ impl FigureContext<'_> {
     /// variation (per case where the cases differ) and its convention.
     fn footer(&self, cases: &[&str]) -> String {
         let mut sizes: Vec<(String, Vec<&str>)> = Vec::new();
+        let mut levels: Vec<(String, Vec<&str>)> = Vec::new();
         let mut conventions: Vec<String> = Vec::new();
         for c in cases {
             let Some(s) = self.scenarios.get(*c) else {
                 continue;
             };
+            // The converged level the case was run at.
+            let sim = &s.simulation;
+            let level = match sim.mode {
+                ehservo_sim::simulation::Mode::Sampled => format!(
+                    "sampled every {} s, {} RK4 sub-step{}",
+                    sim.step,
+                    sim.substeps,
+                    if sim.substeps == 1 { "" } else { "s" }
+                ),
+                ehservo_sim::simulation::Mode::Continuous => {
+                    format!("continuous, RK4 step {:e} s", sim.step)
+                }
+            };
+            match levels.iter_mut().find(|(t, _)| *t == level) {
+                Some((_, cs)) => cs.push(c),
+                None => levels.push((level, vec![c])),
+            }
             let b = b_size(&s.uncertainty);
             match sizes.iter_mut().find(|(t, _)| *t == b) {
                 Some((_, cs)) => cs.push(c),
@@ -120,8 +138,17 @@ impl FigureContext<'_> {
                 .collect::<Vec<_>>()
                 .join("; "),
         };
+        let level = match levels.len() {
+            0 => String::new(),
+            1 => levels[0].0.clone(),
+            _ => levels
+                .iter()
+                .map(|(l, cs)| format!("{}: {l}", cs.join(", ")))
+                .collect::<Vec<_>>()
+                .join("; "),
+        };
         format!(
-            "Reading {}: {}\nTrue b variation: {b} ({})",
+            "Reading {}: {}\nConverged level: {level}\nTrue b variation: {b} ({})",
             self.reading.id,
             self.reading.label,
             conventions.join("; ")
