@@ -386,6 +386,45 @@ fn log_tick(v: &f64) -> String {
 
 /// The dash pattern of a legend swatch 24 px long: up to five pieces
 /// (from, to) in pixels.
+/// A legend swatch at `at`: the line in its dash pattern (up to five
+/// pieces), a shaded box for a band, or a dot for points.
+fn swatch<'b, DB: DrawingBackend + 'b>(
+    c: RGBColor,
+    dash: Dash,
+    band: bool,
+    at: (i32, i32),
+) -> impl IntoDynElement<'b, DB, (i32, i32)> {
+    let pieces = swatch_pieces(dash);
+    let line = ShapeStyle::from(&c).stroke_width(2);
+    let hidden = ShapeStyle::from(&TRANSPARENT);
+    let piece = |k: usize| {
+        let (a, b, st) = match pieces.get(k) {
+            Some(&(a, b)) if !band => (a, b, line),
+            _ => (0, 1, hidden),
+        };
+        PathElement::new(vec![(a, 0), (b, 0)], st)
+    };
+    EmptyElement::at(at)
+        + piece(0)
+        + piece(1)
+        + piece(2)
+        + piece(3)
+        + piece(4)
+        + Rectangle::new(
+            [(0, -5), (24, 5)],
+            if band { c.mix(0.3).filled() } else { hidden },
+        )
+        + Circle::new(
+            (12, 0),
+            4,
+            if dash == Dash::Points && !band {
+                line.filled()
+            } else {
+                hidden
+            },
+        )
+}
+
 fn swatch_pieces(dash: Dash) -> Vec<(i32, i32)> {
     match dash {
         Dash::Solid => vec![(0, 24)],
@@ -491,38 +530,8 @@ where
                     let s_dash = s.dash;
                     if !drawn && !s.label.is_empty() {
                         any_label = true;
-                        anno.label(typeset(&s.label)).legend(move |(x, y)| {
-                            let (dash, band) = (s_dash, true);
-                            let pieces = swatch_pieces(dash);
-                            let line = ShapeStyle::from(&c).stroke_width(2);
-                            let hidden = ShapeStyle::from(&TRANSPARENT);
-                            let piece = |k: usize| {
-                                let (a, b, st) = match pieces.get(k) {
-                                    Some(&(a, b)) if !band => (a, b, line),
-                                    _ => (0, 1, hidden),
-                                };
-                                PathElement::new(vec![(a, 0), (b, 0)], st)
-                            };
-                            EmptyElement::at((x, y))
-                                + piece(0)
-                                + piece(1)
-                                + piece(2)
-                                + piece(3)
-                                + piece(4)
-                                + Rectangle::new(
-                                    [(0, -5), (24, 5)],
-                                    if band { c.mix(0.3).filled() } else { hidden },
-                                )
-                                + Circle::new(
-                                    (12, 0),
-                                    4,
-                                    if dash == Dash::Points && !band {
-                                        line.filled()
-                                    } else {
-                                        hidden
-                                    },
-                                )
-                        });
+                        anno.label(typeset(&s.label))
+                            .legend(move |at| swatch(c, s_dash, true, at));
                     }
                     drawn = true;
                 }
@@ -574,38 +583,8 @@ where
                     let s_dash = s.dash;
                     if first && !s.label.is_empty() {
                         any_label = true;
-                        anno.label(typeset(&s.label)).legend(move |(x, y)| {
-                            let (dash, band) = (s_dash, false);
-                            let pieces = swatch_pieces(dash);
-                            let line = ShapeStyle::from(&c).stroke_width(2);
-                            let hidden = ShapeStyle::from(&TRANSPARENT);
-                            let piece = |k: usize| {
-                                let (a, b, st) = match pieces.get(k) {
-                                    Some(&(a, b)) if !band => (a, b, line),
-                                    _ => (0, 1, hidden),
-                                };
-                                PathElement::new(vec![(a, 0), (b, 0)], st)
-                            };
-                            EmptyElement::at((x, y))
-                                + piece(0)
-                                + piece(1)
-                                + piece(2)
-                                + piece(3)
-                                + piece(4)
-                                + Rectangle::new(
-                                    [(0, -5), (24, 5)],
-                                    if band { c.mix(0.3).filled() } else { hidden },
-                                )
-                                + Circle::new(
-                                    (12, 0),
-                                    4,
-                                    if dash == Dash::Points && !band {
-                                        line.filled()
-                                    } else {
-                                        hidden
-                                    },
-                                )
-                        });
+                        anno.label(typeset(&s.label))
+                            .legend(move |at| swatch(c, s_dash, false, at));
                     }
                     first = false;
                 }

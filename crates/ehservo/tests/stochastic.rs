@@ -66,16 +66,7 @@ fn cm(e_max: Option<f64>, chattering: Option<f64>) -> CaseMetrics {
         "samples": 1001,
     }))
     .unwrap();
-    CaseMetrics {
-        base,
-        sigma_rms: None,
-        capture_corr: None,
-        capture_gain: None,
-        w_drift: None,
-        w128_pp: None,
-        e_hf_share: None,
-        chattering_10ms: None,
-    }
+    CaseMetrics::from(base)
 }
 
 fn claim(kind: ClaimKind, other: Option<&str>, metric: &str, value: Option<f64>) -> Claim {

@@ -430,16 +430,7 @@ mod tests {
             diverged_at_s: diverged_at,
             samples: 0,
         };
-        CaseMetrics {
-            base,
-            sigma_rms: None,
-            capture_corr: None,
-            capture_gain: None,
-            w_drift: None,
-            w128_pp: None,
-            e_hf_share: None,
-            chattering_10ms: None,
-        }
+        CaseMetrics::from(base)
     }
 
     #[test]

@@ -83,6 +83,22 @@ pub fn format_metric(name: &str, v: f64) -> String {
     }
 }
 
+impl From<Metrics> for CaseMetrics {
+    /// The SPEC §9 metrics alone, every derived one undefined (None).
+    fn from(base: Metrics) -> Self {
+        Self {
+            base,
+            sigma_rms: None,
+            capture_corr: None,
+            capture_gain: None,
+            w_drift: None,
+            w128_pp: None,
+            e_hf_share: None,
+            chattering_10ms: None,
+        }
+    }
+}
+
 impl CaseMetrics {
     /// A metric by name.
     pub fn get(&self, name: &str) -> Option<f64> {

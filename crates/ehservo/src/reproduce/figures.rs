@@ -95,16 +95,14 @@ impl FigureContext<'_> {
     /// The footer of a figure made from `cases`: the reading, then the b
     /// variation (per case where the cases differ) and its convention.
     fn footer(&self, cases: &[&str]) -> String {
-        let mut sizes: Vec<(String, Vec<&str>)> = Vec::new();
-        let mut levels: Vec<(String, Vec<&str>)> = Vec::new();
-        let mut conventions: Vec<String> = Vec::new();
-        for c in cases {
-            let Some(s) = self.scenarios.get(*c) else {
-                continue;
-            };
-            // The converged level the case was run at.
+        let found: Vec<(&str, &Scenario)> = cases
+            .iter()
+            .filter_map(|c| self.scenarios.get(*c).map(|s| (*c, *s)))
+            .collect();
+        // The converged level each case was run at.
+        let level = per_case(&found, |s| {
             let sim = &s.simulation;
-            let level = match sim.mode {
+            match sim.mode {
                 ehservo_sim::simulation::Mode::Sampled => format!(
                     "sampled every {} s, {} RK4 sub-step{}",
                     sim.step,
@@ -114,39 +112,16 @@ impl FigureContext<'_> {
                 ehservo_sim::simulation::Mode::Continuous => {
                     format!("continuous, RK4 step {:e} s", sim.step)
                 }
-            };
-            match levels.iter_mut().find(|(t, _)| *t == level) {
-                Some((_, cs)) => cs.push(c),
-                None => levels.push((level, vec![c])),
             }
-            let b = b_size(&s.uncertainty);
-            match sizes.iter_mut().find(|(t, _)| *t == b) {
-                Some((_, cs)) => cs.push(c),
-                None => sizes.push((b, vec![c])),
-            }
+        });
+        let b = per_case(&found, |s| b_size(&s.uncertainty));
+        let mut conventions: Vec<String> = Vec::new();
+        for (_, s) in &found {
             let conv = b_convention(&s.uncertainty);
             if !conventions.contains(&conv) {
                 conventions.push(conv);
             }
         }
-        let b = match sizes.len() {
-            0 => String::new(),
-            1 => sizes[0].0.clone(),
-            _ => sizes
-                .iter()
-                .map(|(b, cs)| format!("{}: {b}", cs.join(", ")))
-                .collect::<Vec<_>>()
-                .join("; "),
-        };
-        let level = match levels.len() {
-            0 => String::new(),
-            1 => levels[0].0.clone(),
-            _ => levels
-                .iter()
-                .map(|(l, cs)| format!("{}: {l}", cs.join(", ")))
-                .collect::<Vec<_>>()
-                .join("; "),
-        };
         format!(
             "Reading {}: {}\nConverged level: {level}\nTrue b variation: {b} ({})",
             self.reading.id,
@@ -166,6 +141,28 @@ impl FigureContext<'_> {
             .map(|s| s.reference.frequency_hz)
             .filter(|f| *f > 0.0)
             .map_or(1.0, |f| 1.0 / f)
+    }
+}
+
+/// `text` of every case: the one text when all cases share it, else
+/// "a, b: text; c: other text".
+fn per_case(cases: &[(&str, &Scenario)], text: impl Fn(&Scenario) -> String) -> String {
+    let mut groups: Vec<(String, Vec<&str>)> = Vec::new();
+    for (c, s) in cases {
+        let t = text(s);
+        match groups.iter_mut().find(|(g, _)| *g == t) {
+            Some((_, cs)) => cs.push(c),
+            None => groups.push((t, vec![c])),
+        }
+    }
+    match groups.as_slice() {
+        [] => String::new(),
+        [(t, _)] => t.clone(),
+        _ => groups
+            .iter()
+            .map(|(t, cs)| format!("{}: {t}", cs.join(", ")))
+            .collect::<Vec<_>>()
+            .join("; "),
     }
 }
 
