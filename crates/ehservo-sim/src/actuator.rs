@@ -1,20 +1,32 @@
-//! The actuator stage between the controller and the plant: the valve that
-//! saturates and lags.
+//! The actuator stage between the controller and the plant: the servo valve
+//! that saturates, lags, has a dead band and a null bias.
 //!
 //! ```text
-//! u_c = clamp(u, −limit, limit)                      saturation (V)
-//! v̇   = clamp((u_c − v)/τ, −rate_limit, rate_limit)  first-order lag, slew-limited
-//! plant input = v          (τ > 0)
-//!             = u_c        (no time constant: a static saturation)
+//! u_c = clamp(u, −limit, limit)                         saturation (V)
+//! first order  (τ):      v̇ = clamp((u_c − v)/τ, ±rate_limit)
+//! second order (ωn, ζ):  v̇ = clamp(w, ±rate_limit),
+//!                        ẇ = ωn²·(u_c − v) − 2ζωn·w     (ẇ = 0 while |w| ≥ rate_limit pushes out)
+//! no dynamics:           v = u_c
+//! plant input = db(v + null_bias),  db(s) = sgn(s)·max(|s| − dead_band, 0)
 //! ```
 //!
-//! The lag's state `v` (V) is integrated with the plant in both simulation
+//! `v` is the spool position in volts of command (the valve's own spool
+//! travel is `Kv·v`). The dynamics are given by `time_constant` τ (first
+//! order), or by the −3 dB `bandwidth_hz` f_b and `order`: a first-order
+//! valve has τ = 1/(2π f_b); a second-order one with damping ζ (default 0.7)
+//! has ωn = 2π f_b / √(1 − 2ζ² + √(4ζ⁴ − 4ζ² + 2)), the natural frequency
+//! whose |G(j2πf_b)| = 1/√2 (servo valves of the Moog G761 class: roughly
+//! 100–200 Hz at ±10 V). The dead band is the spool's overlap: no flow while
+//! |v + null_bias| ≤ dead_band, and the opening beyond it; the null bias is
+//! the spool's offset at zero command (flow at u = 0).
+//!
+//! The spool state (v, w) is integrated with the plant in both simulation
 //! modes: inside the RK4 steps of the held command in sampled mode, and in
 //! every RK4 stage together with the plant and the controller state in
-//! continuous mode. A rate limit bounds the lag's slew and so needs a time
-//! constant (a pure rate limiter is discontinuous in its input; model a
-//! fast valve with a small τ). With no key set the stage is the identity
-//! and the plant sees the command exactly.
+//! continuous mode. A rate limit bounds the spool's slew and so needs
+//! dynamics (a pure rate limiter is discontinuous in its input; model a fast
+//! valve with a high bandwidth). With no key set the stage is the identity
+//! and the plant sees the command exactly (the same bits).
 
 use ehservo_core::error::ParamError;
 use serde::{Deserialize, Serialize};
@@ -26,19 +38,45 @@ pub struct ActuatorConfig {
     /// Saturation of the command, ±limit (V).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub limit: Option<f64>,
-    /// Largest slew of the valve, |v̇| ≤ rate_limit (V/s); needs `time_constant`.
+    /// Largest slew of the spool, |v̇| ≤ rate_limit (V/s); needs dynamics.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rate_limit: Option<f64>,
-    /// First-order lag τ (s) between command and valve.
+    /// First-order lag τ (s) between command and spool (or give `bandwidth_hz`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_constant: Option<f64>,
+    /// −3 dB bandwidth of the spool dynamics (Hz).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bandwidth_hz: Option<f64>,
+    /// Order of the spool dynamics with `bandwidth_hz`: 1 or 2 (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub order: Option<u8>,
+    /// Damping ratio ζ of a second-order spool (default 0.7).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// Half-width of the dead band (overlap) of the spool (V).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dead_band: Option<f64>,
+    /// Spool offset at zero command (V).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub null_bias: Option<f64>,
 }
 
 impl ActuatorConfig {
     /// No effect at all.
     pub fn is_identity(&self) -> bool {
-        self.limit.is_none() && self.rate_limit.is_none() && self.time_constant.is_none()
+        *self == Self::default()
     }
+}
+
+/// The spool's dynamics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Dynamics {
+    /// The spool is where the (saturated) command puts it.
+    None,
+    /// v̇ = (u_c − v)/τ.
+    First { tau: f64 },
+    /// v̈ = ωn²(u_c − v) − 2ζωn v̇.
+    Second { wn2: f64, two_zeta_wn: f64 },
 }
 
 /// The validated stage.
@@ -46,7 +84,17 @@ impl ActuatorConfig {
 pub struct Actuator {
     limit: f64,
     rate: f64,
-    tau: f64,
+    dynamics: Dynamics,
+    dead_band: f64,
+    null_bias: f64,
+    /// Neither dead band nor null bias: the output is the spool itself.
+    plain: bool,
+}
+
+/// The −3 dB bandwidth of a second-order lag as a multiple of ωn.
+pub fn second_order_bandwidth_ratio(zeta: f64) -> f64 {
+    let z2 = zeta * zeta;
+    (1.0 - 2.0 * z2 + (4.0 * z2 * z2 - 4.0 * z2 + 2.0).sqrt()).sqrt()
 }
 
 impl Actuator {
@@ -54,35 +102,103 @@ impl Actuator {
     pub const IDENTITY: Actuator = Actuator {
         limit: f64::INFINITY,
         rate: f64::INFINITY,
-        tau: 0.0,
+        dynamics: Dynamics::None,
+        dead_band: 0.0,
+        null_bias: 0.0,
+        plain: true,
     };
 
-    /// Validates the keys; the error names the key (`limit`, `rate_limit`,
-    /// `time_constant`).
+    /// Validates the keys; the error names the key.
     pub fn try_new(c: &ActuatorConfig) -> Result<Self, ParamError> {
         let pos = |name, v: Option<f64>, default: f64| match v {
             None => Ok(default),
             Some(x) if x.is_finite() && x > 0.0 => Ok(x),
             Some(x) => Err(ParamError::new(name, "must be finite and > 0", x)),
         };
-        let a = Actuator {
-            limit: pos("limit", c.limit, f64::INFINITY)?,
-            rate: pos("rate_limit", c.rate_limit, f64::INFINITY)?,
-            tau: pos("time_constant", c.time_constant, 0.0)?,
+        let dead_band = match c.dead_band {
+            Some(x) if !(x.is_finite() && x >= 0.0) => {
+                return Err(ParamError::new("dead_band", "must be finite and >= 0", x))
+            }
+            v => v.unwrap_or(0.0),
         };
-        if c.rate_limit.is_some() && c.time_constant.is_none() {
+        let null_bias = match c.null_bias {
+            Some(x) if !x.is_finite() => {
+                return Err(ParamError::new("null_bias", "must be finite", x))
+            }
+            v => v.unwrap_or(0.0),
+        };
+        let order = match c.order {
+            None | Some(1) => 1,
+            Some(2) => 2,
+            Some(o) => {
+                return Err(ParamError::new("order", "must be 1 or 2", f64::from(o)));
+            }
+        };
+        if c.order.is_some() && c.bandwidth_hz.is_none() {
             return Err(ParamError::new(
-                "rate_limit",
-                "needs actuator.time_constant > 0 (the rate limit bounds the lag's slew)",
+                "order",
+                "needs actuator.bandwidth_hz (the order of the spool dynamics it sets)",
                 f64::NAN,
             ));
         }
-        Ok(a)
+        if c.damping.is_some() && order != 2 {
+            return Err(ParamError::new(
+                "damping",
+                "applies to a second-order spool only: set actuator.order = 2",
+                f64::NAN,
+            ));
+        }
+        let dynamics = match (c.time_constant, c.bandwidth_hz) {
+            (Some(_), Some(_)) => {
+                return Err(ParamError::new(
+                    "bandwidth_hz",
+                    "give either actuator.time_constant or actuator.bandwidth_hz, not both",
+                    f64::NAN,
+                ))
+            }
+            (Some(t), None) => Dynamics::First {
+                tau: pos("time_constant", Some(t), 0.0)?,
+            },
+            (None, Some(f)) => {
+                let wb = 2.0 * core::f64::consts::PI * pos("bandwidth_hz", Some(f), 0.0)?;
+                if order == 1 {
+                    Dynamics::First { tau: 1.0 / wb }
+                } else {
+                    let zeta = pos("damping", c.damping, 0.7)?;
+                    let wn = wb / second_order_bandwidth_ratio(zeta);
+                    Dynamics::Second {
+                        wn2: wn * wn,
+                        two_zeta_wn: 2.0 * zeta * wn,
+                    }
+                }
+            }
+            (None, None) => Dynamics::None,
+        };
+        if c.rate_limit.is_some() && dynamics == Dynamics::None {
+            return Err(ParamError::new(
+                "rate_limit",
+                "needs spool dynamics: actuator.time_constant or actuator.bandwidth_hz (the rate limit bounds the spool's slew)",
+                f64::NAN,
+            ));
+        }
+        Ok(Actuator {
+            limit: pos("limit", c.limit, f64::INFINITY)?,
+            rate: pos("rate_limit", c.rate_limit, f64::INFINITY)?,
+            dynamics,
+            dead_band,
+            null_bias,
+            plain: dead_band == 0.0 && null_bias == 0.0,
+        })
     }
 
-    /// Whether the stage has a state (a lag).
+    /// Whether the stage has a state (spool dynamics).
     pub fn has_lag(&self) -> bool {
-        self.tau > 0.0
+        self.dynamics != Dynamics::None
+    }
+
+    /// Whether the stage changes nothing.
+    pub fn is_identity(&self) -> bool {
+        *self == Self::IDENTITY
     }
 
     /// The saturation limit (V); infinite when there is none.
@@ -100,34 +216,63 @@ impl Actuator {
         }
     }
 
-    /// The valve's state at rest.
-    pub fn initial_state(&self) -> [f64; 1] {
-        [0.0]
+    /// The valve's state (v, v̇) at rest.
+    pub fn initial_state(&self) -> [f64; 2] {
+        [0.0; 2]
     }
 
-    /// What the plant sees: the lag's state, or the saturated command.
+    /// The spool position (V): the dynamics' state, or the saturated command.
     #[inline]
-    pub fn output(&self, s: &[f64; 1], u: f64) -> f64 {
-        if self.tau > 0.0 {
-            s[0]
+    pub fn spool(&self, s: &[f64; 2], u: f64) -> f64 {
+        match self.dynamics {
+            Dynamics::None => self.saturate(u),
+            _ => s[0],
+        }
+    }
+
+    /// What the plant sees: the spool through the dead band, with the null bias.
+    #[inline]
+    pub fn output(&self, s: &[f64; 2], u: f64) -> f64 {
+        let v = self.spool(s, u);
+        if self.plain {
+            return v;
+        }
+        let p = v + self.null_bias;
+        let over = p.abs() - self.dead_band;
+        if over > 0.0 {
+            over.copysign(p)
         } else {
-            self.saturate(u)
+            0.0
         }
     }
 
     /// The state derivative under command `u`.
     #[inline]
-    pub fn deriv(&self, s: &[f64; 1], u: f64, ds: &mut [f64; 1]) {
-        ds[0] = if self.tau > 0.0 {
-            let r = (self.saturate(u) - s[0]) / self.tau;
-            if r.abs() > self.rate {
-                r.clamp(-self.rate, self.rate)
-            } else {
-                r
+    pub fn deriv(&self, s: &[f64; 2], u: f64, ds: &mut [f64; 2]) {
+        match self.dynamics {
+            Dynamics::None => *ds = [0.0; 2],
+            Dynamics::First { tau } => {
+                let r = (self.saturate(u) - s[0]) / tau;
+                ds[0] = if r.abs() > self.rate {
+                    r.clamp(-self.rate, self.rate)
+                } else {
+                    r
+                };
+                ds[1] = 0.0;
             }
-        } else {
-            0.0
-        };
+            Dynamics::Second { wn2, two_zeta_wn } => {
+                let w = s[1];
+                let a = wn2 * (self.saturate(u) - s[0]) - two_zeta_wn * w;
+                if w.abs() >= self.rate {
+                    ds[0] = w.clamp(-self.rate, self.rate);
+                    // Held at the rate limit: no acceleration outward.
+                    ds[1] = if a * w > 0.0 { 0.0 } else { a };
+                } else {
+                    ds[0] = w;
+                    ds[1] = a;
+                }
+            }
+        }
     }
 }
 
@@ -142,6 +287,7 @@ mod tests {
             limit,
             rate_limit: rate,
             time_constant: tau,
+            ..Default::default()
         })
         .unwrap()
     }
@@ -150,11 +296,11 @@ mod tests {
     fn identity_passes_the_command_exactly() {
         let a = Actuator::IDENTITY;
         for u in [0.0, -0.0, 1e-300, -3.7, 1e300] {
-            assert_eq!(a.output(&[5.0], u).to_bits(), u.to_bits());
+            assert_eq!(a.output(&[5.0, 1.0], u).to_bits(), u.to_bits());
         }
-        let mut d = [1.0];
-        a.deriv(&[5.0], 2.0, &mut d);
-        assert_eq!(d[0], 0.0);
+        let mut d = [1.0; 2];
+        a.deriv(&[5.0, 1.0], 2.0, &mut d);
+        assert_eq!(d, [0.0; 2]);
     }
 
     /// A unit step through τ = 0.05 s: v(t) = 1 − e^(−t/τ); at t = τ,
@@ -162,7 +308,7 @@ mod tests {
     #[test]
     fn lag_step_response_reaches_63_percent_at_tau() {
         let a = act(None, None, Some(0.05));
-        let mut s = [0.0];
+        let mut s = [0.0; 2];
         let h = 0.001;
         for k in 0..50 {
             rk4_step(|_, s, ds| a.deriv(s, 1.0, ds), k as f64 * h, &mut s, h);
@@ -177,7 +323,7 @@ mod tests {
     #[test]
     fn saturation_and_rate_limit() {
         let a = act(Some(0.5), Some(2.0), Some(0.01));
-        let mut s = [0.0];
+        let mut s = [0.0; 2];
         let h = 0.001;
         for k in 0..100 {
             rk4_step(|_, s, ds| a.deriv(s, 10.0, ds), k as f64 * h, &mut s, h);
@@ -189,8 +335,134 @@ mod tests {
         assert!(s[0] <= 0.5 + 1e-12 && s[0] > 0.49, "{}", s[0]);
         // Static saturation without a lag.
         let b = act(Some(0.5), None, None);
-        assert_eq!(b.output(&[0.0], -3.0), -0.5);
-        assert_eq!(b.output(&[0.0], 0.25), 0.25);
+        assert_eq!(b.output(&[0.0; 2], -3.0), -0.5);
+        assert_eq!(b.output(&[0.0; 2], 0.25), 0.25);
+    }
+
+    fn valve(order: u8, f: f64, zeta: Option<f64>) -> Actuator {
+        Actuator::try_new(&ActuatorConfig {
+            bandwidth_hz: Some(f),
+            order: Some(order),
+            damping: zeta,
+            ..Default::default()
+        })
+        .unwrap()
+    }
+
+    /// Steady amplitude of the spool under a unit sine at `f` (Hz): RK4
+    /// with 2000 steps per period, over 30 periods, the last 10 measured.
+    fn gain_at(a: &Actuator, f: f64) -> f64 {
+        let w = 2.0 * std::f64::consts::PI * f;
+        let n = 2000;
+        let h = 1.0 / (f * n as f64);
+        let mut s = [0.0; 2];
+        let mut peak: f64 = 0.0;
+        for k in 0..30 * n {
+            let t = k as f64 * h;
+            rk4_step(|tt, s, ds| a.deriv(s, (w * tt).sin(), ds), t, &mut s, h);
+            if k >= 20 * n {
+                peak = peak.max(s[0].abs());
+            }
+        }
+        peak
+    }
+
+    /// The −3 dB bandwidth means |G(j2πf_b)| = 1/√2, for both orders
+    /// (150 Hz, a G761-class valve; ζ = 0.7 and 0.4).
+    #[test]
+    fn bandwidth_is_the_minus_3_db_frequency() {
+        for a in [
+            valve(1, 150.0, None),
+            valve(2, 150.0, None),
+            valve(2, 150.0, Some(0.4)),
+        ] {
+            let g = gain_at(&a, 150.0);
+            assert!(
+                (g - std::f64::consts::FRAC_1_SQRT_2).abs() < 2e-4,
+                "{a:?}: {g}"
+            );
+        }
+        // First order: τ = 1/(2π·150) = 1.0610e-3 s, as time_constant gives.
+        let a = valve(1, 150.0, None);
+        let b = act(None, None, Some(1.0 / (2.0 * std::f64::consts::PI * 150.0)));
+        assert_eq!(a, b);
+    }
+
+    /// A unit step through the second-order spool against the closed form
+    /// 1 − e^(−ζωn t)(cos ωd t + ζ/√(1−ζ²)·sin ωd t), ωd = ωn√(1−ζ²), with
+    /// ωn from the bandwidth: for ζ = 0.7 the ratio f_b/f_n is
+    /// √(1 − 0.98 + √(0.9604 − 1.96 + 2)) = √1.02020 = 1.010050.
+    #[test]
+    fn second_order_step_response_closed_form() {
+        assert!((second_order_bandwidth_ratio(0.7) - 1.010050).abs() < 1e-6);
+        // ζ = 1/√2: the Butterworth case, bandwidth = ωn exactly.
+        assert!(
+            (second_order_bandwidth_ratio(std::f64::consts::FRAC_1_SQRT_2) - 1.0).abs() < 1e-12
+        );
+        let a = valve(2, 100.0, None);
+        let wn = 2.0 * std::f64::consts::PI * 100.0 / 1.010050;
+        let z: f64 = 0.7;
+        let wd = wn * (1.0 - z * z).sqrt();
+        let h = 1e-6;
+        let mut s = [0.0; 2];
+        for k in 0..20_000 {
+            rk4_step(|_, s, ds| a.deriv(s, 1.0, ds), k as f64 * h, &mut s, h);
+            let t = (k + 1) as f64 * h;
+            let y = 1.0
+                - (-z * wn * t).exp()
+                    * ((wd * t).cos() + z / (1.0 - z * z).sqrt() * (wd * t).sin());
+            assert!((s[0] - y).abs() < 2e-6, "t = {t}: {} vs {y}", s[0]);
+        }
+        // ζ = 0.7: overshoot e^(−πζ/√(1−ζ²)) = 4.60 %.
+        let mut s = [0.0; 2];
+        let mut peak: f64 = 0.0;
+        for k in 0..20_000 {
+            rk4_step(|_, s, ds| a.deriv(s, 1.0, ds), k as f64 * h, &mut s, h);
+            peak = peak.max(s[0]);
+        }
+        assert!((peak - 1.0459_9).abs() < 1e-4, "{peak}");
+    }
+
+    /// Dead band 0.1 V and null bias 0.02 V, no dynamics: db(u + 0.02).
+    #[test]
+    fn dead_band_and_null_bias() {
+        let a = Actuator::try_new(&ActuatorConfig {
+            dead_band: Some(0.1),
+            null_bias: Some(0.02),
+            limit: Some(1.0),
+            ..Default::default()
+        })
+        .unwrap();
+        let s = [0.0; 2];
+        assert_eq!(a.output(&s, 0.0), 0.0); // 0.02 inside the band
+        assert_eq!(a.output(&s, 0.08), 0.0); // 0.10 on its edge
+        assert!((a.output(&s, 0.5) - 0.42).abs() < 1e-15); // 0.52 − 0.1
+        assert!((a.output(&s, -0.5) + 0.38).abs() < 1e-15); // −0.48 + 0.1
+        assert!((a.output(&s, 7.0) - 0.92).abs() < 1e-15); // saturated at 1, + 0.02 − 0.1
+        assert!(!a.is_identity() && Actuator::IDENTITY.is_identity());
+    }
+
+    /// A second-order spool slews at the rate limit: from rest, a 1 V step
+    /// through a 1 kHz valve with 20 V/s never moves faster than 20 V/s.
+    #[test]
+    fn second_order_rate_limit() {
+        let a = Actuator::try_new(&ActuatorConfig {
+            bandwidth_hz: Some(1000.0),
+            order: Some(2),
+            rate_limit: Some(20.0),
+            ..Default::default()
+        })
+        .unwrap();
+        let h = 1e-5;
+        let mut s = [0.0; 2];
+        let mut prev = 0.0;
+        for k in 0..5000 {
+            rk4_step(|_, s, ds| a.deriv(s, 1.0, ds), k as f64 * h, &mut s, h);
+            assert!((s[0] - prev) / h <= 20.0 + 1e-9);
+            prev = s[0];
+        }
+        // 0.05 s at 20 V/s: 1 V reached at ~0.05 s (plus the rise into the limit).
+        assert!(s[0] > 0.9 && s[0] < 1.0 + 1e-9, "{}", s[0]);
     }
 
     #[test]
@@ -218,5 +490,70 @@ mod tests {
             }),
             "rate_limit"
         );
+        for (c, key) in [
+            (
+                ActuatorConfig {
+                    bandwidth_hz: Some(-100.0),
+                    ..c
+                },
+                "bandwidth_hz",
+            ),
+            (
+                ActuatorConfig {
+                    bandwidth_hz: Some(100.0),
+                    order: Some(3),
+                    ..c
+                },
+                "order",
+            ),
+            (
+                ActuatorConfig {
+                    order: Some(2),
+                    ..c
+                },
+                "order",
+            ),
+            (
+                ActuatorConfig {
+                    bandwidth_hz: Some(100.0),
+                    damping: Some(0.5),
+                    ..c
+                },
+                "damping",
+            ),
+            (
+                ActuatorConfig {
+                    bandwidth_hz: Some(100.0),
+                    order: Some(2),
+                    damping: Some(0.0),
+                    ..c
+                },
+                "damping",
+            ),
+            (
+                ActuatorConfig {
+                    bandwidth_hz: Some(100.0),
+                    time_constant: Some(0.01),
+                    ..c
+                },
+                "bandwidth_hz",
+            ),
+            (
+                ActuatorConfig {
+                    dead_band: Some(-0.1),
+                    ..c
+                },
+                "dead_band",
+            ),
+            (
+                ActuatorConfig {
+                    null_bias: Some(f64::INFINITY),
+                    ..c
+                },
+                "null_bias",
+            ),
+        ] {
+            assert_eq!(e(c), key);
+        }
     }
 }

@@ -15,6 +15,7 @@
 //! runs here, its parts logged as named signals.
 
 pub mod actuator;
+pub mod estimator;
 pub mod metrics;
 pub mod plant;
 pub mod sensor;

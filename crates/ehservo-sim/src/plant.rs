@@ -21,6 +21,7 @@
 //! `a_bias = 1, b_bias = 0.5` (true a = 2ā, true b = 1.25·b̄); Fig. 8 is
 //! `a_bias = a_random = 0.5` and `b_bias = b_random = 0.25`.
 
+use ehservo_core::control::Signal;
 use ehservo_core::math::sgn;
 use ehservo_core::rk4::OdeState;
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
@@ -192,12 +193,28 @@ impl UncertaintySignal {
     }
 }
 
+/// Most physical states a plant may log per sample ([`Plant::STATES`]).
+pub const MAX_STATES: usize = 4;
+
+/// The load pressure Pl of the paper's servo.
+const LOAD_PRESSURE: [Signal; 1] = [Signal::new(
+    "p_load",
+    "p_load_Pa",
+    "Pa",
+    "load pressure Pl (the third-order plant: from the torque balance (4))",
+)];
+
 /// A plant as a pure derivative over its own state (of any dimension: a
 /// spool, a cylinder's two pressures), with an output map to the
 /// x = (θ, θ̇, θ̈) that the sensors see.
 pub trait Plant {
     /// The plant's state.
     type State: OdeState;
+    /// The physical states beyond x = (θ, θ̇, θ̈) that a trace carries
+    /// (a load pressure, chamber pressures), at most [`MAX_STATES`].
+    const STATES: &'static [Signal] = &[];
+    /// Their values at the state `s`, whose output is `x`.
+    fn states(&self, _s: &Self::State, _x: &[f64; 3], _out: &mut [f64; MAX_STATES]) {}
     /// The plant state that corresponds to x(0).
     fn initial_state(&self, x0: [f64; 3]) -> Self::State;
     /// x = (θ, θ̇, θ̈) from the plant state.
@@ -271,6 +288,11 @@ impl ThirdOrderPlant {
 
 impl Plant for ThirdOrderPlant {
     type State = [f64; 3];
+    const STATES: &'static [Signal] = &LOAD_PRESSURE;
+
+    fn states(&self, _s: &[f64; 3], x: &[f64; 3], out: &mut [f64; MAX_STATES]) {
+        out[0] = self.model.load_pressure(x);
+    }
 
     fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {
         x0
@@ -351,6 +373,11 @@ impl PhysicalPlant {
 
 impl Plant for PhysicalPlant {
     type State = [f64; 3];
+    const STATES: &'static [Signal] = &LOAD_PRESSURE;
+
+    fn states(&self, s: &[f64; 3], _x: &[f64; 3], out: &mut [f64; MAX_STATES]) {
+        out[0] = s[2];
+    }
 
     /// Pl(0) from the torque balance (4) with θ̈(0) = x0[2].
     fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {

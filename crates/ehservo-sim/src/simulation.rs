@@ -30,8 +30,10 @@
 //! does I/O.
 
 use crate::actuator::Actuator;
+use crate::estimator::AnyEstimator;
+pub use crate::plant::MAX_STATES;
 use crate::plant::{Plant, UncertaintySignal, UncertaintySpec, Variation};
-use crate::sensor::Sensor;
+use crate::sensor::{Channels, Sensor};
 use ehservo_core::control::{flags, Controller, Measurement, Output, Signal, Signals, Truth};
 use ehservo_core::error::ParamError;
 use ehservo_core::math::DR;
@@ -76,6 +78,9 @@ pub struct SimConfig {
     pub theta_limit: f64,
     /// Initial x = (θ, θ̇, θ̈).
     pub x0: [f64; 3],
+    /// Sampled mode: the command computed at t_k is applied from t_{k+1}
+    /// (a controller whose computation takes one sample period).
+    pub computation_delay: bool,
 }
 
 /// Most parts a controller may log per sample.
@@ -105,6 +110,16 @@ pub struct Sample {
     pub signals: &'static [Signal],
     /// Their values (the first `signals.len()`).
     pub values: [f64; MAX_PARTS],
+    /// What the controller was given as x: the measured channels after
+    /// the sensors, the others from the estimator.
+    pub x_ctrl: [f64; 3],
+    /// The estimator's (θ̂, θ̂̇, θ̂̈); zero without one.
+    pub x_est: [f64; 3],
+    /// The spool position (V), before the dead band and the null bias.
+    pub spool: f64,
+    /// The plant's physical states ([`Plant::STATES`]), when the
+    /// simulation is asked for them ([`Simulation::log_states`]).
+    pub states: [f64; MAX_STATES],
 }
 
 impl Default for Sample {
@@ -120,6 +135,10 @@ impl Default for Sample {
             flags: 0,
             signals: &[],
             values: [0.0; MAX_PARTS],
+            x_ctrl: [0.0; 3],
+            x_est: [0.0; 3],
+            spool: 0.0,
+            states: [0.0; MAX_STATES],
         }
     }
 }
@@ -252,7 +271,7 @@ pub struct Outcome {
 #[derive(Debug, Clone, Copy)]
 struct PlantAct<S: OdeState> {
     x: S,
-    a: [f64; 1],
+    a: [f64; 2],
 }
 
 impl<S: OdeState> OdeState for PlantAct<S> {
@@ -260,7 +279,7 @@ impl<S: OdeState> OdeState for PlantAct<S> {
     fn zero() -> Self {
         Self {
             x: S::zero(),
-            a: [0.0],
+            a: [0.0; 2],
         }
     }
     #[inline]
@@ -270,7 +289,7 @@ impl<S: OdeState> OdeState for PlantAct<S> {
     }
     #[inline]
     fn all_finite(&self) -> bool {
-        self.x.all_finite() && self.a[0].is_finite()
+        self.x.all_finite() && self.a.all_finite()
     }
 }
 
@@ -350,7 +369,7 @@ impl<P: Plant> Truth for TruthAt<'_, P> {
 
 /// Everything a simulation is built from besides its plant, controller and
 /// reference.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Stages {
     /// The true parameter variation.
     pub uncertainty: UncertaintySpec,
@@ -360,6 +379,8 @@ pub struct Stages {
     pub sensor: Sensor,
     /// The sampled loop's fault policy and valve range (sampled mode).
     pub policy: FaultPolicy,
+    /// What estimates the channels the sensors do not measure (sampled mode).
+    pub estimator: Option<AnyEstimator>,
 }
 
 /// A closed loop that can be stepped, run to a time, and resumed.
@@ -378,6 +399,11 @@ pub struct Simulation<P: Plant, C: Controller, R: Reference> {
     /// (the sampled controller keeps its own state): the check after each
     /// step then need not scan it again.
     xi_finite: bool,
+    estimator: Option<AnyEstimator>,
+    /// The command applied over the current sample period (the previous
+    /// one with a computation delay; the estimator's input).
+    u_applied: f64,
+    log_states: bool,
     k: u64,
     stop: Option<Stop>,
     outcome: Outcome,
@@ -398,6 +424,36 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             "a controller logs at most {MAX_PARTS} parts"
         );
         let xi = ctrl.initial_state();
+        if cfg.mode == Mode::Continuous {
+            if stages.sensor.is_sampled() {
+                return Err(ParamError::new(
+                    "sensor",
+                    "noise and delay need the sampled mode (a continuous law has no samples to draw them at)",
+                    f64::NAN,
+                ));
+            }
+            if stages.estimator.is_some() || stages.sensor.measured() != Channels::ALL {
+                return Err(ParamError::new(
+                    "estimator",
+                    "an estimator runs at the controller's rate: it needs the sampled mode",
+                    f64::NAN,
+                ));
+            }
+            if cfg.computation_delay {
+                return Err(ParamError::new(
+                    "computation_delay",
+                    "a computation delay of one sample needs the sampled mode",
+                    f64::NAN,
+                ));
+            }
+        }
+        if stages.sensor.measured() != Channels::ALL && stages.estimator.is_none() {
+            return Err(ParamError::new(
+                "measured",
+                "channels that are not measured must be estimated: set an estimator",
+                f64::NAN,
+            ));
+        }
         let ctrl = SampledController::with_policy(ctrl, cfg.step, stages.policy)?;
         let unc = UncertaintySignal::new(stages.uncertainty, plant.nominal().coeffs.as_array());
         let per_hold = unc.steps_per_hold(Self::hs(&cfg));
@@ -418,10 +474,19 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             ctrl,
             per_hold,
             xi_finite: xi.all_finite(),
+            estimator: stages.estimator,
+            u_applied: 0.0,
+            log_states: false,
             k: 0,
             stop: None,
             outcome: Outcome::default(),
         })
+    }
+
+    /// Whether each sample carries the plant's physical states
+    /// ([`Sample::states`]; off by default: sweeps need only the metrics).
+    pub fn log_states(&mut self, on: bool) {
+        self.log_states = on;
     }
 
     /// The step of the variation's clock: the RK4 sub-step in sampled mode.
@@ -493,10 +558,23 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         };
         let var = self.unc.at_step(j0, hs, self.per_hold);
         let x = self.plant.measure(&self.y.pa.x);
-        let xm = self.sensor.measure(x);
         let z = self.reference.z(t);
         match self.cfg.mode {
             Mode::Sampled => {
+                let mut xm = self.sensor.sample(x);
+                if let Some(est) = &mut self.estimator {
+                    if k == 0 {
+                        est.reset(xm[0]);
+                    }
+                    let xe = est.update(xm[0], self.u_applied);
+                    let measured = self.sensor.measured();
+                    for i in 1..3 {
+                        if !measured.has(i) {
+                            xm[i] = xe[i];
+                        }
+                    }
+                    sample.x_est = xe;
+                }
                 let truth = TruthAt {
                     plant: &self.plant,
                     x,
@@ -512,19 +590,23 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     .ctrl
                     .step_with(t, xm, z, |c, s, o| c.annotate(s, o, &truth));
                 // k1 of the step below, if the law's diagnostics evaluated
-                // it for the command the plant now gets.
-                let k1 = truth
-                    .stage
-                    .and_then(|st| st.k1.get())
-                    .filter(|(bits, _)| *bits == out.u.to_bits());
-                if !self.log(sample, t, z, x, &out) {
+                // it for the command the plant now gets (checked below).
+                let k1 = truth.stage.and_then(|st| st.k1.get());
+                let u = if self.cfg.computation_delay {
+                    self.u_applied
+                } else {
+                    out.u
+                };
+                if !self.log(sample, t, z, x, xm, u, &out) {
                     return false;
                 }
+                self.u_applied = out.u;
                 if k == self.cfg.steps {
                     self.stop = Some(Stop::Horizon);
                     return true;
                 }
-                let (plant, act, u) = (&self.plant, &self.actuator, out.u);
+                let k1 = k1.filter(|(bits, _)| *bits == u.to_bits());
+                let (plant, act) = (&self.plant, &self.actuator);
                 let f = |tt: f64,
                          s: &PlantAct<P::State>,
                          ds: &mut PlantAct<P::State>,
@@ -563,11 +645,12 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     stage: None,
                 };
                 let c = self.ctrl.controller();
+                let xm = self.sensor.measure(x);
                 let mut out = c.law(&Measurement { t, x: xm, z }, &self.y.xi, &mut dy.xi);
                 if out.u.is_finite() {
                     c.annotate(&self.y.xi, &mut out, &truth);
                 }
-                if !self.log(sample, t, z, x, &out) {
+                if !self.log(sample, t, z, x, xm, out.u, &out) {
                     return false;
                 }
                 if k == self.cfg.steps {
@@ -611,6 +694,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
 
     /// Counts the law's flags and fills `sample` at `t_k`; false (and the
     /// run stopped) when the output or a logged signal is not finite.
+    #[allow(clippy::too_many_arguments)]
     #[inline]
     fn log(
         &mut self,
@@ -618,6 +702,8 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         t: f64,
         z: [f64; 4],
         x: [f64; 3],
+        x_ctrl: [f64; 3],
+        u_applied: f64,
         out: &Output<C::Parts>,
     ) -> bool {
         if out.flags & flags::VALVE_ROOT_CLAMPED != 0 {
@@ -646,7 +732,12 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         sample.z = z;
         sample.x = x;
         sample.u = u;
-        sample.u_plant = self.actuator.output(&self.y.pa.a, u);
+        sample.u_plant = self.actuator.output(&self.y.pa.a, u_applied);
+        sample.spool = self.actuator.spool(&self.y.pa.a, u_applied);
+        sample.x_ctrl = x_ctrl;
+        if self.log_states {
+            self.plant.states(&self.y.pa.x, &x, &mut sample.states);
+        }
         sample.e = z[0] - x[0];
         sample.flags = out.flags;
         sample.signals = C::Parts::SIGNALS;
@@ -718,8 +809,9 @@ mod tests {
                 ..UncertaintySpec::NONE
             },
             actuator,
-            sensor: Sensor::IDENTITY,
+            sensor: Sensor::identity(),
             policy: FaultPolicy::default(),
+            estimator: None,
         }
     }
 
@@ -731,6 +823,7 @@ mod tests {
             substeps: 3,
             theta_limit: 1.0,
             x0: [0.0; 3],
+            computation_delay: false,
         }
     }
 
@@ -1033,5 +1126,43 @@ mod tests {
         assert_eq!(out.samples, 301);
         // The clock component: 300 steps of 1 ms.
         assert!((s.y.pa.x[3] - 0.3).abs() < 1e-12);
+    }
+
+    /// With a computation delay the plant gets each command one sample
+    /// late; with a measurement delay of 2 the controller sees x of two
+    /// samples back (the first x until then).
+    #[test]
+    fn computation_and_measurement_delays() {
+        let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+        let mut c = cfg(Mode::Sampled);
+        c.computation_delay = true;
+        let mut st = stages(Actuator::IDENTITY);
+        st.sensor = Sensor::try_new(&crate::sensor::SensorConfig {
+            delay: 2,
+            ..Default::default()
+        })
+        .unwrap();
+        let mut trace = Vec::new();
+        Simulation::new(plant, nn(), Sine::paper(), st, c)
+            .unwrap()
+            .run(&mut |s| trace.push(*s));
+        assert_eq!(trace[0].u_plant, 0.0);
+        for k in 1..trace.len() {
+            assert_eq!(
+                trace[k].u_plant.to_bits(),
+                trace[k - 1].u.to_bits(),
+                "k = {k}"
+            );
+        }
+        for k in 0..trace.len() {
+            let src = k.saturating_sub(2);
+            assert_eq!(trace[k].x_ctrl, trace[src].x, "k = {k}");
+        }
+        // A continuous loop refuses both.
+        let mut cc = cfg(Mode::Continuous);
+        cc.computation_delay = true;
+        let e = Simulation::new(plant, nn(), Sine::paper(), stages(Actuator::IDENTITY), cc)
+            .unwrap_err();
+        assert_eq!(e.name, "computation_delay");
     }
 }

@@ -96,6 +96,7 @@ fn control_and_simulation_steps_do_not_allocate() {
             substeps: 2,
             theta_limit: 1.0,
             x0: [0.0; 3],
+            computation_delay: false,
         };
         let stages = Stages {
             uncertainty: UncertaintySpec {
@@ -104,8 +105,9 @@ fn control_and_simulation_steps_do_not_allocate() {
                 ..UncertaintySpec::NONE
             },
             actuator: Actuator::IDENTITY,
-            sensor: Sensor::IDENTITY,
+            sensor: Sensor::identity(),
             policy: FaultPolicy::default(),
+            estimator: None,
         };
         let mut sim = Simulation::new(plant, nn, reference, stages, cfg).unwrap();
         let mut sum = 0.0;

@@ -4,7 +4,7 @@
 //! this construction: a scenario is valid exactly when [`Setup::new`]
 //! succeeds, so no key is checked in one place and used unchecked in another.
 
-use super::{ControllerCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS};
+use super::{ControllerCfg, EstimatorCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS};
 use ehservo_core::control::Design;
 use ehservo_core::error::ParamError;
 use ehservo_core::reference::Sine;
@@ -12,8 +12,10 @@ use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
 use ehservo_core::surface::SwitchingSurface;
 use ehservo_sim::actuator::Actuator;
+use ehservo_sim::estimator::AnyEstimator;
 use ehservo_sim::plant::UncertaintySpec;
 use ehservo_sim::sensor::Sensor;
+use ehservo_sim::simulation::Mode;
 use ehservo_sim::simulation::{SimConfig, Stages};
 
 /// Most evaluations (law or plant RK4 steps) one run may ask for: 4·10⁸,
@@ -228,6 +230,7 @@ impl Setup {
         }
         let actuator = Actuator::try_new(&s.actuator).map_err(|e| param_err("actuator", e))?;
         let sensor = Sensor::try_new(&s.sensor).map_err(|e| param_err("sensor", e))?;
+        let estimator = s.estimator(sim_cfg_step(s))?;
         let policy = FaultPolicy {
             safe: match s.fault.safe_command {
                 SafeCommandCfg::HoldLast => SafeCommand::HoldLast,
@@ -260,6 +263,7 @@ impl Setup {
                 actuator,
                 sensor,
                 policy,
+                estimator,
             },
             sim: sim_cfg,
             reference: s.reference(),
@@ -282,7 +286,72 @@ impl super::Visit for Check<'_> {
     }
 }
 
+/// The estimator of `[estimator]` for the sample period `h`.
+fn build_estimator(
+    cfg: &EstimatorCfg,
+    _model: &NominalModel,
+    _h: f64,
+    _sensor: &ehservo_sim::sensor::SensorConfig,
+) -> Result<AnyEstimator, (String, String)> {
+    Err((
+        "estimator.kind".into(),
+        format!("`{}`: not built yet", cfg.kind()),
+    ))
+}
+
+fn sim_cfg_step(s: &Scenario) -> f64 {
+    s.simulation.step
+}
+
 impl Scenario {
+    /// The stages that live on the samples of the sampled loop — sensor
+    /// noise and delay, an estimator, a computation delay — checked against
+    /// the mode, and the estimator built for the sample period `h`.
+    pub fn estimator(&self, h: f64) -> Result<Option<AnyEstimator>, (String, String)> {
+        let bad = |k: &str, r: &str| Err((k.to_string(), r.to_string()));
+        let sampled = self.simulation.mode == Mode::Sampled;
+        let need =
+            "needs simulation.mode = \"sampled\" (a continuous law has no samples to draw it at)";
+        if !sampled {
+            if self.sensor.noise.iter().any(|&v| v != 0.0) {
+                return bad("sensor.noise", need);
+            }
+            if self.sensor.delay > 0 {
+                return bad("sensor.delay", need);
+            }
+            if self.simulation.computation_delay {
+                return bad("simulation.computation_delay", need);
+            }
+            if self.estimator.is_some() {
+                return bad(
+                    "estimator",
+                    "an estimator runs at the controller's rate: it needs simulation.mode = \"sampled\"",
+                );
+            }
+        }
+        let missing = self.sensor.measured.missing();
+        let Some(cfg) = &self.estimator else {
+            if !missing.is_empty() {
+                return Err((
+                    "sensor.measured".into(),
+                    format!(
+                        "{} not measured: set an [estimator] (kind = \"levant\", \"luenberger\" or \"kalman\") to estimate {}",
+                        missing.join(" and "),
+                        if missing.len() > 1 { "them" } else { "it" }
+                    ),
+                ));
+            }
+            return Ok(None);
+        };
+        build_estimator(
+            cfg,
+            &NominalModel::new(self.servo(), self.load_model()),
+            h,
+            &self.sensor,
+        )
+        .map(Some)
+    }
+
     /// The physical parameters.
     pub fn servo(&self) -> ServoParams {
         self.plant.params
@@ -339,6 +408,7 @@ impl Scenario {
             substeps: s.substeps,
             theta_limit: s.theta_limit,
             x0: s.x0,
+            computation_delay: s.computation_delay,
         }
     }
 }

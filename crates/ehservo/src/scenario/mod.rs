@@ -21,8 +21,8 @@ pub use build::Setup;
 pub use overrides::{apply_override, line_col, parse_value, set_path};
 pub use registry::{ControllerCfg, ControllerConfig, Visit, DEFAULT_KIND};
 pub use sections::{
-    FaultCfg, OutputCfg, PlantCfg, PlantModel, ReferenceCfg, SafeCommandCfg, SimulationCfg,
-    SurfaceCfg,
+    EstimatorCfg, FaultCfg, OutputCfg, PlantCfg, PlantModel, ReferenceCfg, SafeCommandCfg,
+    SimulationCfg, SurfaceCfg,
 };
 
 use ehservo_core::servo::Load;
@@ -92,6 +92,9 @@ pub struct Scenario {
     pub actuator: ActuatorConfig,
     /// What the controller measures (exact unless given).
     pub sensor: SensorConfig,
+    /// What estimates the channels the sensors do not measure.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimator: Option<EstimatorCfg>,
     /// The sampled loop's response to a bad measurement.
     pub fault: FaultCfg,
     /// Output options.

@@ -33,6 +33,11 @@ pub struct SimulationCfg {
     pub theta_limit: f64,
     /// x(0) = (θ, θ̇, θ̈). Default 0.
     pub x0: [f64; 3],
+    /// Sampled mode: apply each command one sample after the measurement
+    /// it was computed from (a controller that takes a period to compute).
+    /// Default false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub computation_delay: bool,
 }
 
 impl Default for SimulationCfg {
@@ -45,6 +50,7 @@ impl Default for SimulationCfg {
             settle: 2.0,
             theta_limit: 1.0,
             x0: [0.0; 3],
+            computation_delay: false,
         }
     }
 }
@@ -153,6 +159,49 @@ impl Default for OutputCfg {
         Self {
             decimate: 1,
             plot: true,
+        }
+    }
+}
+
+/// `[estimator]`: what estimates the channels of x that `sensor.measured`
+/// leaves out, from the measured θ, at the controller's rate (sampled mode).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum EstimatorCfg {
+    /// Levant's robust exact differentiator of second order.
+    Levant {
+        /// Bound L on |θ⃛| of the motion (rad/s³).
+        lipschitz: f64,
+        /// Forward-Euler sub-steps of the differentiator per sample. Default 10.
+        #[serde(default = "default_levant_substeps")]
+        substeps: u32,
+    },
+    /// Luenberger observer on the nominal linear model.
+    Luenberger {
+        /// Continuous-time observer poles (rad/s, real, negative).
+        poles: [f64; 3],
+    },
+    /// Steady-state Kalman filter on the nominal linear model.
+    Kalman {
+        /// Intensity q of the white jerk driving the model ((rad/s³)²·s).
+        process_noise: f64,
+        /// Variance of the θ measurement (rad²); default sensor.noise[0]².
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        measurement_noise: Option<f64>,
+    },
+}
+
+fn default_levant_substeps() -> u32 {
+    10
+}
+
+impl EstimatorCfg {
+    /// The scenario spelling of the kind.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            EstimatorCfg::Levant { .. } => "levant",
+            EstimatorCfg::Luenberger { .. } => "luenberger",
+            EstimatorCfg::Kalman { .. } => "kalman",
         }
     }
 }
