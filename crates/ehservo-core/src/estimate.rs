@@ -88,8 +88,8 @@ pub trait Estimator<T: Real = f64> {
 /// 1.3 with n = 1), but the interpolated input is not the signal, so the
 /// `τ^{3−i}` order no longer holds (at h = 1e-4 n = 10 is worse than
 /// n = 1). Sub-steps do not filter noise. Holding the newest sample
-/// instead (zero-order hold) makes `z` chase a staircase: measured errors
-/// ten times larger, O(h). The command `u_prev` is not used: the
+/// instead (zero-order hold) makes `z` chase a staircase: measured `θ̇`
+/// errors 3× (h = 0.01) to 70× (h = 1e-3) larger, of order h. The command `u_prev` is not used: the
 /// differentiator is model-free.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Levant<T: Real = f64> {
