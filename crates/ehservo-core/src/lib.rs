@@ -14,6 +14,7 @@
 //! | [`rbf`] | the modified radial-basis vector `Φ(x, z)` (130 entries) | (20) |
 //! | [`control`] | the [`Controller`](control::Controller) trait, the traditional VSC and the NNBVSC | (11)–(14), (23)–(34) |
 //! | [`rk4`] | one fixed-step classic Runge–Kutta step over any fixed-size state | §IV |
+//! | [`estimate`] | estimators of `(θ, θ̇, θ̈)` from θ: Levant's differentiator, a linear observer | — |
 //! | [`sampled`] | a fixed-rate loop for hardware: law + forward-Euler controller state | — |
 //!
 //! Nothing here allocates or touches `std`; `exp` and `sqrt` come from
@@ -40,6 +41,7 @@
 
 pub mod control;
 pub mod error;
+pub mod estimate;
 pub mod math;
 pub mod onboard;
 pub mod rbf;
@@ -60,6 +62,7 @@ pub mod prelude {
         Config, Controller, Design, Measurement, Output, Signal, Signals, Truth,
     };
     pub use crate::error::ParamError;
+    pub use crate::estimate::{Estimator, Levant, LinearObserver};
     pub use crate::rbf::{Rbf, N_KERNELS, N_PHI};
     pub use crate::reference::{Reference, Sine};
     pub use crate::rk4::{rk4_step, OdeState};

@@ -94,6 +94,8 @@ pub trait Real:
     fn clamp(self, lo: Self, hi: Self) -> Self;
     /// √v.
     fn sqrt(self) -> Self;
+    /// ∛v (real, odd: ∛(−v) = −∛v); `libm`'s `cbrt`/`cbrtf`.
+    fn cbrt(self) -> Self;
     /// eᵛ.
     fn exp(self) -> Self;
     /// sin v.
@@ -167,6 +169,10 @@ impl Real for f64 {
         libm::sqrt(self)
     }
     #[inline(always)]
+    fn cbrt(self) -> Self {
+        libm::cbrt(self)
+    }
+    #[inline(always)]
     fn exp(self) -> Self {
         #[cfg(feature = "std")]
         {
@@ -208,6 +214,10 @@ impl Real for f32 {
     #[inline(always)]
     fn sqrt(self) -> Self {
         sqrt_f32(self)
+    }
+    #[inline(always)]
+    fn cbrt(self) -> Self {
+        libm::cbrtf(self)
     }
     #[inline(always)]
     fn exp(self) -> Self {

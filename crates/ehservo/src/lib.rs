@@ -12,10 +12,12 @@
 //! | [`run`] | scenario → plant + controller → result |
 //! | [`output`], [`plot`] | CSV, JSON and PNG/SVG outputs, written atomically |
 //! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
+//! | [`estimation`] | design of the linear observers of `ehservo_core::estimate`: discretisation, Luenberger, steady-state Kalman, noise gains |
 //! | [`study`] | sweeps and Monte Carlo, sharded across machines |
 
 pub mod analysis;
 pub mod error;
+pub mod estimation;
 pub mod input;
 pub mod output;
 pub mod plot;
