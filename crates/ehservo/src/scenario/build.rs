@@ -289,14 +289,65 @@ impl super::Visit for Check<'_> {
 /// The estimator of `[estimator]` for the sample period `h`.
 fn build_estimator(
     cfg: &EstimatorCfg,
-    _model: &NominalModel,
-    _h: f64,
-    _sensor: &ehservo_sim::sensor::SensorConfig,
+    model: &NominalModel,
+    h: f64,
+    sensor: &ehservo_sim::sensor::SensorConfig,
 ) -> Result<AnyEstimator, (String, String)> {
-    Err((
-        "estimator.kind".into(),
-        format!("`{}`: not built yet", cfg.kind()),
-    ))
+    use ehservo_core::estimate::Levant;
+    let err = |e: ParamError| {
+        // The design's own names (h, a1, …) are not keys: name the table.
+        let key = match e.name {
+            "lipschitz" | "substeps" | "poles" | "process_noise" | "measurement_noise" => {
+                format!("estimator.{}", e.name)
+            }
+            n if n.starts_with('p') && n.len() == 2 => "estimator.poles".to_string(),
+            _ => "estimator".to_string(),
+        };
+        let (_, reason) = param_err("estimator", e);
+        (key, reason)
+    };
+    Ok(match *cfg {
+        EstimatorCfg::Levant {
+            lipschitz,
+            substeps,
+        } => AnyEstimator::Levant(
+            Levant::try_new(lipschitz, h)
+                .and_then(|l| l.with_substeps(substeps))
+                .map_err(err)?,
+        ),
+        EstimatorCfg::Luenberger { poles } => {
+            if let Some(p) = poles.iter().find(|p| !(p.is_finite() && **p < 0.0)) {
+                return Err((
+                    "estimator.poles".into(),
+                    format!("must be finite and < 0 (got {p:?})"),
+                ));
+            }
+            AnyEstimator::Linear(crate::estimation::luenberger(model, poles, h).map_err(err)?)
+        }
+        EstimatorCfg::Kalman {
+            process_noise,
+            measurement_noise,
+        } => {
+            // By default the θ channel's noise: the Gaussian σ², plus the
+            // quantisation's q²/12.
+            let r = measurement_noise.unwrap_or(
+                sensor.noise[0] * sensor.noise[0] + sensor.resolution[0] * sensor.resolution[0] / 12.0,
+            );
+            if !(r.is_finite() && r > 0.0) {
+                return Err((
+                    "estimator.measurement_noise".into(),
+                    if measurement_noise.is_none() {
+                        "θ's sensor is exact (sensor.noise and sensor.resolution of θ are 0): give the variance the filter should assume".into()
+                    } else {
+                        format!("must be finite and > 0 (got {r:?})")
+                    },
+                ));
+            }
+            AnyEstimator::Linear(
+                crate::estimation::kalman(model, process_noise, r, h).map_err(err)?,
+            )
+        }
+    })
 }
 
 fn sim_cfg_step(s: &Scenario) -> f64 {

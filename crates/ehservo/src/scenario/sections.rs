@@ -172,7 +172,9 @@ pub enum EstimatorCfg {
     Levant {
         /// Bound L on |θ⃛| of the motion (rad/s³).
         lipschitz: f64,
-        /// Forward-Euler sub-steps of the differentiator per sample. Default 10.
+        /// Sub-steps of the differentiator per sample, the input interpolated
+        /// linearly between samples. Default 1 (Livne & Levant's
+        /// second-order-corrected step, see `ehservo_core::estimate`).
         #[serde(default = "default_levant_substeps")]
         substeps: u32,
     },
@@ -192,7 +194,7 @@ pub enum EstimatorCfg {
 }
 
 fn default_levant_substeps() -> u32 {
-    10
+    1
 }
 
 impl EstimatorCfg {
