@@ -302,7 +302,7 @@ mod tests {
     fn reverse_drop_is_clamped_not_nan() {
         let c = CylinderParams::typical();
         let (q1, q2, clamped) = c.valve_flows(1e-4, c.ps + 1e5, -2e5);
-        assert_eq!((q1, q2, clamped), (0.0, 0.0, true));
+        assert!(q1 == 0.0 && q2 == 0.0 && clamped);
         let (_, _, clamped) = c.valve_flows(0.0, c.ps + 1e5, -2e5);
         assert!(!clamped, "a closed valve has no flow to clamp");
     }
