@@ -6,6 +6,7 @@
 //! | module | role |
 //! |---|---|
 //! | [`plant`] | the "true" plants (third-order and physical) with the parameter variations the controller does not know |
+//! | [`cylinder`] | a valve-controlled double-rod cylinder on a rack and pinion, a second plant family |
 //! | [`actuator`] | the valve between controller and plant: saturation, rate limit, first-order lag |
 //! | [`sensor`] | what the controller measures: bias and quantisation |
 //! | [`simulation`] | the resumable loop, continuous and sampled, with its stop reasons |
@@ -16,6 +17,7 @@
 
 pub mod actuator;
 pub mod estimator;
+pub mod cylinder;
 pub mod metrics;
 pub mod plant;
 pub mod sensor;

@@ -27,6 +27,6 @@ pub mod scenario;
 pub mod signals;
 pub mod study;
 
-pub use ehservo_sim::{actuator, metrics, plant, sensor, simulation};
+pub use ehservo_sim::{actuator, cylinder, metrics, plant, sensor, simulation};
 
 pub use ehservo_core as core;

@@ -453,10 +453,7 @@ fn print_summary(
         "{}: {} on the {} plant, {} (h = {} s{}), horizon {} s",
         s.name,
         s.controller.kind(),
-        match s.plant.model {
-            ehservo::scenario::PlantModel::ThirdOrder => "third-order",
-            ehservo::scenario::PlantModel::Physical => "physical",
-        },
+        s.plant.model.as_str(),
         sim.mode.as_str(),
         sim.step,
         if sim.mode == ehservo::simulation::Mode::Sampled {

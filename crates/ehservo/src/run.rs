@@ -3,6 +3,7 @@
 //! controller and runs the [`Simulation`], keeping the metrics (and the
 //! trace if asked).
 
+use crate::cylinder::CylinderPlant;
 use crate::metrics::{Metrics, MetricsAccumulator};
 use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant};
 use crate::scenario::{ControllerConfig, PlantModel, Scenario, ScenarioError, Setup, Visit};
@@ -98,6 +99,13 @@ impl Visit for Runner<'_, '_> {
             }
             PlantModel::Physical => {
                 execute(PhysicalPlant::new(p, l), ctrl, self.setup, self.observe)
+            }
+            PlantModel::Cylinder => {
+                let c = self
+                    .setup
+                    .cylinder
+                    .expect("Setup::new keeps the cylinder of a cylinder scenario");
+                execute(CylinderPlant::new(c, l), ctrl, self.setup, self.observe)
             }
         }
     }

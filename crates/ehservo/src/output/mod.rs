@@ -252,10 +252,7 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         "{} — {} on the {} plant, {} h = {} s",
         s.name,
         s.controller.kind(),
-        match s.plant.model {
-            crate::scenario::PlantModel::ThirdOrder => "third-order",
-            crate::scenario::PlantModel::Physical => "physical",
-        },
+        s.plant.model.as_str(),
         s.simulation.mode.as_str(),
         s.simulation.step
     );

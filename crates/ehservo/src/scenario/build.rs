@@ -6,6 +6,7 @@
 
 use super::{ControllerCfg, EstimatorCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS};
 use ehservo_core::control::Design;
+use ehservo_core::cylinder::CylinderParams;
 use ehservo_core::error::ParamError;
 use ehservo_core::reference::Sine;
 use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
@@ -30,6 +31,8 @@ pub const MAX_DRAWS: f64 = 1.0e8;
 pub struct Setup {
     /// Which true plant.
     pub plant: PlantModel,
+    /// The cylinder's parameters, with `plant == Cylinder`.
+    pub cylinder: Option<CylinderParams>,
     /// The nominal model (physical parameters and load).
     pub model: NominalModel,
     /// What the controller is designed from.
@@ -215,6 +218,8 @@ impl Setup {
             );
         }
 
+        let cylinder = s.checked_cylinder()?;
+
         let surface = s.surface()?;
         if !s.controller.uses_surface() && s.surface != Default::default() {
             return bad(
@@ -255,6 +260,7 @@ impl Setup {
         s.controller.visit(Check(&design))?;
         Ok(Setup {
             plant: s.plant.model,
+            cylinder,
             model,
             design,
             controller: s.controller.clone(),
@@ -403,9 +409,75 @@ impl Scenario {
         .map(Some)
     }
 
-    /// The physical parameters.
+    /// The physical parameters: `[plant.params]`, or with a cylinder the
+    /// paper's parameters equal to its linearisation (docs/cylinder.md).
     pub fn servo(&self) -> ServoParams {
-        self.plant.params
+        match self.plant.model {
+            PlantModel::Cylinder => self.cylinder().nominal_servo_params(),
+            _ => self.plant.params,
+        }
+    }
+
+    /// `[plant.cylinder]`, the documented typical set when absent.
+    pub fn cylinder(&self) -> CylinderParams {
+        self.plant.cylinder.unwrap_or_default()
+    }
+
+    /// The cylinder's checks (`Some` with `model = "cylinder"`): its
+    /// parameters, no `[plant.params]` beside it, the reference and x(0)
+    /// inside the stroke; and no `[plant.cylinder]` on another model.
+    fn checked_cylinder(&self) -> Result<Option<CylinderParams>, (String, String)> {
+        if self.plant.model != PlantModel::Cylinder {
+            return match self.plant.cylinder {
+                Some(_) => Err((
+                    "plant.cylinder".into(),
+                    format!(
+                        "given, but plant.model is \"{}\": set plant.model = \"cylinder\" or remove [plant.cylinder]",
+                        self.plant.model.as_str()
+                    ),
+                )),
+                None => Ok(None),
+            };
+        }
+        if self.plant.params != ServoParams::paper() {
+            return Err((
+                "plant.params".into(),
+                "not used with plant.model = \"cylinder\": the nominal model is derived from [plant.cylinder] (docs/cylinder.md); remove [plant.params]".into(),
+            ));
+        }
+        let c = self.cylinder();
+        c.validate().map_err(|e| {
+            let prefix = if c.friction.is_some()
+                && matches!(
+                    e.name,
+                    "coulomb" | "stiction" | "stribeck_velocity" | "viscous" | "smoothing"
+                ) {
+                "plant.cylinder.friction"
+            } else {
+                "plant.cylinder"
+            };
+            param_err(prefix, e)
+        })?;
+        let end = c.stroke_angle();
+        if self.reference.amplitude_deg.to_radians() >= end {
+            return Err((
+                "reference.amplitude_deg".into(),
+                format!(
+                    "the reference reaches the end of the cylinder's stroke, ±{:.4}° (stroke/(2r))",
+                    end.to_degrees()
+                ),
+            ));
+        }
+        if self.simulation.x0[0].abs() >= end {
+            return Err((
+                "simulation.x0".into(),
+                format!(
+                    "θ(0) is beyond the cylinder's stroke, ±{:.4}° (stroke/(2r))",
+                    end.to_degrees()
+                ),
+            ));
+        }
+        Ok(Some(c))
     }
 
     /// The switching surface from `poles` or `p` (the paper's by default).
@@ -457,7 +529,12 @@ impl Scenario {
             step: s.step,
             mode: s.mode,
             substeps: s.substeps,
-            theta_limit: s.theta_limit,
+            // A cylinder's run diverges when it reaches the end of its
+            // stroke (end stops are not modelled).
+            theta_limit: match self.plant.model {
+                PlantModel::Cylinder => s.theta_limit.min(self.cylinder().stroke_angle()),
+                _ => s.theta_limit,
+            },
             x0: s.x0,
             computation_delay: s.computation_delay,
         }

@@ -1,6 +1,7 @@
 //! The sections of a scenario file, one type each, every key at the
 //! paper's Fig. 2 value by default.
 
+use ehservo_core::cylinder::CylinderParams;
 use ehservo_core::servo::ServoParams;
 use ehservo_sim::simulation::Mode;
 use serde::{Deserialize, Serialize};
@@ -13,6 +14,20 @@ pub enum PlantModel {
     ThirdOrder,
     /// Eqs. (1)–(6) in (θ, θ̇, Pl).
     Physical,
+    /// A valve-controlled double-rod cylinder on a rack and pinion
+    /// (`[plant.cylinder]`, docs/cylinder.md), in (y, ẏ, P1, P2).
+    Cylinder,
+}
+
+impl PlantModel {
+    /// The scenario's name of the model.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            PlantModel::ThirdOrder => "third-order",
+            PlantModel::Physical => "physical",
+            PlantModel::Cylinder => "cylinder",
+        }
+    }
 }
 
 /// `[simulation]`.
@@ -59,11 +74,16 @@ impl Default for SimulationCfg {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlantCfg {
-    /// `"third-order"` (default) or `"physical"`.
+    /// `"third-order"` (default), `"physical"` or `"cylinder"`.
     pub model: PlantModel,
     /// `[plant.params]`: the physical parameters, SI, by the paper's symbol
     /// (`Ps`, `beta_e`, `Vt`, `Kce`, `Dm`, `Jt`, `Bm`, `Kv`, `G`, `rho`, `Cd`, `Ag`).
     pub params: ServoParams,
+    /// `[plant.cylinder]`: the cylinder's parameters (`model = "cylinder"`
+    /// only; the documented typical set when absent). The nominal model is
+    /// then derived from them and `[plant.params]` must not be given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cylinder: Option<CylinderParams>,
 }
 
 impl Default for PlantCfg {
@@ -71,6 +91,7 @@ impl Default for PlantCfg {
         Self {
             model: PlantModel::ThirdOrder,
             params: ServoParams::paper(),
+            cylinder: None,
         }
     }
 }
