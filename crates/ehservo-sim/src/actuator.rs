@@ -196,6 +196,16 @@ impl Actuator {
         self.dynamics != Dynamics::None
     }
 
+    /// The magnitude of the spool dynamics' fastest eigenvalue (1/s): 1/τ,
+    /// or ωn; 0 without dynamics.
+    pub fn fastest_rate(&self) -> f64 {
+        match self.dynamics {
+            Dynamics::None => 0.0,
+            Dynamics::First { tau } => 1.0 / tau,
+            Dynamics::Second { wn2, .. } => wn2.sqrt(),
+        }
+    }
+
     /// Whether the stage changes nothing.
     pub fn is_identity(&self) -> bool {
         *self == Self::IDENTITY

@@ -113,7 +113,12 @@ impl CylinderPlant {
 /// The cylinder's physical states in a trace.
 const CYLINDER_STATES: [Signal; 4] = [
     Signal::new("y", "y_mm", "mm", "rod position y = r·θ"),
-    Signal::new("p1", "p1_Pa", "Pa", "pressure of chamber 1 (extends the rod)"),
+    Signal::new(
+        "p1",
+        "p1_Pa",
+        "Pa",
+        "pressure of chamber 1 (extends the rod)",
+    ),
     Signal::new("p2", "p2_Pa", "Pa", "pressure of chamber 2"),
     Signal::new("p_load", "p_load_Pa", "Pa", "load pressure P1 − P2"),
 ];

@@ -16,8 +16,8 @@
 //! runs here, its parts logged as named signals.
 
 pub mod actuator;
-pub mod estimator;
 pub mod cylinder;
+pub mod estimator;
 pub mod metrics;
 pub mod plant;
 pub mod sensor;

@@ -71,12 +71,30 @@ pub fn run_observed(
     observe: &mut dyn FnMut(&Sample),
 ) -> Result<(Outcome, Metrics), ScenarioError> {
     let setup = s.setup()?;
-    Ok(run_setup(&setup, observe))
+    Ok(setup.controller.visit(Runner {
+        setup: &setup,
+        observe,
+        states: true,
+    }))
 }
 
-/// Runs a built scenario.
+/// Runs a built scenario, for its metrics: the samples carry no plant
+/// states ([`Sample::states`]), which only traces need.
 pub fn run_setup(setup: &Setup, observe: &mut dyn FnMut(&Sample)) -> (Outcome, Metrics) {
-    setup.controller.visit(Runner { setup, observe })
+    setup.controller.visit(Runner {
+        setup,
+        observe,
+        states: false,
+    })
+}
+
+/// The physical states a plant model logs beside x ([`Plant::STATES`]).
+pub fn plant_states(model: PlantModel) -> &'static [ehservo_core::control::Signal] {
+    match model {
+        PlantModel::ThirdOrder => ThirdOrderPlant::STATES,
+        PlantModel::Physical => PhysicalPlant::STATES,
+        PlantModel::Cylinder => CylinderPlant::STATES,
+    }
 }
 
 /// Builds the plant and the controller of a [`Setup`] and runs them: the
@@ -84,6 +102,7 @@ pub fn run_setup(setup: &Setup, observe: &mut dyn FnMut(&Sample)) -> (Outcome, M
 pub struct Runner<'a, 'b> {
     setup: &'a Setup,
     observe: &'b mut dyn FnMut(&Sample),
+    states: bool,
 }
 
 impl Visit for Runner<'_, '_> {
@@ -94,18 +113,32 @@ impl Visit for Runner<'_, '_> {
             .expect("Setup::new built this controller once already");
         let (p, l) = (self.setup.model.params, self.setup.model.load);
         match self.setup.plant {
-            PlantModel::ThirdOrder => {
-                execute(ThirdOrderPlant::new(p, l), ctrl, self.setup, self.observe)
-            }
-            PlantModel::Physical => {
-                execute(PhysicalPlant::new(p, l), ctrl, self.setup, self.observe)
-            }
+            PlantModel::ThirdOrder => execute(
+                ThirdOrderPlant::new(p, l),
+                ctrl,
+                self.setup,
+                self.observe,
+                self.states,
+            ),
+            PlantModel::Physical => execute(
+                PhysicalPlant::new(p, l),
+                ctrl,
+                self.setup,
+                self.observe,
+                self.states,
+            ),
             PlantModel::Cylinder => {
                 let c = self
                     .setup
                     .cylinder
                     .expect("Setup::new keeps the cylinder of a cylinder scenario");
-                execute(CylinderPlant::new(c, l), ctrl, self.setup, self.observe)
+                execute(
+                    CylinderPlant::new(c, l),
+                    ctrl,
+                    self.setup,
+                    self.observe,
+                    self.states,
+                )
             }
         }
     }
@@ -116,6 +149,7 @@ fn execute<P: Plant, C: Controller>(
     ctrl: C,
     setup: &Setup,
     observe: &mut dyn FnMut(&Sample),
+    states: bool,
 ) -> (Outcome, Metrics) {
     let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
     let mut acc = MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network);
@@ -127,6 +161,7 @@ fn execute<P: Plant, C: Controller>(
         setup.sim,
     )
     .expect("Setup::new validated the sample period and the policy");
+    sim.log_states(states);
     let outcome = sim.run(&mut |smp: &Sample| {
         acc.push(smp);
         observe(smp);

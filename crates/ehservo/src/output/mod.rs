@@ -7,6 +7,7 @@ use crate::run::RunResult;
 use crate::scenario::Scenario;
 use crate::simulation::{Divergence, Sample};
 use anyhow::{Context, Result};
+use ehservo_core::math::DR;
 use serde::Serialize;
 use std::fs;
 use std::io::Write;
@@ -35,38 +36,101 @@ pub const SOFTWARE: Software = Software {
 pub const TRACE_PREFIX: [&str; 5] = ["t_s", "theta_d_deg", "theta_deg", "e_deg", "u_V"];
 
 /// The columns of a run's `trace.csv`: the prefix, the controller's
-/// signals that have a column, then `u_plant_V` when an actuator stands
-/// between the command and the plant.
+/// signals that have a column, `u_plant_V` when an actuator stands between
+/// the command and the plant; then the plant's physical state — θ̇, θ̈ and
+/// the plant's own states (a load pressure, chamber pressures) —, the spool
+/// position with spool dynamics, what the sensors measured (the measured
+/// channels, when the sensors are not exact) and the estimator's estimate.
+/// The physical-state columns come after the older ones, so a trace's
+/// first columns read as they always did.
 #[derive(Debug, Clone)]
 pub struct TraceLayout {
     /// Column names.
     pub columns: Vec<&'static str>,
     parts: Vec<usize>,
     actuator: bool,
+    states: usize,
+    spool: bool,
+    measured: [bool; 3],
+    estimated: bool,
+}
+
+/// The measured channels' columns.
+const MEASURED: [&str; 3] = [
+    "theta_meas_deg",
+    "theta_dot_meas_deg_s",
+    "theta_ddot_meas_deg_s2",
+];
+/// The estimate's columns.
+const ESTIMATED: [&str; 3] = [
+    "theta_est_deg",
+    "theta_dot_est_deg_s",
+    "theta_ddot_est_deg_s2",
+];
+
+/// What a trace carries beside the controller's signals.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TraceExtras {
+    /// An actuator stands between command and plant.
+    pub actuator: bool,
+    /// The plant's physical states beside x.
+    pub states: &'static [ehservo_core::control::Signal],
+    /// The actuator has spool dynamics.
+    pub spool: bool,
+    /// The channels the sensors measure, when they are not exact.
+    pub measured: Option<[bool; 3]>,
+    /// An estimator runs.
+    pub estimated: bool,
 }
 
 impl TraceLayout {
     /// The layout for samples carrying `signals`.
-    pub fn new(signals: &[ehservo_core::control::Signal], actuator: bool) -> Self {
+    pub fn new(signals: &[ehservo_core::control::Signal], x: TraceExtras) -> Self {
         let parts: Vec<usize> = (0..signals.len())
             .filter(|&i| !signals[i].column.is_empty())
             .collect();
         let mut columns: Vec<&'static str> = TRACE_PREFIX.to_vec();
         columns.extend(parts.iter().map(|&i| signals[i].column));
-        if actuator {
+        if x.actuator {
             columns.push("u_plant_V");
+        }
+        columns.extend(["theta_dot_deg_s", "theta_ddot_deg_s2"]);
+        columns.extend(x.states.iter().map(|s| s.column));
+        if x.spool {
+            columns.push("spool_V");
+        }
+        let measured = x.measured.unwrap_or([false; 3]);
+        columns.extend((0..3).filter(|&i| measured[i]).map(|i| MEASURED[i]));
+        if x.estimated {
+            columns.extend(ESTIMATED);
         }
         Self {
             columns,
             parts,
-            actuator,
+            actuator: x.actuator,
+            states: x.states.len(),
+            spool: x.spool,
+            measured,
+            estimated: x.estimated,
         }
     }
 
     /// The layout of a scenario's runs.
     pub fn of(s: &Scenario) -> Self {
         let signals = s.controller.visit(SignalsOf);
-        Self::new(signals, !s.actuator.is_identity())
+        let exact =
+            s.sensor.bias == [0.0; 3] && s.sensor.resolution == [0.0; 3] && !s.sensor.is_sampled();
+        let actuator = crate::actuator::Actuator::try_new(&s.actuator).ok();
+        Self::new(
+            signals,
+            TraceExtras {
+                actuator: !s.actuator.is_identity(),
+                states: crate::run::plant_states(s.plant.model),
+                spool: actuator.is_some_and(|a| a.has_lag()),
+                measured: (!exact || s.estimator.is_some()).then_some(s.sensor.measured.0),
+                estimated: s.estimator.is_some(),
+            },
+        )
     }
 
     fn row(&self, s: &Sample, out: &mut Vec<f64>) {
@@ -75,6 +139,19 @@ impl TraceLayout {
         out.extend(self.parts.iter().map(|&i| s.values[i]));
         if self.actuator {
             out.push(s.u_plant);
+        }
+        out.extend([s.x[1] / DR, s.x[2] / DR]);
+        out.extend(&s.states[..self.states]);
+        if self.spool {
+            out.push(s.spool);
+        }
+        out.extend(
+            (0..3)
+                .filter(|&i| self.measured[i])
+                .map(|i| s.x_ctrl[i] / DR),
+        );
+        if self.estimated {
+            out.extend(s.x_est.map(|v| v / DR));
         }
     }
 }
@@ -316,6 +393,24 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         e_panel,
         panel("(c) control input u", "u (V)", u_series),
     ];
+    // What the controller was given against the truth, when the sensors
+    // or an estimator stand between: the acceleration, the hardest channel.
+    let exact_sensor =
+        s.sensor.bias == [0.0; 3] && s.sensor.resolution == [0.0; 3] && !s.sensor.is_sampled();
+    if !exact_sensor || s.estimator.is_some() {
+        let source = match (&s.estimator, s.sensor.measured.has(2)) {
+            (Some(e), false) => format!("estimated ({})", e.kind()),
+            _ => "measured".to_string(),
+        };
+        panels.push(panel(
+            &format!("θ̈: true and {source}, as the controller saw it"),
+            "θ̈ (deg/s²)",
+            vec![
+                Series::new("seen", t.clone(), col(&|x| x.x_ctrl[2] / DR), 1).dash(Dash::Dashed),
+                Series::new("true", t.clone(), col(&|x| x.x[2] / DR), 0),
+            ],
+        ));
+    }
     let signals = run.trace.first().map(|x| x.signals).unwrap_or(&[]);
     let has = |key: &str| signals.iter().any(|g| g.key == key);
     if has("sigma") && has("uncertainty") {

@@ -234,6 +234,36 @@ impl Setup {
             return bad("output.decimate", "must be >= 1".into());
         }
         let actuator = Actuator::try_new(&s.actuator).map_err(|e| param_err("actuator", e))?;
+        // RK4 is stable for a real or lightly damped eigenvalue λ while
+        // |λ|·h ≲ 2.5–2.8: a faster spool than the plant's step would make
+        // the run numerical noise, so it is refused with the fix.
+        let hs = match sim.mode {
+            ehservo_sim::simulation::Mode::Sampled => sim.step / sim.substeps as f64,
+            ehservo_sim::simulation::Mode::Continuous => sim.step,
+        };
+        let rate = actuator.fastest_rate();
+        if rate * hs > 2.5 {
+            let key = if s.actuator.bandwidth_hz.is_some() {
+                "actuator.bandwidth_hz"
+            } else {
+                "actuator.time_constant"
+            };
+            let fix = match sim.mode {
+                ehservo_sim::simulation::Mode::Sampled => format!(
+                    "set simulation.substeps >= {}",
+                    (rate * sim.step / 2.5).ceil() as u64
+                ),
+                ehservo_sim::simulation::Mode::Continuous => {
+                    format!("set simulation.step <= {:.3e}", 2.5 / rate)
+                }
+            };
+            return bad(
+                key,
+                format!(
+                    "the spool's dynamics (|λ| = {rate:.4} 1/s) are too fast for the plant's RK4 step of {hs:e} s (unstable beyond |λ|·h ≈ 2.5): {fix}"
+                ),
+            );
+        }
         let sensor = Sensor::try_new(&s.sensor).map_err(|e| param_err("sensor", e))?;
         let estimator = s.estimator(sim_cfg_step(s))?;
         let policy = FaultPolicy {
@@ -337,7 +367,8 @@ fn build_estimator(
             // By default the θ channel's noise: the Gaussian σ², plus the
             // quantisation's q²/12.
             let r = measurement_noise.unwrap_or(
-                sensor.noise[0] * sensor.noise[0] + sensor.resolution[0] * sensor.resolution[0] / 12.0,
+                sensor.noise[0] * sensor.noise[0]
+                    + sensor.resolution[0] * sensor.resolution[0] / 12.0,
             );
             if !(r.is_finite() && r > 0.0) {
                 return Err((
