@@ -111,8 +111,14 @@ fn execute<P: Plant, C: Controller>(
 ) -> (Outcome, Metrics) {
     let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
     let mut acc = MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network);
-    let mut sim = Simulation::new(plant, ctrl, setup.reference, setup.stages, setup.sim)
-        .expect("Setup::new validated the sample period and the policy");
+    let mut sim = Simulation::new(
+        plant,
+        ctrl,
+        setup.reference.clone(),
+        setup.stages,
+        setup.sim,
+    )
+    .expect("Setup::new validated the sample period and the policy");
     let outcome = sim.run(&mut |smp: &Sample| {
         acc.push(smp);
         observe(smp);

@@ -4,10 +4,9 @@
 //! this construction: a scenario is valid exactly when [`Setup::new`]
 //! succeeds, so no key is checked in one place and used unchecked in another.
 
-use super::{ControllerCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS};
+use super::{AnyReference, ControllerCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS};
 use ehservo_core::control::Design;
 use ehservo_core::error::ParamError;
-use ehservo_core::reference::Sine;
 use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
 use ehservo_core::surface::SwitchingSurface;
@@ -39,12 +38,13 @@ pub struct Setup {
     /// The loop's settings.
     pub sim: SimConfig,
     /// The desired trajectory.
-    pub reference: Sine,
+    pub reference: AnyReference,
     /// End of the transient for the metrics (s).
     pub settle: f64,
     /// Horizon (s).
     pub horizon: f64,
-    /// Period of the reference (s).
+    /// Period of the reference (s): the window of `e_final_deg`
+    /// ([`super::ReferenceCfg::period`]).
     pub period: f64,
 }
 
@@ -192,26 +192,7 @@ impl Setup {
             );
         }
 
-        let r = &s.reference;
-        if !(r.amplitude_deg.is_finite() && r.amplitude_deg >= 0.0) {
-            return bad(
-                "reference.amplitude_deg",
-                format!("must be finite and >= 0 (got {:?})", r.amplitude_deg),
-            );
-        }
-        if r.amplitude_deg.to_radians() >= sim.theta_limit {
-            return bad(
-                "reference.amplitude_deg",
-                "the reference reaches simulation.theta_limit: every run would count as diverged"
-                    .into(),
-            );
-        }
-        if !(r.frequency_hz.is_finite() && r.frequency_hz > 0.0) {
-            return bad(
-                "reference.frequency_hz",
-                format!("must be finite and > 0 (got {:?})", r.frequency_hz),
-            );
-        }
+        let reference = s.reference()?;
 
         let surface = s.surface()?;
         if !s.controller.uses_surface() && s.surface != Default::default() {
@@ -262,10 +243,10 @@ impl Setup {
                 policy,
             },
             sim: sim_cfg,
-            reference: s.reference(),
+            reference,
             settle: s.simulation.settle,
             horizon: s.simulation.horizon,
-            period: 1.0 / s.reference.frequency_hz,
+            period: s.reference.period(s.simulation.horizon),
         })
     }
 }
@@ -319,9 +300,22 @@ impl Scenario {
         self.load
     }
 
-    /// The reference.
-    pub fn reference(&self) -> Sine {
-        Sine::from_deg_hz(self.reference.amplitude_deg, self.reference.frequency_hz)
+    /// The reference, checked and built (a CSV file is read).
+    pub fn reference(&self) -> Result<AnyReference, (String, String)> {
+        self.reference.build(
+            self.simulation.horizon,
+            self.simulation.theta_limit,
+            self.base_dir.as_deref(),
+        )
+    }
+
+    /// The span (s) along which the analyses sample the reference: one
+    /// period of a sine, the horizon otherwise.
+    pub fn reference_span(&self) -> f64 {
+        match self.reference.kind {
+            super::ReferenceKind::Sine => 1.0 / self.reference.frequency_hz.unwrap_or(1.0),
+            _ => self.simulation.horizon,
+        }
     }
 
     /// The true variation.
