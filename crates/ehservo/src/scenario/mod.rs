@@ -501,4 +501,37 @@ mod tests {
         let e = Scenario::parse_with("", "t.toml", &["controller.nope=1".into()]).unwrap_err();
         assert_eq!(e.key, "controller.nope");
     }
+
+    /// `reference.kind` by `--set` and by a study's values: another kind
+    /// starts from no keys, so the sine's defaults do not leak into it.
+    #[test]
+    fn reference_kind_can_be_overridden() {
+        let s = Scenario::parse_with(
+            "",
+            "t.toml",
+            &[
+                "reference.kind=step".into(),
+                "reference.prefilter_tau=0.05".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(s.reference.kind, ReferenceKind::Step);
+        assert_eq!(s.reference.frequency_hz, None);
+        let base = Scenario::parse("").unwrap();
+        let (s, setup) = base
+            .with_values_built(&[
+                ("reference.kind".into(), toml::Value::String("ramp".into())),
+                ("reference.slope_deg_per_s".into(), toml::Value::Float(1.0)),
+                ("reference.prefilter_tau".into(), toml::Value::Float(0.1)),
+            ])
+            .unwrap();
+        assert_eq!(s.reference.kind, ReferenceKind::Ramp);
+        assert!(setup.reference.as_sine().is_none());
+        assert_eq!(setup.period, 1.0);
+        // The paper's scenario reads, writes and builds as before.
+        assert_eq!(base, Scenario::default());
+        assert!(base
+            .to_toml()
+            .contains("[reference]\namplitude_deg = 5.0\nfrequency_hz = 1.0\n"));
+    }
 }
