@@ -33,8 +33,8 @@ fn simulate_direct(s: &Scenario) -> (u64, f64) {
         .expect("nnvsc")
         .build(&setup.design)
         .expect("gains");
-    let mut sim =
-        Simulation::new(plant, nn, setup.reference, setup.stages, setup.sim).expect("valid");
+    let mut sim = Simulation::new(plant, nn, setup.reference.clone(), setup.stages, setup.sim)
+        .expect("valid");
     let mut sum = 0.0;
     let out = sim.run(&mut |smp: &Sample| sum += smp.u);
     (out.samples, sum)

@@ -156,7 +156,7 @@ fn execute<P: Plant, C: Controller>(
     let mut sim = Simulation::new(
         plant,
         ctrl,
-        setup.reference,
+        setup.reference.clone(),
         setup.stages.clone(),
         setup.sim,
     )

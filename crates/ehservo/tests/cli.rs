@@ -229,3 +229,39 @@ fn a_rerun_replaces_the_outputs_whole() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(json["scenario"]["controller"]["gamma1"], 200.0);
 }
+
+/// The reference examples run end to end from another directory (the CSV
+/// is found next to its scenario); the step's θd starts at 0 and settles
+/// at its 5°.
+#[test]
+fn reference_examples_run_end_to_end() {
+    let tmp = tempfile::tempdir().unwrap();
+    for name in ["step", "chirp", "csv"] {
+        let out = tmp.path().join(name);
+        let o = ehservo()
+            .current_dir(tmp.path())
+            .arg("run")
+            .arg(repo().join(format!("scenarios/examples/{name}.toml")))
+            .args(["--set", "output.plot=false", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        assert!(summary.contains("\"diverged\": false"), "{name}: {summary}");
+        let csv = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+        let theta_d = |line: &str| -> f64 { line.split(',').nth(1).unwrap().parse().unwrap() };
+        let mut rows = csv.lines().skip(1);
+        let first = theta_d(rows.next().unwrap());
+        let last = theta_d(rows.last().unwrap());
+        if name == "step" {
+            assert!(first.abs() < 1e-12, "{first}");
+            assert!((last - 5.0).abs() < 1e-9, "{last}");
+        }
+    }
+}

@@ -7,7 +7,8 @@
 //! as the outputs captured in `tests/golden/` before the platform rework
 //! (commit 477679b). A refactoring that changes one floating-point operation
 //! on the paper's path fails here. `examples/pid-valve.toml` came with the
-//! PID and the actuator; its outputs were captured when it was added.
+//! PID and the actuator; its outputs were captured when it was added, as
+//! were those of `examples/{step,chirp,csv}.toml` with the reference kinds.
 //!
 //! To re-capture after an intended change of results (never for a
 //! refactoring): `cargo run --release -- run FILE --out DIR --no-plot`, then

@@ -38,7 +38,11 @@ pub fn fig2() -> Fig2 {
         plant,
         nn,
         vsc,
-        reference: s.reference(),
+        reference: *s
+            .reference()
+            .expect("paper reference")
+            .as_sine()
+            .expect("a sine"),
         unc,
     }
 }

@@ -130,7 +130,7 @@ fn loop_matrix(abar: &[f64; 3], v: &Truth, dd: &[f64; 3], gs: f64, p: [f64; 3]) 
 }
 
 /// kb = b̄·k of (14) along the reference with the state on it: least and
-/// largest over one period.
+/// largest over one period (of a sine; the whole horizon for another kind).
 fn vsc_kb_range(s: &Scenario, c: &SlidingConfig, model: &NominalModel) -> [f64; 2] {
     let abar = model.coeffs.as_array();
     let bb = c.bound_b;
@@ -138,9 +138,13 @@ fn vsc_kb_range(s: &Scenario, c: &SlidingConfig, model: &NominalModel) -> [f64; 
     let Ok(surf) = s.surface() else {
         return [f64::NAN; 2];
     };
-    let r = s.reference();
-    let period = 1.0 / s.reference.frequency_hz;
-    let n = 2000;
+    let Ok(r) = s.reference() else {
+        return [f64::NAN; 2];
+    };
+    // One period of a sine (as it always was), else the whole horizon,
+    // finer.
+    let period = s.reference_span();
+    let n = if r.as_sine().is_some() { 2000 } else { 20_000 };
     (0..n).fold([f64::INFINITY, 0.0], |[lo, hi], i| {
         let z = r.z(period * i as f64 / n as f64);
         let x = [z[0], z[1], z[2]];

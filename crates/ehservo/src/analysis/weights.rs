@@ -135,16 +135,21 @@ pub fn kernel_sq_max(rbf: &Rbf, bound: [f64; 3]) -> (f64, [f64; 3]) {
     (prod, arg)
 }
 
-/// Largest ‖Φ‖ and ‖z‖ along the reference over one period, with the state
+/// Largest ‖Φ‖ and ‖z‖ along the reference over one period (of a sine; the
+/// whole horizon for another kind), with the state
 /// on the reference (perfect tracking).
 pub fn phi_norm_reference(s: &Scenario) -> (f64, f64) {
     let Ok(rbf) = sliding(s).rbf.build() else {
         return (f64::NAN, f64::NAN);
     };
-    let r = s.reference();
-    let period = 1.0 / s.reference.frequency_hz;
+    let Ok(r) = s.reference() else {
+        return (f64::NAN, f64::NAN);
+    };
+    // One period of a sine (as it always was), else the whole horizon,
+    // finer.
+    let period = s.reference_span();
     let mut out = [0.0; N_PHI];
-    let n = 2000;
+    let n = if r.as_sine().is_some() { 2000 } else { 20_000 };
     (0..n).fold((1.0, 0.0), |(pm, zm), i| {
         let z = r.z(period * i as f64 / n as f64);
         let nrm = rbf.phi(&[z[0], z[1], z[2]], &z, &mut out);

@@ -319,7 +319,12 @@ pub fn search(
     grid: Scan,
     sets: &(dyn Fn(f64) -> Vec<String> + Sync),
 ) -> Result<Search> {
-    let e_limit = TRACKING_FRACTION * base.reference.amplitude_deg.abs();
+    let e_limit = TRACKING_FRACTION
+        * base
+            .reference
+            .amplitude_deg
+            .unwrap_or(crate::scenario::DEFAULT_AMPLITUDE_DEG)
+            .abs();
     search_with(grid, &|x| point(base, &sets(x), x), e_limit)
 }
 

@@ -57,7 +57,7 @@ pub(super) fn measure(s: &Scenario, keep_trace: bool) -> Result<(CaseMetrics, Op
         &r.trace,
         s.simulation.settle,
         s.simulation.horizon,
-        s.reference.frequency_hz,
+        s.reference.base_frequency_hz(s.simulation.horizon),
         network,
     );
     Ok((cm, if keep_trace { Some(r) } else { None }))

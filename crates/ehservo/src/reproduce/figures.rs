@@ -138,7 +138,7 @@ impl FigureContext<'_> {
     fn period(&self, case: &str) -> f64 {
         self.scenarios
             .get(case)
-            .map(|s| s.reference.frequency_hz)
+            .map(|s| s.reference.base_frequency_hz(s.simulation.horizon))
             .filter(|f| *f > 0.0)
             .map_or(1.0, |f| 1.0 / f)
     }

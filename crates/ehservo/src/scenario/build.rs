@@ -4,11 +4,12 @@
 //! this construction: a scenario is valid exactly when [`Setup::new`]
 //! succeeds, so no key is checked in one place and used unchecked in another.
 
-use super::{ControllerCfg, EstimatorCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS};
+use super::{
+    AnyReference, ControllerCfg, EstimatorCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS,
+};
 use ehservo_core::control::Design;
 use ehservo_core::cylinder::CylinderParams;
 use ehservo_core::error::ParamError;
-use ehservo_core::reference::Sine;
 use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
 use ehservo_core::surface::SwitchingSurface;
@@ -44,12 +45,13 @@ pub struct Setup {
     /// The loop's settings.
     pub sim: SimConfig,
     /// The desired trajectory.
-    pub reference: Sine,
+    pub reference: AnyReference,
     /// End of the transient for the metrics (s).
     pub settle: f64,
     /// Horizon (s).
     pub horizon: f64,
-    /// Period of the reference (s).
+    /// Period of the reference (s): the window of `e_final_deg`
+    /// ([`super::ReferenceCfg::period`]).
     pub period: f64,
 }
 
@@ -197,26 +199,7 @@ impl Setup {
             );
         }
 
-        let r = &s.reference;
-        if !(r.amplitude_deg.is_finite() && r.amplitude_deg >= 0.0) {
-            return bad(
-                "reference.amplitude_deg",
-                format!("must be finite and >= 0 (got {:?})", r.amplitude_deg),
-            );
-        }
-        if r.amplitude_deg.to_radians() >= sim.theta_limit {
-            return bad(
-                "reference.amplitude_deg",
-                "the reference reaches simulation.theta_limit: every run would count as diverged"
-                    .into(),
-            );
-        }
-        if !(r.frequency_hz.is_finite() && r.frequency_hz > 0.0) {
-            return bad(
-                "reference.frequency_hz",
-                format!("must be finite and > 0 (got {:?})", r.frequency_hz),
-            );
-        }
+        let reference = s.reference()?;
 
         let cylinder = s.checked_cylinder()?;
 
@@ -302,10 +285,10 @@ impl Setup {
                 estimator,
             },
             sim: sim_cfg,
-            reference: s.reference(),
+            reference,
             settle: s.simulation.settle,
             horizon: s.simulation.horizon,
-            period: 1.0 / s.reference.frequency_hz,
+            period: s.reference.period(s.simulation.horizon),
         })
     }
 }
@@ -490,9 +473,17 @@ impl Scenario {
             param_err(prefix, e)
         })?;
         let end = c.stroke_angle();
-        if self.reference.amplitude_deg.to_radians() >= end {
+        // The largest |θd| over the run, sampled at the loop's step (and at
+        // least 10 000 points).
+        use ehservo_core::reference::Reference;
+        let r = self.reference()?;
+        let n = ((self.simulation.horizon / self.simulation.step).ceil() as usize).max(10_000);
+        let peak = (0..=n)
+            .map(|i| r.z(self.simulation.horizon * i as f64 / n as f64)[0].abs())
+            .fold(0.0, f64::max);
+        if peak >= end {
             return Err((
-                "reference.amplitude_deg".into(),
+                "reference".into(),
                 format!(
                     "the reference reaches the end of the cylinder's stroke, ±{:.4}° (stroke/(2r))",
                     end.to_degrees()
@@ -542,9 +533,22 @@ impl Scenario {
         self.load
     }
 
-    /// The reference.
-    pub fn reference(&self) -> Sine {
-        Sine::from_deg_hz(self.reference.amplitude_deg, self.reference.frequency_hz)
+    /// The reference, checked and built (a CSV file is read).
+    pub fn reference(&self) -> Result<AnyReference, (String, String)> {
+        self.reference.build(
+            self.simulation.horizon,
+            self.simulation.theta_limit,
+            self.base_dir.as_deref(),
+        )
+    }
+
+    /// The span (s) along which the analyses sample the reference: one
+    /// period of a sine, the horizon otherwise.
+    pub fn reference_span(&self) -> f64 {
+        match self.reference.kind {
+            super::ReferenceKind::Sine => 1.0 / self.reference.frequency_hz.unwrap_or(1.0),
+            _ => self.simulation.horizon,
+        }
     }
 
     /// The true variation.

@@ -14,15 +14,19 @@
 
 mod build;
 mod overrides;
+mod reference;
 mod registry;
 mod sections;
 
 pub use build::Setup;
 pub use overrides::{apply_override, line_col, parse_value, set_path};
+pub use reference::{
+    read_csv, AnyReference, ComponentCfg, ReferenceCfg, ReferenceKind, Table, DEFAULT_AMPLITUDE_DEG,
+};
 pub use registry::{ControllerCfg, ControllerConfig, Visit, DEFAULT_KIND};
 pub use sections::{
-    EstimatorCfg, FaultCfg, OutputCfg, PlantCfg, PlantModel, ReferenceCfg, SafeCommandCfg,
-    SimulationCfg, SurfaceCfg,
+    EstimatorCfg, FaultCfg, OutputCfg, PlantCfg, PlantModel, SafeCommandCfg, SimulationCfg,
+    SurfaceCfg,
 };
 
 use ehservo_core::servo::Load;
@@ -81,7 +85,7 @@ pub struct Scenario {
     /// Δb = b_reference·b̄·(b_bias + b_random·r_b), r uniform on [−1, 1]
     /// held over `hold`.
     pub uncertainty: UncertaintySpec,
-    /// Desired trajectory.
+    /// Desired trajectory: `kind` (default `"sine"`) and its keys.
     pub reference: ReferenceCfg,
     /// Switching surface.
     pub surface: SurfaceCfg,
@@ -99,6 +103,10 @@ pub struct Scenario {
     pub fault: FaultCfg,
     /// Output options.
     pub output: OutputCfg,
+    /// The directory of the scenario file (set by [`Scenario::load`]): a
+    /// relative `reference.file` is read from it. Not a key.
+    #[serde(skip)]
+    pub base_dir: Option<std::path::PathBuf>,
 }
 
 /// Largest number of steps a scenario may ask for: 2·10⁷ (200 s at 10 µs;
@@ -116,7 +124,8 @@ impl Scenario {
             line_col: None,
             reason: format!("the scenario file {reason}"),
         })?;
-        let mut s = Self::parse_with(&text, &file, overrides)?;
+        let dir = path.parent().map(Path::to_path_buf);
+        let mut s = Self::parse_in(&text, &file, overrides, dir)?;
         if s.name.is_empty() {
             s.name = path
                 .file_stem()
@@ -131,11 +140,22 @@ impl Scenario {
         Self::parse_with(text, "<string>", &[])
     }
 
-    /// Parses TOML text, applies `key.path=value` overrides, validates.
+    /// Parses TOML text, applies `key.path=value` overrides, validates. A
+    /// relative `reference.file` is read from the working directory.
     pub fn parse_with(
         text: &str,
         file: &str,
         overrides: &[String],
+    ) -> Result<Scenario, ScenarioError> {
+        Self::parse_in(text, file, overrides, None)
+    }
+
+    /// As [`Scenario::parse_with`], for a file in `base_dir`.
+    pub fn parse_in(
+        text: &str,
+        file: &str,
+        overrides: &[String],
+        base_dir: Option<std::path::PathBuf>,
     ) -> Result<Scenario, ScenarioError> {
         let err = |key: String, line_col, reason: String| ScenarioError {
             file: file.to_string(),
@@ -172,7 +192,7 @@ impl Scenario {
                 return Err(err(key, lc, reason));
             }
         }
-        let scenario = if overrides.is_empty() {
+        let mut scenario = if overrides.is_empty() {
             scenario
         } else {
             // Pass 2: apply the overrides to the document and read it again.
@@ -208,6 +228,7 @@ impl Scenario {
                 }
             })?
         };
+        scenario.base_dir = base_dir;
         scenario.validate().map_err(|(key, reason)| {
             // A key set by --set is blamed on the flag, not on the file's
             // line; any other key, when flags were given, on the file as
@@ -326,11 +347,19 @@ impl Scenario {
                 table.insert("controller".into(), toml::Value::Table(fresh.to_table()));
             }
         }
+        // Likewise `reference.kind`: another kind starts from no keys.
+        let new_ref = values.iter().rev().find_map(|(k, v)| match v {
+            toml::Value::String(kind) if k.trim() == "reference.kind" => Some(kind.as_str()),
+            _ => None,
+        });
+        if new_ref.is_some_and(|k| k != self.reference.kind.name()) {
+            table.insert("reference".into(), toml::Value::Table(toml::Table::new()));
+        }
         for (k, v) in values {
             set_path(&mut table, k, v.clone()).map_err(|(k, r)| fail(k, r))?;
         }
         let controller = table.get("controller").cloned();
-        let s: Scenario =
+        let mut s: Scenario =
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
                 let key = clean_path(&e.path().to_string());
                 match (key.as_str(), controller) {
@@ -340,6 +369,7 @@ impl Scenario {
                     _ => fail(key, first_line(&e.into_inner().to_string())),
                 }
             })?;
+        s.base_dir.clone_from(&self.base_dir);
         let setup = Setup::new(&s).map_err(|(k, r)| fail(k, r))?;
         Ok((s, setup))
     }
@@ -474,5 +504,38 @@ mod tests {
 
         let e = Scenario::parse_with("", "t.toml", &["controller.nope=1".into()]).unwrap_err();
         assert_eq!(e.key, "controller.nope");
+    }
+
+    /// `reference.kind` by `--set` and by a study's values: another kind
+    /// starts from no keys, so the sine's defaults do not leak into it.
+    #[test]
+    fn reference_kind_can_be_overridden() {
+        let s = Scenario::parse_with(
+            "",
+            "t.toml",
+            &[
+                "reference.kind=step".into(),
+                "reference.prefilter_tau=0.05".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(s.reference.kind, ReferenceKind::Step);
+        assert_eq!(s.reference.frequency_hz, None);
+        let base = Scenario::parse("").unwrap();
+        let (s, setup) = base
+            .with_values_built(&[
+                ("reference.kind".into(), toml::Value::String("ramp".into())),
+                ("reference.slope_deg_per_s".into(), toml::Value::Float(1.0)),
+                ("reference.prefilter_tau".into(), toml::Value::Float(0.1)),
+            ])
+            .unwrap();
+        assert_eq!(s.reference.kind, ReferenceKind::Ramp);
+        assert!(setup.reference.as_sine().is_none());
+        assert_eq!(setup.period, 1.0);
+        // The paper's scenario reads, writes and builds as before.
+        assert_eq!(base, Scenario::default());
+        assert!(base
+            .to_toml()
+            .contains("[reference]\namplitude_deg = 5.0\nfrequency_hz = 1.0\n"));
     }
 }

@@ -96,25 +96,6 @@ impl Default for PlantCfg {
     }
 }
 
-/// `[reference]`: θd = amplitude·sin(2π·f·t).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ReferenceCfg {
-    /// Default 5°.
-    pub amplitude_deg: f64,
-    /// Default 1 Hz.
-    pub frequency_hz: f64,
-}
-
-impl Default for ReferenceCfg {
-    fn default() -> Self {
-        Self {
-            amplitude_deg: 5.0,
-            frequency_hz: 1.0,
-        }
-    }
-}
-
 /// `[surface]`: either `poles` (three real, negative) or `p` = [p1, p2, p3].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]

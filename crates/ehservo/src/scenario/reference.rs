@@ -1,0 +1,782 @@
+//! `[reference]`: the desired trajectory, by `kind` (default `"sine"`, the
+//! paper's `θd = amplitude·sin(2π·f·t)`).
+//!
+//! | kind | keys (defaults) | θd |
+//! |---|---|---|
+//! | `sine` | `amplitude_deg` (5), `frequency_hz` (1) | A·sin(2πft), analytic |
+//! | `step` | `amplitude_deg` (5), `start` (0), `prefilter_tau` | 0 → A at `start`, prefiltered |
+//! | `ramp` | `slope_deg_per_s`, `start` (0), `prefilter_tau` | slope·(t − start)⁺, prefiltered |
+//! | `square` | `amplitude_deg` (5), `frequency_hz` (1), `prefilter_tau` | 0 before t = 0, then +A, −A each half period, prefiltered |
+//! | `chirp` | `amplitude_deg` (5), `f0_hz`, `f1_hz`, `duration` | A·sin φ, f0 → f1 linearly over `duration`, then f1 |
+//! | `multisine` | `components` = [{`amplitude_deg`, `frequency_hz`, `phase_deg` (0)}, …] (1 to 8) | Σ A·sin(2πft + p), analytic |
+//! | `csv` | `file`, `prefilter_tau` | the file's rows, linearly interpolated, prefiltered |
+//!
+//! "Prefiltered" is [`Prefiltered`]: four identical first-order lags of
+//! time constant `prefilter_tau` (s), so that θd is C³ and θ⃛d exists; it
+//! delays a ramp by 4·τ. A CSV file has the header `t,theta_deg` and at
+//! least two rows with strictly increasing times (s); its path is relative
+//! to the scenario file's directory. Before its first row θd is the first
+//! row's value, after its last the last's.
+//!
+//! The window over which `e_final_deg` is measured ([`ReferenceCfg::period`]):
+//! 1/f for `sine` and `square`, the slowest component's period for
+//! `multisine`, 1/f at the horizon for `chirp`, and the last second (the
+//! horizon if shorter) for `step`, `ramp` and `csv`, which have no period.
+
+use ehservo_core::math::DR;
+use ehservo_core::reference::{
+    Chirp, Component, Knot, LagState, Multisine, Prefiltered, Reference, Sine, MAX_COMPONENTS,
+};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Amplitude (deg) of a kind that has one, when not given.
+pub const DEFAULT_AMPLITUDE_DEG: f64 = 5.0;
+/// Frequency (Hz) of `sine` and `square`, when not given.
+pub const DEFAULT_FREQUENCY_HZ: f64 = 1.0;
+/// Most knots a generated or read piecewise-linear reference may have.
+pub const MAX_KNOTS: usize = 200_000;
+
+/// `reference.kind`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReferenceKind {
+    /// A·sin(2πft) (the paper).
+    #[default]
+    Sine,
+    /// A prefiltered step.
+    Step,
+    /// A prefiltered ramp.
+    Ramp,
+    /// A prefiltered square wave.
+    Square,
+    /// A linear frequency sweep.
+    Chirp,
+    /// A sum of sines.
+    Multisine,
+    /// A prefiltered table read from a CSV file.
+    Csv,
+}
+
+impl ReferenceKind {
+    /// As written in a scenario.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sine => "sine",
+            Self::Step => "step",
+            Self::Ramp => "ramp",
+            Self::Square => "square",
+            Self::Chirp => "chirp",
+            Self::Multisine => "multisine",
+            Self::Csv => "csv",
+        }
+    }
+
+    /// The keys this kind uses (besides `kind`).
+    pub fn keys(self) -> &'static [&'static str] {
+        match self {
+            Self::Sine => &["amplitude_deg", "frequency_hz"],
+            Self::Step => &["amplitude_deg", "start", "prefilter_tau"],
+            Self::Ramp => &["slope_deg_per_s", "start", "prefilter_tau"],
+            Self::Square => &["amplitude_deg", "frequency_hz", "prefilter_tau"],
+            Self::Chirp => &["amplitude_deg", "f0_hz", "f1_hz", "duration"],
+            Self::Multisine => &["components"],
+            Self::Csv => &["file", "prefilter_tau"],
+        }
+    }
+
+    fn is_sine(&self) -> bool {
+        *self == Self::Sine
+    }
+}
+
+/// One `reference.components` entry of a `multisine`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComponentCfg {
+    /// Amplitude (deg).
+    pub amplitude_deg: f64,
+    /// Frequency (Hz).
+    pub frequency_hz: f64,
+    /// Phase (deg). Default 0.
+    #[serde(default)]
+    pub phase_deg: f64,
+}
+
+/// `[reference]`: `kind` and that kind's keys (see the module's table).
+/// Every key is optional here; [`ReferenceCfg::build`] checks that the
+/// kind's required keys are given and that no other kind's key is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(from = "ReferenceRaw")]
+pub struct ReferenceCfg {
+    /// Default `"sine"`.
+    #[serde(skip_serializing_if = "ReferenceKind::is_sine")]
+    pub kind: ReferenceKind,
+    /// Amplitude (deg): sine, step, square, chirp.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub amplitude_deg: Option<f64>,
+    /// Frequency (Hz): sine, square.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency_hz: Option<f64>,
+    /// Time of the step or of the ramp's start (s). Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start: Option<f64>,
+    /// The prefilter's time constant τ (s): step, ramp, square, csv.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prefilter_tau: Option<f64>,
+    /// The ramp's slope (deg/s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slope_deg_per_s: Option<f64>,
+    /// The chirp's start frequency (Hz).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub f0_hz: Option<f64>,
+    /// The chirp's end frequency (Hz).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub f1_hz: Option<f64>,
+    /// The chirp's sweep duration (s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub duration: Option<f64>,
+    /// The multisine's components.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub components: Option<Vec<ComponentCfg>>,
+    /// The CSV file (relative to the scenario file's directory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+}
+
+/// What the file holds; a sine's missing keys are filled in
+/// [`ReferenceCfg`], so that the paper's scenario reads as it always did.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+struct ReferenceRaw {
+    kind: ReferenceKind,
+    amplitude_deg: Option<f64>,
+    frequency_hz: Option<f64>,
+    start: Option<f64>,
+    prefilter_tau: Option<f64>,
+    slope_deg_per_s: Option<f64>,
+    f0_hz: Option<f64>,
+    f1_hz: Option<f64>,
+    duration: Option<f64>,
+    components: Option<Vec<ComponentCfg>>,
+    file: Option<String>,
+}
+
+impl From<ReferenceRaw> for ReferenceCfg {
+    fn from(r: ReferenceRaw) -> Self {
+        let sine = r.kind == ReferenceKind::Sine;
+        let fill = |v: Option<f64>, d: f64| if sine { v.or(Some(d)) } else { v };
+        Self {
+            kind: r.kind,
+            amplitude_deg: fill(r.amplitude_deg, DEFAULT_AMPLITUDE_DEG),
+            frequency_hz: fill(r.frequency_hz, DEFAULT_FREQUENCY_HZ),
+            start: r.start,
+            prefilter_tau: r.prefilter_tau,
+            slope_deg_per_s: r.slope_deg_per_s,
+            f0_hz: r.f0_hz,
+            f1_hz: r.f1_hz,
+            duration: r.duration,
+            components: r.components,
+            file: r.file,
+        }
+    }
+}
+
+impl Default for ReferenceCfg {
+    fn default() -> Self {
+        ReferenceRaw::default().into()
+    }
+}
+
+/// A checked error: key path and reason.
+type Bad = (String, String);
+
+fn bad<T>(key: &str, reason: impl Into<String>) -> Result<T, Bad> {
+    Err((format!("reference.{key}"), reason.into()))
+}
+
+fn finite(key: &str, v: f64) -> Result<f64, Bad> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        bad(key, format!("must be finite (got {v:?})"))
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<f64, Bad> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        bad(key, format!("must be finite and > 0 (got {v:?})"))
+    }
+}
+
+fn required(kind: ReferenceKind, key: &str, v: Option<f64>) -> Result<f64, Bad> {
+    v.map_or_else(
+        || bad(key, format!("is required by kind `{}`", kind.name())),
+        Ok,
+    )
+}
+
+impl ReferenceCfg {
+    /// The keys that are set, by name.
+    fn set_keys(&self) -> Vec<&'static str> {
+        let f = |k: &'static str, set: bool| set.then_some(k);
+        [
+            f("amplitude_deg", self.amplitude_deg.is_some()),
+            f("frequency_hz", self.frequency_hz.is_some()),
+            f("start", self.start.is_some()),
+            f("prefilter_tau", self.prefilter_tau.is_some()),
+            f("slope_deg_per_s", self.slope_deg_per_s.is_some()),
+            f("f0_hz", self.f0_hz.is_some()),
+            f("f1_hz", self.f1_hz.is_some()),
+            f("duration", self.duration.is_some()),
+            f("components", self.components.is_some()),
+            f("file", self.file.is_some()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+
+    /// The sine's amplitude (deg), or the default.
+    fn amplitude(&self) -> f64 {
+        self.amplitude_deg.unwrap_or(DEFAULT_AMPLITUDE_DEG)
+    }
+
+    /// The sine's or square's frequency (Hz), or the default.
+    fn frequency(&self) -> f64 {
+        self.frequency_hz.unwrap_or(DEFAULT_FREQUENCY_HZ)
+    }
+
+    /// The window (s) over which `e_final_deg` is measured: the period of
+    /// a periodic reference (see the module's notes for the others).
+    pub fn period(&self, horizon: f64) -> f64 {
+        match self.kind {
+            ReferenceKind::Sine | ReferenceKind::Square => 1.0 / self.frequency(),
+            ReferenceKind::Multisine => {
+                let f = self
+                    .components
+                    .iter()
+                    .flatten()
+                    .map(|c| c.frequency_hz)
+                    .fold(f64::INFINITY, f64::min);
+                if f.is_finite() && f > 0.0 {
+                    1.0 / f
+                } else {
+                    horizon.min(1.0)
+                }
+            }
+            ReferenceKind::Chirp => {
+                match Chirp::try_new(
+                    1.0,
+                    self.f0_hz.unwrap_or(1.0),
+                    self.f1_hz.unwrap_or(1.0),
+                    self.duration.unwrap_or(1.0),
+                ) {
+                    Ok(c) => 1.0 / c.frequency_at(horizon),
+                    Err(_) => horizon.min(1.0),
+                }
+            }
+            ReferenceKind::Step | ReferenceKind::Ramp | ReferenceKind::Csv => horizon.min(1.0),
+        }
+    }
+
+    /// The reference's (fundamental) frequency (Hz): `frequency_hz` for a
+    /// sine, else 1/[`ReferenceCfg::period`].
+    pub fn base_frequency_hz(&self, horizon: f64) -> f64 {
+        match self.kind {
+            ReferenceKind::Sine => self.frequency(),
+            _ => 1.0 / self.period(horizon),
+        }
+    }
+
+    /// Checks every key and builds the reference for a run of `horizon` (s)
+    /// whose |θ| limit is `theta_limit` (rad); a CSV file is read from
+    /// `base_dir` (the scenario file's directory) when its path is relative.
+    pub fn build(
+        &self,
+        horizon: f64,
+        theta_limit: f64,
+        base_dir: Option<&Path>,
+    ) -> Result<AnyReference, Bad> {
+        let kind = self.kind;
+        if let Some(k) = self
+            .set_keys()
+            .into_iter()
+            .find(|k| !kind.keys().contains(k))
+        {
+            return bad(
+                k,
+                format!(
+                    "not used by kind `{}` (its keys: {})",
+                    kind.name(),
+                    kind.keys().join(", ")
+                ),
+            );
+        }
+        // |θd| ≤ `peak` (rad) over the run, checked against the limit.
+        let within = |key: &str, peak: f64| -> Result<(), Bad> {
+            if peak >= theta_limit {
+                bad(
+                    key,
+                    "the reference reaches simulation.theta_limit: every run would count as diverged",
+                )
+            } else {
+                Ok(())
+            }
+        };
+        let tau = || {
+            positive(
+                "prefilter_tau",
+                required(kind, "prefilter_tau", self.prefilter_tau)?,
+            )
+        };
+        let start = || finite("start", self.start.unwrap_or(0.0));
+        match kind {
+            ReferenceKind::Sine => {
+                // The paper's checks, in their order, with their words.
+                let (a, f) = (self.amplitude(), self.frequency());
+                if !(a.is_finite() && a >= 0.0) {
+                    return bad(
+                        "amplitude_deg",
+                        format!("must be finite and >= 0 (got {a:?})"),
+                    );
+                }
+                within("amplitude_deg", a.to_radians())?;
+                if !(f.is_finite() && f > 0.0) {
+                    return bad(
+                        "frequency_hz",
+                        format!("must be finite and > 0 (got {f:?})"),
+                    );
+                }
+                Ok(AnyReference::Sine(Sine::from_deg_hz(a, f)))
+            }
+            ReferenceKind::Step => {
+                let a = finite("amplitude_deg", self.amplitude())?;
+                within("amplitude_deg", a.abs().to_radians())?;
+                let t0 = start()?;
+                let v = a * DR;
+                Table::reference(vec![Knot { t: t0, v: 0.0 }, Knot { t: t0, v }], tau()?)
+            }
+            ReferenceKind::Ramp => {
+                let slope = finite(
+                    "slope_deg_per_s",
+                    required(kind, "slope_deg_per_s", self.slope_deg_per_s)?,
+                )?;
+                let t0 = start()?;
+                within(
+                    "slope_deg_per_s",
+                    (slope.abs() * (horizon - t0).max(0.0)).to_radians(),
+                )?;
+                let end = horizon.max(t0) + 1.0;
+                Table::reference(
+                    vec![
+                        Knot { t: t0, v: 0.0 },
+                        Knot {
+                            t: end,
+                            v: slope * DR * (end - t0),
+                        },
+                    ],
+                    tau()?,
+                )
+            }
+            ReferenceKind::Square => {
+                let a = finite("amplitude_deg", self.amplitude())?;
+                within("amplitude_deg", a.abs().to_radians())?;
+                let f = positive("frequency_hz", self.frequency())?;
+                let edges = (2.0 * f * horizon).ceil() + 1.0;
+                if 2.0 * edges + 2.0 > MAX_KNOTS as f64 {
+                    return bad(
+                        "frequency_hz",
+                        format!(
+                            "{edges:.3e} edges over the horizon, more than the limit of {}",
+                            MAX_KNOTS / 2 - 1
+                        ),
+                    );
+                }
+                let v = a * DR;
+                let mut knots = vec![Knot { t: 0.0, v: 0.0 }, Knot { t: 0.0, v }];
+                let mut level = v;
+                for m in 1..=edges as u64 {
+                    let t = m as f64 / (2.0 * f);
+                    knots.push(Knot { t, v: level });
+                    level = -level;
+                    knots.push(Knot { t, v: level });
+                }
+                Table::reference(knots, tau()?)
+            }
+            ReferenceKind::Chirp => {
+                let a = finite("amplitude_deg", self.amplitude())?;
+                within("amplitude_deg", a.abs().to_radians())?;
+                let f0 = positive("f0_hz", required(kind, "f0_hz", self.f0_hz)?)?;
+                let f1 = positive("f1_hz", required(kind, "f1_hz", self.f1_hz)?)?;
+                let d = positive("duration", required(kind, "duration", self.duration)?)?;
+                let c = Chirp::try_new(a * DR, f0, f1, d)
+                    .map_err(|e| ("reference".to_string(), format!("{}: {}", e.name, e.reason)))?;
+                Ok(AnyReference::Chirp(c))
+            }
+            ReferenceKind::Multisine => {
+                let Some(cs) = &self.components else {
+                    return bad("components", "is required by kind `multisine`");
+                };
+                if cs.is_empty() || cs.len() > MAX_COMPONENTS {
+                    return bad(
+                        "components",
+                        format!(
+                            "must hold 1 to {MAX_COMPONENTS} components (got {})",
+                            cs.len()
+                        ),
+                    );
+                }
+                let mut comps = Vec::with_capacity(cs.len());
+                for (i, c) in cs.iter().enumerate() {
+                    let n = i + 1;
+                    let what = |k: &str, r: &str, v: f64| {
+                        bad::<Component>(
+                            "components",
+                            format!("component {n}: {k} {r} (got {v:?})"),
+                        )
+                    };
+                    if !c.amplitude_deg.is_finite() {
+                        what("amplitude_deg", "must be finite", c.amplitude_deg)?;
+                    }
+                    if !(c.frequency_hz.is_finite() && c.frequency_hz > 0.0) {
+                        what("frequency_hz", "must be finite and > 0", c.frequency_hz)?;
+                    }
+                    if !c.phase_deg.is_finite() {
+                        what("phase_deg", "must be finite", c.phase_deg)?;
+                    }
+                    comps.push(Component {
+                        amplitude: c.amplitude_deg * DR,
+                        frequency: c.frequency_hz,
+                        phase: c.phase_deg * DR,
+                    });
+                }
+                within(
+                    "components",
+                    comps.iter().map(|c| c.amplitude.abs()).sum::<f64>(),
+                )?;
+                let m = Multisine::try_new(&comps)
+                    .map_err(|e| ("reference.components".to_string(), e.to_string()))?;
+                Ok(AnyReference::Multisine(m))
+            }
+            ReferenceKind::Csv => {
+                let Some(file) = &self.file else {
+                    return bad("file", "is required by kind `csv`");
+                };
+                let tau = tau()?;
+                let path = match base_dir {
+                    Some(d) if Path::new(file).is_relative() => d.join(file),
+                    _ => PathBuf::from(file),
+                };
+                let knots = read_csv(&path).map_err(|r| ("reference.file".to_string(), r))?;
+                let peak = knots.iter().map(|k| k.v.abs()).fold(0.0, f64::max);
+                within("file", peak).map_err(|(k, r)| (k, format!("{}: {r}", path.display())))?;
+                Table::reference(knots, tau)
+            }
+        }
+    }
+}
+
+/// The rows of a reference CSV (`t,theta_deg`) as knots (s, rad). The
+/// error names the file, the line and the data row.
+pub fn read_csv(path: &Path) -> Result<Vec<Knot>, String> {
+    let name = path.display();
+    let text =
+        crate::input::read_text(path).map_err(|r| format!("the reference file {name} {r}"))?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty());
+    let Some((hl, header)) = lines.next() else {
+        return Err(format!(
+            "{name}: is empty: expected the header `t,theta_deg` and at least two rows"
+        ));
+    };
+    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    if cols != ["t", "theta_deg"] {
+        return Err(format!(
+            "{name}: line {hl}: expected the header `t,theta_deg`, got `{header}`"
+        ));
+    }
+    let mut knots: Vec<Knot> = Vec::new();
+    for (row, (line, l)) in lines.enumerate() {
+        let row = row + 1;
+        let at = format!("{name}: line {line} (row {row})");
+        if knots.len() >= MAX_KNOTS {
+            return Err(format!("{at}: more than {MAX_KNOTS} rows"));
+        }
+        let fields: Vec<&str> = l.split(',').map(str::trim).collect();
+        if fields.len() != 2 {
+            return Err(format!(
+                "{at}: expected 2 columns (t, theta_deg), got {}",
+                fields.len()
+            ));
+        }
+        let mut v = [0.0; 2];
+        for (j, col) in ["t", "theta_deg"].iter().enumerate() {
+            let x: f64 = fields[j].parse().map_err(|_| {
+                format!(
+                    "{at}: cannot read `{}` in column {col} as a number",
+                    fields[j]
+                )
+            })?;
+            if x.is_nan() {
+                return Err(format!("{at}: NaN in column {col}"));
+            }
+            if !x.is_finite() {
+                return Err(format!("{at}: {x} in column {col}: values must be finite"));
+            }
+            v[j] = x;
+        }
+        if let Some(prev) = knots.last() {
+            if v[0] <= prev.t {
+                return Err(format!(
+                    "{at}: non-monotonic time: t = {} after {} (times must strictly increase)",
+                    v[0], prev.t
+                ));
+            }
+        }
+        knots.push(Knot {
+            t: v[0],
+            v: v[1] * DR,
+        });
+    }
+    match knots.len() {
+        0 => Err(format!(
+            "{name}: no data rows: a CSV reference needs at least two"
+        )),
+        1 => Err(format!(
+            "{name}: a single data row: a CSV reference needs at least two"
+        )),
+        _ => Ok(knots),
+    }
+}
+
+/// A piecewise-linear reference through the prefilter, owning its knots
+/// and the filter's state at each.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    knots: Vec<Knot>,
+    states: Vec<LagState>,
+    tau: f64,
+}
+
+impl Table {
+    /// The knots through four lags of `tau`, as a reference.
+    fn reference(knots: Vec<Knot>, tau: f64) -> Result<AnyReference, Bad> {
+        let mut states = vec![[0.0; 4]; knots.len()];
+        Prefiltered::fill_states(&knots, tau, &mut states)
+            .map_err(|e| ("reference".to_string(), e.to_string()))?;
+        Ok(AnyReference::Table(Arc::new(Table { knots, states, tau })))
+    }
+
+    /// The core's view of it.
+    pub fn prefiltered(&self) -> Prefiltered<'_> {
+        Prefiltered::new(&self.knots, &self.states, self.tau)
+            .expect("Table::new filled one state per knot with tau > 0")
+    }
+
+    /// The knots (s, rad).
+    pub fn knots(&self) -> &[Knot] {
+        &self.knots
+    }
+}
+
+/// A built reference of any kind.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnyReference {
+    /// The paper's kind, evaluated exactly as [`Sine::z`].
+    Sine(Sine),
+    /// A frequency sweep.
+    Chirp(Chirp),
+    /// A sum of sines.
+    Multisine(Multisine),
+    /// Step, ramp, square and CSV: knots through the prefilter (shared, so
+    /// that cloning a set-up is cheap).
+    Table(Arc<Table>),
+}
+
+impl AnyReference {
+    /// The sine, for the theory that holds for the paper's reference only.
+    pub fn as_sine(&self) -> Option<&Sine> {
+        match self {
+            Self::Sine(s) => Some(s),
+            _ => None,
+        }
+    }
+}
+
+impl From<Sine> for AnyReference {
+    fn from(s: Sine) -> Self {
+        Self::Sine(s)
+    }
+}
+
+impl Reference<f64> for AnyReference {
+    #[inline]
+    fn z(&self, t: f64) -> [f64; 4] {
+        match self {
+            Self::Sine(s) => s.z(t),
+            Self::Chirp(c) => c.z(t),
+            Self::Multisine(m) => m.z(t),
+            Self::Table(tb) => tb.prefiltered().z(t),
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
+mod tests {
+    use super::*;
+
+    fn cfg(text: &str) -> ReferenceCfg {
+        toml::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn sine_is_the_paper_by_default_and_bit_identical() {
+        let c = cfg("");
+        assert_eq!(c, ReferenceCfg::default());
+        assert_eq!(c.amplitude_deg, Some(5.0));
+        let r = c.build(10.0, 1.0, None).unwrap();
+        let s = Sine::from_deg_hz(5.0, 1.0);
+        for t in [0.0, 0.123, 7.77] {
+            assert_eq!(r.z(t), s.z(t));
+        }
+        assert_eq!(c.period(10.0), 1.0);
+        assert_eq!(
+            toml::to_string(&c).unwrap(),
+            "amplitude_deg = 5.0\nfrequency_hz = 1.0\n"
+        );
+    }
+
+    #[test]
+    fn keys_of_another_kind_and_missing_keys_are_named() {
+        let e = cfg("kind = \"step\"\nfrequency_hz = 2\nprefilter_tau = 0.02")
+            .build(10.0, 1.0, None)
+            .unwrap_err();
+        assert_eq!(e.0, "reference.frequency_hz");
+        assert!(e.1.contains("not used by kind `step`"), "{e:?}");
+        let e = cfg("kind = \"step\"").build(10.0, 1.0, None).unwrap_err();
+        assert_eq!(e.0, "reference.prefilter_tau");
+        assert!(e.1.contains("required"), "{e:?}");
+        let e = cfg("kind = \"ramp\"\nslope_deg_per_s = 10\nprefilter_tau = 0.02")
+            .build(10.0, 1.0, None)
+            .unwrap_err();
+        assert!(e.1.contains("theta_limit"), "{e:?}");
+        assert!(toml::from_str::<ReferenceCfg>("kind = \"trapezoid\"").is_err());
+    }
+
+    /// A ramp of 10°/s from 0.5 s through τ = 0.02: far after the start,
+    /// θd = slope·(t − 0.5 − 4τ) and θ̇d = slope.
+    #[test]
+    fn ramp_lags_by_four_tau() {
+        let r = cfg("kind = \"ramp\"\nslope_deg_per_s = 10\nstart = 0.5\nprefilter_tau = 0.02")
+            .build(5.0, 1.0, None)
+            .unwrap();
+        let z = r.z(3.0);
+        let slope = 10f64.to_radians();
+        assert!((z[0] - slope * (3.0 - 0.5 - 0.08)).abs() < 1e-12, "{z:?}");
+        assert!((z[1] - slope).abs() < 1e-12);
+        assert_eq!(r.z(0.4), [0.0; 4]);
+    }
+
+    /// A sine sampled every 1 ms in a CSV: linear interpolation is within
+    /// A·ω²·Δt²/8 ≈ 4.3e-7 rad of the sine, and the same prefilter is a
+    /// linear operation of unit gain, so the CSV reference is within that of
+    /// the prefiltered sine (here the prefiltered sine itself is built from
+    /// 0.1 ms knots, within 4.3e-9 rad of the sine).
+    #[test]
+    fn csv_of_a_sampled_sine_is_the_prefiltered_sine() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a_deg, w) = (5.0, std::f64::consts::TAU);
+        let mut text = String::from("t,theta_deg\n");
+        for i in 0..=3000 {
+            let t = i as f64 * 1e-3;
+            text += &format!("{t},{}\n", a_deg * (w * t).sin());
+        }
+        std::fs::write(dir.path().join("s.csv"), text).unwrap();
+        let c = cfg("kind = \"csv\"\nfile = \"s.csv\"\nprefilter_tau = 0.02");
+        let r = c.build(3.0, 1.0, Some(dir.path())).unwrap();
+        let fine: Vec<Knot> = (0..=30000)
+            .map(|i| {
+                let t = i as f64 * 1e-4;
+                Knot {
+                    t,
+                    v: a_deg.to_radians() * (w * t).sin(),
+                }
+            })
+            .collect();
+        let exact = Table::reference(fine, 0.02).unwrap();
+        for t in [0.3, 1.0, 2.2, 2.9] {
+            let (z, e) = (r.z(t), exact.z(t));
+            assert!((z[0] - e[0]).abs() < 4.5e-7, "t = {t}: {z:?} vs {e:?}");
+            // The derivatives through the same prefilter: u's error is at
+            // most ~Aω·Δt in slope, smoothed by the lags.
+            assert!((z[1] - e[1]).abs() < 1e-4, "t = {t}: {z:?} vs {e:?}");
+        }
+        // And the prefiltered sine lags the sine by about 4τ in phase
+        // (|H(jω)| = (1 + (ωτ)²)⁻², arg = −4·atan(ωτ)).
+        let t = 2.5;
+        let (g, ph) = (
+            (1.0 + (w * 0.02f64).powi(2)).powi(-2),
+            -4.0 * (w * 0.02f64).atan(),
+        );
+        let want = a_deg.to_radians() * g * (w * t + ph).sin();
+        assert!((r.z(t)[0] - want).abs() < 1e-6, "{} vs {want}", r.z(t)[0]);
+    }
+
+    #[test]
+    fn bad_csv_files_are_named_by_line_and_row() {
+        let dir = tempfile::tempdir().unwrap();
+        let check = |body: &str, want: &str| {
+            let p = dir.path().join("r.csv");
+            std::fs::write(&p, body).unwrap();
+            let e = read_csv(&p).unwrap_err();
+            assert!(e.contains(want), "{e}");
+        };
+        check("t,theta_deg\n0,1\n", "single data row");
+        check("t,theta_deg\n", "no data rows");
+        check("time,theta\n0,1\n1,2\n", "header");
+        check(
+            "t,theta_deg\n0,1\n0.5,2\n0.4,3\n",
+            "line 4 (row 3): non-monotonic time",
+        );
+        check(
+            "t,theta_deg\n0,1\n0.5,NaN\n",
+            "line 3 (row 2): NaN in column theta_deg",
+        );
+        check("t,theta_deg\n0,1\n0.5,inf\n", "column theta_deg");
+        check("t,theta_deg\n0,1\n0.5,x\n", "cannot read `x`");
+        check("t,theta_deg\n0,1\n0.5\n", "expected 2 columns");
+        assert!(read_csv(&dir.path().join("nope.csv"))
+            .unwrap_err()
+            .contains("cannot be read"));
+    }
+
+    #[test]
+    fn square_chirp_multisine_build() {
+        let sq =
+            cfg("kind = \"square\"\namplitude_deg = 2\nfrequency_hz = 0.5\nprefilter_tau = 0.01")
+                .build(4.0, 1.0, None)
+                .unwrap();
+        // Settled at +A late in the first half period, −A in the second.
+        assert!((sq.z(0.9)[0] - 2f64.to_radians()).abs() < 1e-9);
+        assert!((sq.z(1.9)[0] + 2f64.to_radians()).abs() < 1e-9);
+        let c = cfg("kind = \"chirp\"\nf0_hz = 0.1\nf1_hz = 5\nduration = 10");
+        assert!(c.build(10.0, 1.0, None).is_ok());
+        assert!((c.period(10.0) - 0.2).abs() < 1e-12);
+        let m = cfg("kind = \"multisine\"\ncomponents = [{amplitude_deg = 2, frequency_hz = 0.5}, {amplitude_deg = 1, frequency_hz = 2, phase_deg = 90}]");
+        let r = m.build(10.0, 1.0, None).unwrap();
+        assert!((r.z(0.0)[0] - 1f64.to_radians()).abs() < 1e-15);
+        assert_eq!(m.period(10.0), 2.0);
+        let e = cfg("kind = \"multisine\"\ncomponents = []")
+            .build(10.0, 1.0, None)
+            .unwrap_err();
+        assert_eq!(e.0, "reference.components");
+    }
+}
