@@ -135,7 +135,7 @@ pub struct SensorConfig {
 }
 
 fn is_zero3(v: &[f64; 3]) -> bool {
-    *v == [0.0; 3]
+    v.iter().all(|&x| x == 0.0)
 }
 fn is_zero_u64(v: &u64) -> bool {
     *v == 0
@@ -148,6 +148,12 @@ impl SensorConfig {
     /// No effect at all.
     pub fn is_identity(&self) -> bool {
         *self == Self::default()
+    }
+
+    /// The controller gets x exactly, at once (it may still get only some
+    /// channels: see `measured`).
+    pub fn is_exact(&self) -> bool {
+        is_zero3(&self.bias) && is_zero3(&self.resolution) && !self.is_sampled()
     }
 
     /// Whether the stage needs samples (noise or delay).
@@ -202,7 +208,7 @@ impl Sensor {
         }
         Ok(Self {
             cfg: *c,
-            identity: c.bias == [0.0; 3] && c.resolution == [0.0; 3],
+            identity: is_zero3(&c.bias) && is_zero3(&c.resolution),
             pure: !c.is_sampled(),
             rng: core::array::from_fn(|i| ChaCha8Rng::seed_from_u64(c.seed.wrapping_add(i as u64))),
             line: [[0.0; 3]; MAX_DELAY as usize + 1],

@@ -109,11 +109,12 @@ fn cli_trace_and_summary_show_the_actuator() {
         String::from_utf8_lossy(&o.stderr)
     );
     let csv = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    // The law's parts, the valve's output, then the physical states.
     assert!(csv
         .lines()
         .next()
         .unwrap()
-        .ends_with(",b_bar_V_s3,u_plant_V"));
+        .contains(",b_bar_V_s3,u_plant_V,theta_dot_deg_s,theta_ddot_deg_s2,p_load_Pa"));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert!(summary["faults"]["saturated_samples"].as_u64().unwrap() > 0);

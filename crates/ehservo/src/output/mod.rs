@@ -118,8 +118,7 @@ impl TraceLayout {
     /// The layout of a scenario's runs.
     pub fn of(s: &Scenario) -> Self {
         let signals = s.controller.visit(SignalsOf);
-        let exact =
-            s.sensor.bias == [0.0; 3] && s.sensor.resolution == [0.0; 3] && !s.sensor.is_sampled();
+        let exact = s.sensor.is_exact();
         let actuator = crate::actuator::Actuator::try_new(&s.actuator).ok();
         Self::new(
             signals,
@@ -395,8 +394,7 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
     ];
     // What the controller was given against the truth, when the sensors
     // or an estimator stand between: the acceleration, the hardest channel.
-    let exact_sensor =
-        s.sensor.bias == [0.0; 3] && s.sensor.resolution == [0.0; 3] && !s.sensor.is_sampled();
+    let exact_sensor = s.sensor.is_exact();
     if !exact_sensor || s.estimator.is_some() {
         let source = match (&s.estimator, s.sensor.measured.has(2)) {
             (Some(e), false) => format!("estimated ({})", e.kind()),

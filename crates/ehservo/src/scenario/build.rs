@@ -483,7 +483,11 @@ impl Scenario {
             .fold(0.0, f64::max);
         if peak >= end {
             return Err((
-                "reference".into(),
+                match self.reference.kind {
+                    super::ReferenceKind::Sine => "reference.amplitude_deg",
+                    _ => "reference",
+                }
+                .into(),
                 format!(
                     "the reference reaches the end of the cylinder's stroke, ±{:.4}° (stroke/(2r))",
                     end.to_degrees()
