@@ -142,3 +142,38 @@ fn delays_of_whole_samples() {
     assert!(r.outcome.diverged.is_none());
     assert!(r.metrics.e_max_deg.is_some());
 }
+
+/// The study of docs/realistic.md reproduces from the shipped files: the
+/// estimator studies' results.csv, byte for byte (runs are pure functions
+/// of the study and the run index). The other studies are re-made by the
+/// commands on that page.
+#[test]
+fn the_shipped_estimator_studies_reproduce() {
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    for study in ["estimators", "estimator-bias"] {
+        let out = tmp.path().join(study);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_ehservo"))
+            .arg("sweep")
+            .arg(repo.join(format!("scenarios/realistic/{study}.toml")))
+            .arg("--out")
+            .arg(&out)
+            .args(["--quiet", "--no-plot"])
+            .output()
+            .unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let got = std::fs::read_to_string(out.join("results.csv")).unwrap();
+        let want =
+            std::fs::read_to_string(repo.join(format!("docs/realistic/{study}/results.csv")))
+                .unwrap();
+        assert!(
+            got == want,
+            "{study}: results.csv differs from the shipped one"
+        );
+    }
+}
