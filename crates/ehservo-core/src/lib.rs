@@ -61,7 +61,7 @@ pub mod prelude {
     };
     pub use crate::control::vsc::{Switching, Vsc, VscParams};
     pub use crate::control::{
-        Config, Controller, Design, Measurement, Output, Signal, Signals, Truth,
+        Config, Controller, Design, Measurement, Output, Signal, Signals, Truth, Tunable,
     };
     pub use crate::error::ParamError;
     pub use crate::estimate::{Estimator, Levant, LinearObserver};

@@ -26,6 +26,7 @@ pub mod run;
 pub mod scenario;
 pub mod signals;
 pub mod study;
+pub mod tune;
 
 pub use ehservo_sim::{actuator, cylinder, metrics, plant, sensor, simulation};
 

@@ -144,6 +144,23 @@ enum Command {
         #[arg(long)]
         no_plot: bool,
     },
+    /// Tune a controller's parameters over a set of scenarios by particle swarm: tuned.toml, convergence.csv/png, tune.json.
+    Tune {
+        /// The tune file (TOML).
+        file: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Worker threads, 1 to 1024 (default: every core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar, no summary.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Do not draw the convergence plot.
+        #[arg(long)]
+        no_plot: bool,
+    },
     /// Join the outputs of sharded sweeps into one results.csv.
     Merge {
         /// Shard output directories.
@@ -406,6 +423,52 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                     } else {
                         String::new()
                     },
+                    out.display()
+                );
+            }
+            Ok(())
+        }
+        Command::Tune {
+            file,
+            out,
+            threads,
+            quiet,
+            no_plot,
+        } => {
+            use std::io::IsTerminal;
+            if let Some(t) = threads {
+                if !(1..=MAX_THREADS).contains(&t) {
+                    ehservo::bad_input!("--threads {t}: must be between 1 and {MAX_THREADS}");
+                }
+            }
+            let tune = ehservo::tune::Tune::load(&file)?;
+            output::probe_destination(&out)?;
+            let pb = if !quiet && std::io::stderr().is_terminal() {
+                indicatif::ProgressBar::new(tune.file.budget)
+            } else {
+                indicatif::ProgressBar::hidden()
+            };
+            let start = Instant::now();
+            let r = ehservo::tune::tune_to_dir(&tune, &out, threads, &pb, !no_plot)?;
+            pb.finish_and_clear();
+            if !quiet {
+                let params: Vec<String> = r
+                    .params
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v:.6}"))
+                    .collect();
+                out!(
+                    w,
+                    "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}\n  {}\nwrote {}/tuned.toml",
+                    tune.file.name,
+                    tune.kind,
+                    r.evaluations,
+                    start.elapsed().as_secs_f64(),
+                    r.objective,
+                    r.before
+                        .map(|b| format!(" (before: {b:.5})"))
+                        .unwrap_or_default(),
+                    params.join(", "),
                     out.display()
                 );
             }

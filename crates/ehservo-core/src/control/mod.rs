@@ -42,6 +42,41 @@ use crate::rk4::OdeState;
 use crate::servo::NominalModel;
 use crate::surface::SwitchingSurface;
 
+/// A parameter of a controller kind that a tuner may search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tunable {
+    /// Its key in `[controller]`.
+    pub key: &'static str,
+    /// Lowest value searched.
+    pub low: f64,
+    /// Highest value searched.
+    pub high: f64,
+    /// Searched on a log scale (then `0 < low`).
+    pub log: bool,
+}
+
+impl Tunable {
+    /// A parameter searched on a log scale over `[low, high]`.
+    pub const fn log(key: &'static str, low: f64, high: f64) -> Self {
+        Self {
+            key,
+            low,
+            high,
+            log: true,
+        }
+    }
+
+    /// A parameter searched on a linear scale over `[low, high]`.
+    pub const fn linear(key: &'static str, low: f64, high: f64) -> Self {
+        Self {
+            key,
+            low,
+            high,
+            log: false,
+        }
+    }
+}
+
 /// What the controller measures at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Measurement<T = f64> {
@@ -236,6 +271,10 @@ pub trait Config {
     const KIND: &'static str;
     /// Whether the law uses the switching surface (`[surface]`).
     const USES_SURFACE: bool;
+    /// The parameters a tuner may search, with their ranges: what
+    /// `ehservo tune` varies when the tune file names none. Empty: nothing
+    /// to tune.
+    const TUNABLE: &'static [Tunable] = &[];
     /// The controller built.
     type Controller: Controller;
     /// Checks every parameter (all of them, whether or not this law reads

@@ -48,7 +48,7 @@
 //! H. E. Merritt, *Hydraulic Control Systems*, Wiley 1967 (feedforward of
 //! the valve-controlled motor's nominal model).
 
-use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals};
+use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
 use crate::error::{positive, ParamError};
 use crate::math::{sqrt, Real};
 
@@ -221,6 +221,13 @@ impl<T: Real> Pid<T> {
 impl Config for PidConfig {
     const KIND: &'static str = "pid";
     const USES_SURFACE: bool = false;
+    /// The three gains over decades around the pole-placement design of
+    /// the Fig. 2 case (kp ≈ 26 V/rad, ki ≈ 310 V/(rad·s), kd ≈ 0.038 V·s/rad).
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::log("kp", 0.1, 1e4),
+        Tunable::log("ki", 0.1, 1e5),
+        Tunable::log("kd", 1e-4, 10.0),
+    ];
     type Controller = Pid;
 
     fn build(&self, d: &Design) -> Result<Pid, ParamError> {

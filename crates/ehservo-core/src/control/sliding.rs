@@ -9,7 +9,7 @@
 //! `controller.kind` among `vsc`, `vsc-sat` and `nnvsc` and keep its keys,
 //! and every key is validated whichever law reads it.
 
-use super::{Config, Design, Output, Signal, Signals, Truth};
+use super::{Config, Design, Output, Signal, Signals, Truth, Tunable};
 use crate::control::nnvsc::{MuRule, NnVsc, NnVscParams};
 use crate::control::vsc::{Switching, Vsc, VscParams};
 use crate::error::{non_negative, positive, ParamError};
@@ -331,6 +331,13 @@ pub struct VscSatConfig(pub SlidingConfig);
 impl Config for NnVscConfig {
     const KIND: &'static str = "nnvsc";
     const USES_SURFACE: bool = true;
+    /// The paper's three main gains: the linear switching gain γ1, the
+    /// leakage η and the learning rate α (ᾱ = 5 stays below it).
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::log("gamma1", 1.0, 1e4),
+        Tunable::linear("eta", 0.0, 2.0),
+        Tunable::log("alpha", 10.0, 1e4),
+    ];
     type Controller = NnVsc;
     fn build(&self, d: &Design) -> Result<NnVsc, ParamError> {
         let rbf = self.0.validate()?;
@@ -341,6 +348,11 @@ impl Config for NnVscConfig {
 impl Config for VscConfig {
     const KIND: &'static str = "vsc";
     const USES_SURFACE: bool = true;
+    /// The switching gain's bounds (what the law is told).
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::linear("bound_a", 0.0, 3.0),
+        Tunable::linear("bound_b", 0.0, 0.9),
+    ];
     type Controller = Vsc;
     fn build(&self, d: &Design) -> Result<Vsc, ParamError> {
         self.0.validate()?;
@@ -351,6 +363,13 @@ impl Config for VscConfig {
 impl Config for VscSatConfig {
     const KIND: &'static str = "vsc-sat";
     const USES_SURFACE: bool = true;
+    /// The switching gain's bounds (what the law is told) and the
+    /// boundary layer.
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::linear("bound_a", 0.0, 3.0),
+        Tunable::linear("bound_b", 0.0, 0.9),
+        Tunable::log("mu", 1e-2, 1e3),
+    ];
     type Controller = Vsc;
     fn build(&self, d: &Design) -> Result<Vsc, ParamError> {
         self.0.validate()?;
