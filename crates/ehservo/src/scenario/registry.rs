@@ -139,6 +139,7 @@ registry! {
     Vsc => VscConfig,
     VscSat => VscSatConfig,
     Pid => ehservo_core::control::pid::PidConfig,
+    NnRobust => ehservo_core::control::nn_robust::NnRobustConfig,
 }
 
 impl Default for ControllerCfg {
