@@ -139,6 +139,7 @@ registry! {
     Vsc => VscConfig,
     VscSat => VscSatConfig,
     Pid => ehservo_core::control::pid::PidConfig,
+    Adrc => ehservo_core::control::adrc::AdrcConfig,
 }
 
 impl Default for ControllerCfg {
