@@ -35,6 +35,7 @@ pub mod adrc;
 pub mod nnvsc;
 pub mod pid;
 pub mod sliding;
+pub mod sta;
 pub mod vsc;
 
 use crate::error::ParamError;

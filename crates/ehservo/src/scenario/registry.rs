@@ -140,6 +140,7 @@ registry! {
     VscSat => VscSatConfig,
     Pid => ehservo_core::control::pid::PidConfig,
     Adrc => ehservo_core::control::adrc::AdrcConfig,
+    Sta => ehservo_core::control::sta::StaConfig,
 }
 
 impl Default for ControllerCfg {
