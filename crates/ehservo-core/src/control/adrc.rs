@@ -75,7 +75,7 @@ use crate::math::Real;
 
 /// `kind = "adrc"`: the `[controller]` keys. Bandwidths left out follow the
 /// module doc's rule.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(
     feature = "serde",
     derive(serde::Serialize, serde::Deserialize),
@@ -98,18 +98,6 @@ pub struct AdrcConfig {
     /// Move the nominal model's −ā·z into the observer and the law (module
     /// doc). Default false (Gao's law).
     pub model_assisted: bool,
-}
-
-impl Default for AdrcConfig {
-    fn default() -> Self {
-        Self {
-            omega_c: None,
-            omega_o: None,
-            b0: None,
-            u_limit: None,
-            model_assisted: false,
-        }
-    }
 }
 
 /// The observer gains β1..β4 placing the LESO's error poles at −ω_o (four
@@ -320,6 +308,7 @@ impl<T: Real> Controller<T> for Adrc<T> {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
 mod tests {
     use super::*;
     use crate::rk4::rk4_step;

@@ -272,6 +272,7 @@ impl<T: Real> Controller<T> for Sta<T> {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)] // exact values are the point of several checks
 mod tests {
     use super::*;
     use crate::servo::{Load, ServoParams};
