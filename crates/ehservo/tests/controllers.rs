@@ -128,3 +128,53 @@ fn readme_simulation_snippet() -> Result<(), Box<dyn std::error::Error>> {
     assert!(metrics.e_max_deg.is_some());
     Ok(())
 }
+
+/// `kind = "adrc"` on the Fig. 2 case (`scenarios/league/adrc-fig2.toml`):
+/// with the nominal model in the observer and the default bandwidths it is
+/// bounded and tracks (e_max below 10 % of the 5° amplitude) sampled at
+/// 0.01 s; the parts add up to u (no limit). Gao's plain law runs at 1 ms.
+#[test]
+fn adrc_tracks_the_fig2_case() {
+    let text = include_str!("../../../scenarios/league/adrc-fig2.toml");
+    for set in [
+        vec![],
+        vec!["controller.model_assisted=false", "simulation.step=0.001"],
+    ] {
+        let s = scenario(text, &set).unwrap();
+        let r = run(&s, Keep::Every(1)).unwrap();
+        assert!(r.outcome.diverged.is_none(), "{set:?}");
+        let e = r.metrics.e_max_deg.unwrap();
+        eprintln!("adrc {set:?}: e_max {e}°");
+        assert!(e < 5.0, "{set:?}: e_max {e}°");
+        let smp = &r.trace[r.trace.len() / 2];
+        let sum = ["u_pd", "u_dist", "u_model"]
+            .iter()
+            .map(|k| smp.part(k))
+            .sum::<f64>();
+        assert!((sum - smp.u).abs() < 1e-9 * smp.u.abs().max(1.0));
+        assert!(smp.get("sigma").is_none());
+    }
+}
+
+/// `kind = "sta"` on the Fig. 2 case (`scenarios/league/sta-fig2.toml`),
+/// sampled at 0.01 s and at 1 ms: bounded, tracking below 10 % of the 5°
+/// amplitude, its parts adding up to u and its σ the paper's (10).
+#[test]
+fn sta_tracks_the_fig2_case() {
+    let text = include_str!("../../../scenarios/league/sta-fig2.toml");
+    for set in [vec![], vec!["simulation.step=0.001"]] {
+        let s = scenario(text, &set).unwrap();
+        let r = run(&s, Keep::Every(1)).unwrap();
+        assert!(r.outcome.diverged.is_none(), "{set:?}");
+        let e = r.metrics.e_max_deg.unwrap();
+        eprintln!("sta {set:?}: e_max {e}°");
+        assert!(e < 0.5, "{set:?}: e_max {e}°");
+        let smp = &r.trace[r.trace.len() / 2];
+        let sum = ["u_eq", "u_sta", "u_v"]
+            .iter()
+            .map(|k| smp.part(k))
+            .sum::<f64>();
+        assert!((sum - smp.u).abs() < 1e-9 * smp.u.abs().max(1.0));
+        assert!(smp.get("sigma").is_some());
+    }
+}

@@ -31,10 +31,12 @@
 //! `b̄ > 0`, so `sgn(u) = sgn(v)`; then `b̄ = b(x, sgn v)` and `u = v/b̄`
 //! ([`crate::servo::NominalModel::gain_for`]).
 
+pub mod adrc;
 pub mod nn_robust;
 pub mod nnvsc;
 pub mod pid;
 pub mod sliding;
+pub mod sta;
 pub mod vsc;
 
 use crate::error::ParamError;

@@ -140,6 +140,8 @@ registry! {
     VscSat => VscSatConfig,
     Pid => ehservo_core::control::pid::PidConfig,
     NnRobust => ehservo_core::control::nn_robust::NnRobustConfig,
+    Adrc => ehservo_core::control::adrc::AdrcConfig,
+    Sta => ehservo_core::control::sta::StaConfig,
 }
 
 impl Default for ControllerCfg {
