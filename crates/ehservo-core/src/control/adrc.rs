@@ -69,7 +69,7 @@
 //! `model_assisted = true` the observer only sees the model error and the
 //! default bandwidths track at 0.01 s (`scenarios/league/adrc-fig2.toml`).
 
-use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals};
+use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
 use crate::error::{positive, ParamError};
 use crate::math::Real;
 
@@ -221,6 +221,12 @@ impl<T: Real> Adrc<T> {
 impl Config for AdrcConfig {
     const KIND: &'static str = "adrc";
     const USES_SURFACE: bool = false;
+    /// The two bandwidths (rad/s); an observer beyond the sampled limit
+    /// ω_o·dt < 2 is refused (a tuner scores it +∞).
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::log("omega_c", 1.0, 500.0),
+        Tunable::log("omega_o", 5.0, 2000.0),
+    ];
     type Controller = Adrc;
 
     fn build(&self, d: &Design) -> Result<Adrc, ParamError> {

@@ -102,7 +102,7 @@
 
 use super::nnvsc::{MuRule, NnState, NnVsc, NnVscParams};
 use super::sliding::{RbfConfig, SlidingParts};
-use super::{Config, Controller, Design, Measurement, Output, Signal, Signals, Truth};
+use super::{Config, Controller, Design, Measurement, Output, Signal, Signals, Truth, Tunable};
 use crate::error::{non_negative, positive, ParamError};
 use crate::math::{sqrt, Real};
 use crate::rbf::{Rbf, N_PHI};
@@ -459,6 +459,14 @@ impl NnRobustConfig {
 impl Config for NnRobustConfig {
     const KIND: &'static str = "nn-robust";
     const USES_SURFACE: bool = true;
+    /// The NNBVSC's γ1 and α, and the leakage of σ- and e-modification
+    /// (the law not chosen ignores its own).
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::log("gamma1", 1.0, 1e4),
+        Tunable::log("alpha", 10.0, 1e4),
+        Tunable::log("sigma_mod", 1e-3, 10.0),
+        Tunable::log("nu", 1e-3, 10.0),
+    ];
     type Controller = NnRobust;
     fn build(&self, d: &Design) -> Result<NnRobust, ParamError> {
         self.nnvsc().validate()?;

@@ -47,7 +47,7 @@
 //! Fig. 2 loop sampled at 0.01 s diverged within 0.3 s that way. `k1` and
 //! `k2` given as keys are constants instead (each independently).
 
-use super::{Config, Controller, Design, Measurement, Output, Signal, Signals};
+use super::{Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
 use crate::control::flags;
 use crate::error::{non_negative, positive, ParamError};
 use crate::math::{sgn, sqrt, Real};
@@ -191,6 +191,9 @@ impl<T: Real> Sta<T> {
 impl Config for StaConfig {
     const KIND: &'static str = "sta";
     const USES_SURFACE: bool = true;
+    /// Constant gains in place of the C(t) rule, over decades.
+    const TUNABLE: &'static [Tunable] =
+        &[Tunable::log("k1", 1.0, 1e4), Tunable::log("k2", 1.0, 1e7)];
     type Controller = Sta;
 
     fn build(&self, d: &Design) -> Result<Sta, ParamError> {
