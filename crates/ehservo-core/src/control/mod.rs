@@ -31,6 +31,7 @@
 //! `b̄ > 0`, so `sgn(u) = sgn(v)`; then `b̄ = b(x, sgn v)` and `u = v/b̄`
 //! ([`crate::servo::NominalModel::gain_for`]).
 
+pub mod arc;
 pub mod nnvsc;
 pub mod pid;
 pub mod sliding;

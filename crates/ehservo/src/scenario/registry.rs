@@ -139,6 +139,7 @@ registry! {
     Vsc => VscConfig,
     VscSat => VscSatConfig,
     Pid => ehservo_core::control::pid::PidConfig,
+    Arc => ehservo_core::control::arc::ArcConfig,
 }
 
 impl Default for ControllerCfg {
