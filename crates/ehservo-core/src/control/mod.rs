@@ -32,6 +32,7 @@
 //! ([`crate::servo::NominalModel::gain_for`]).
 
 pub mod arc;
+pub mod backstepping;
 pub mod nnvsc;
 pub mod pid;
 pub mod sliding;

@@ -140,6 +140,7 @@ registry! {
     VscSat => VscSatConfig,
     Pid => ehservo_core::control::pid::PidConfig,
     Arc => ehservo_core::control::arc::ArcConfig,
+    Backstepping => ehservo_core::control::backstepping::BacksteppingConfig,
 }
 
 impl Default for ControllerCfg {
