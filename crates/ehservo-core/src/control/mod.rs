@@ -32,6 +32,8 @@
 //! ([`crate::servo::NominalModel::gain_for`]).
 
 pub mod adrc;
+pub mod arc;
+pub mod backstepping;
 pub mod nn_robust;
 pub mod nnvsc;
 pub mod pid;

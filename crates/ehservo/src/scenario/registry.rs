@@ -142,6 +142,8 @@ registry! {
     NnRobust => ehservo_core::control::nn_robust::NnRobustConfig,
     Adrc => ehservo_core::control::adrc::AdrcConfig,
     Sta => ehservo_core::control::sta::StaConfig,
+    Arc => ehservo_core::control::arc::ArcConfig,
+    Backstepping => ehservo_core::control::backstepping::BacksteppingConfig,
 }
 
 impl Default for ControllerCfg {
