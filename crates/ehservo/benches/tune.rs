@@ -32,7 +32,7 @@ fn bench_tune(c: &mut Criterion) {
     let hidden = indicatif::ProgressBar::hidden();
     let mut g = c.benchmark_group("tune");
     g.sample_size(10);
-    g.measurement_time(Duration::from_secs(30));
+    g.measurement_time(Duration::from_secs(20));
     for kind in ["pid", "nnvsc"] {
         let t = tune(kind);
         for threads in [1usize, 2] {
@@ -51,5 +51,9 @@ fn bench_tune(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_tune);
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench_tune
+}
 criterion_main!(benches);

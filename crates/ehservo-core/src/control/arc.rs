@@ -83,7 +83,7 @@
 //! ε = 6.97·10⁶ rad²/s⁵, Z = 76.63 rad/s², Γ = (0.0957, 495.1, 1.030,
 //! 1.353·10⁻⁶).
 
-use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals};
+use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
 use crate::error::{non_negative, positive, ParamError};
 use crate::math::Real;
 use crate::rbf::Rbf;
@@ -241,6 +241,13 @@ impl<T: Real> Arc<T> {
 impl Config for ArcConfig {
     const KIND: &'static str = "arc";
     const USES_SURFACE: bool = true;
+    /// The feedback rate, the robust term's ε and the adaptation time of
+    /// the Γ rule.
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::log("k_s", 1.0, 1e3),
+        Tunable::log("eps", 1e-3, 1e6),
+        Tunable::log("adapt_time", 0.01, 100.0),
+    ];
     type Controller = Arc;
 
     fn build(&self, d: &Design) -> Result<Arc, ParamError> {

@@ -74,7 +74,7 @@
 //! `T_a` (`adapt_time`, default 1 s). For the paper's servo:
 //! Z = 14.371 rad/s², Γ = (0.510, 2640, 5.49), γϱ = 9.62·10⁻⁶.
 
-use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals};
+use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
 use crate::error::{non_negative, positive, ParamError};
 use crate::math::Real;
 use crate::rbf::Rbf;
@@ -231,6 +231,13 @@ impl<T: Real> Backstepping<T> {
 impl Config for BacksteppingConfig {
     const KIND: &'static str = "backstepping";
     const USES_SURFACE: bool = false;
+    /// The three error gains and the adaptation time of the Γ rule.
+    const TUNABLE: &'static [Tunable] = &[
+        Tunable::log("c1", 1.0, 300.0),
+        Tunable::log("c2", 1.0, 300.0),
+        Tunable::log("c3", 1.0, 300.0),
+        Tunable::log("adapt_time", 0.01, 100.0),
+    ];
     type Controller = Backstepping;
 
     fn build(&self, d: &Design) -> Result<Backstepping, ParamError> {
