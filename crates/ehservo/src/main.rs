@@ -465,9 +465,11 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                     r.evaluations,
                     start.elapsed().as_secs_f64(),
                     r.objective,
-                    r.before
-                        .map(|b| format!(" (before: {b:.5})"))
-                        .unwrap_or_default(),
+                    if r.kept_defaults {
+                        " — no better than the defaults, which are kept".to_string()
+                    } else {
+                        format!(" (defaults: {:.5})", r.defaults)
+                    },
                     params.join(", "),
                     out.display()
                 );

@@ -385,6 +385,11 @@ impl Tune {
     /// The overrides of one evaluation of `values`: one list per
     /// scenario × draw.
     fn sets(&self, values: &[f64]) -> Vec<Vec<(String, toml::Value)>> {
+        self.sets_of(Some(values))
+    }
+
+    /// [`Tune::sets`] of `values`, or of the kind's default parameters.
+    fn sets_of(&self, values: Option<&[f64]>) -> Vec<Vec<(String, toml::Value)>> {
         let mut out = Vec::new();
         for _ in &self.scenarios {
             for d in 0..self.file.draws {
@@ -392,7 +397,7 @@ impl Tune {
                     "controller.kind".to_string(),
                     toml::Value::String(self.kind.into()),
                 )];
-                for (r, &v) in self.params.iter().zip(values) {
+                for (r, &v) in self.params.iter().zip(values.unwrap_or(&[])) {
                     sets.push((format!("controller.{}", r.key), toml::Value::Float(v)));
                 }
                 if self.file.draws > 1 {
@@ -428,8 +433,11 @@ impl Tune {
     /// The metrics of every scenario × draw at `values` (None where the
     /// controller refused them).
     pub fn evaluate(&self, values: &[f64]) -> Vec<Option<Metrics>> {
-        self.sets(values)
-            .iter()
+        self.evaluate_sets(&self.sets(values))
+    }
+
+    fn evaluate_sets(&self, sets: &[Vec<(String, toml::Value)>]) -> Vec<Option<Metrics>> {
+        sets.iter()
             .enumerate()
             .map(|(i, sets)| {
                 self.build_run(i, sets)
@@ -465,8 +473,13 @@ impl Tune {
 
     /// The objective at parameter `values`.
     pub fn objective(&self, values: &[f64]) -> f64 {
+        self.objective_of(Some(values))
+    }
+
+    /// The objective at `values`, or at the kind's default parameters.
+    pub fn objective_of(&self, values: Option<&[f64]>) -> f64 {
         let scores: Vec<f64> = self
-            .evaluate(values)
+            .evaluate_sets(&self.sets_of(values))
             .iter()
             .map(|m| self.score(m.as_ref()))
             .collect();
@@ -537,9 +550,12 @@ pub struct TuneResult {
     pub params: Vec<(String, f64)>,
     /// The objective there.
     pub objective: f64,
-    /// The objective at the scenarios' own parameters (before tuning), when
-    /// their kind is the one tuned.
-    pub before: Option<f64>,
+    /// The objective at the kind's default parameters (its design rules;
+    /// for a scenario of the kind tuned, its own `[controller]` table).
+    pub defaults: f64,
+    /// The swarm found nothing better than the defaults, which are kept:
+    /// tuned.toml then carries the default parameters.
+    pub kept_defaults: bool,
     /// Evaluations made.
     pub evaluations: u64,
     /// Best objective after each iteration of the swarm (the first after
@@ -584,7 +600,8 @@ pub fn search(
         Ok(TuneResult {
             params: t.params.iter().map(|r| r.key.clone()).zip(values).collect(),
             objective: state.get_best_cost(),
-            before: None,
+            defaults: f64::INFINITY,
+            kept_defaults: false,
             evaluations,
             history: history.0.lock().expect("unpoisoned").clone(),
         })
@@ -597,33 +614,11 @@ pub fn search(
             .install(work)?,
         None => work()?,
     };
-    if t.scenarios.iter().all(|s| s.controller.kind() == t.kind) {
-        // The objective of the scenarios as they stand.
-        let scores: Vec<f64> = t
-            .scenarios
-            .iter()
-            .flat_map(|s| {
-                (0..t.file.draws).map(move |d| {
-                    let mut s = s.clone();
-                    if t.file.draws > 1 {
-                        s.uncertainty.seed = d;
-                    }
-                    s
-                })
-            })
-            .map(|s| {
-                t.score(
-                    s.setup()
-                        .ok()
-                        .map(|setup| crate::run::run_setup(&setup, &mut |_| {}).1)
-                        .as_ref(),
-                )
-            })
-            .collect();
-        r.before = Some(match t.file.objective {
-            Objective::Mean => scores.iter().sum::<f64>() / scores.len() as f64,
-            Objective::Worst => scores.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        });
+    // A tune never returns worse than where it starts: the defaults.
+    r.defaults = t.objective_of(None);
+    if !(r.objective <= r.defaults) {
+        r.kept_defaults = true;
+        r.objective = r.defaults;
     }
     Ok(r)
 }
@@ -641,8 +636,8 @@ pub fn tune_to_dir(
     let r = search(t, threads, progress)?;
     let stage = Staging::new(out)?;
     // The tuned scenario: the first scenario, its controller replaced.
-    let sets: Vec<(String, toml::Value)> = t
-        .sets(&r.params.iter().map(|p| p.1).collect::<Vec<_>>())[0]
+    let values: Vec<f64> = r.params.iter().map(|p| p.1).collect();
+    let sets: Vec<(String, toml::Value)> = t.sets_of((!r.kept_defaults).then_some(&values[..]))[0]
         .iter()
         .filter(|(k, _)| k != "uncertainty.seed")
         .cloned()
@@ -713,9 +708,11 @@ fn convergence_figure(t: &Tune, r: &TuneResult) -> Figure {
             title: format!(
                 "best objective: {:.5}{}",
                 r.objective,
-                r.before
-                    .map(|b| format!(" (the scenario's own parameters: {b:.5})"))
-                    .unwrap_or_default()
+                if r.kept_defaults {
+                    " — the defaults, kept: the swarm found nothing better".to_string()
+                } else {
+                    format!(" (the kind's defaults: {:.5})", r.defaults)
+                }
             ),
             x_label: "evaluations".into(),
             y_label: "objective (° + penalties)".into(),
