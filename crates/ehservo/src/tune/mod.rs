@@ -616,7 +616,7 @@ pub fn search(
     };
     // A tune never returns worse than where it starts: the defaults.
     r.defaults = t.objective_of(None);
-    if !(r.objective <= r.defaults) {
+    if r.objective > r.defaults || r.objective.is_nan() {
         r.kept_defaults = true;
         r.objective = r.defaults;
     }
