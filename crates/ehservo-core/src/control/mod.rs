@@ -34,6 +34,35 @@
 pub mod adrc;
 pub mod arc;
 pub mod backstepping;
+/// Serde for an enum written in scenarios by name: `as_str` out, `parse`
+/// in, and the names listed in the error for anything else.
+#[cfg(feature = "serde")]
+macro_rules! serde_by_name {
+    ($t:ty, $expecting:literal, $names:expr) => {
+        impl serde::Serialize for $t {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.serialize_str(self.as_str())
+            }
+        }
+
+        impl<'de> serde::Deserialize<'de> for $t {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                struct V;
+                impl serde::de::Visitor<'_> for V {
+                    type Value = $t;
+                    fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
+                        f.write_str($expecting)
+                    }
+                    fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<$t, E> {
+                        <$t>::parse(v).ok_or_else(|| E::unknown_variant(v, &$names))
+                    }
+                }
+                d.deserialize_str(V)
+            }
+        }
+    };
+}
+
 pub mod nn_robust;
 pub mod nnvsc;
 pub mod pid;

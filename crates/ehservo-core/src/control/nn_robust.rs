@@ -140,29 +140,11 @@ impl WeightLaw {
 }
 
 #[cfg(feature = "serde")]
-impl serde::Serialize for WeightLaw {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.as_str())
-    }
-}
-
-#[cfg(feature = "serde")]
-impl<'de> serde::Deserialize<'de> for WeightLaw {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl serde::de::Visitor<'_> for V {
-            type Value = WeightLaw;
-            fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
-                f.write_str("one of `sigma-mod`, `e-mod`, `projection`")
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<WeightLaw, E> {
-                WeightLaw::parse(v)
-                    .ok_or_else(|| E::unknown_variant(v, &["sigma-mod", "e-mod", "projection"]))
-            }
-        }
-        d.deserialize_str(V)
-    }
-}
+serde_by_name!(
+    WeightLaw,
+    "one of `sigma-mod`, `e-mod`, `projection`",
+    ["sigma-mod", "e-mod", "projection"]
+);
 
 /// The weight law's own gains (the rest are the NNBVSC's).
 #[derive(Debug, Clone, Copy, PartialEq)]

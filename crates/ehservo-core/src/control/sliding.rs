@@ -138,31 +138,13 @@ impl<T: Real> SlidingParts<T> {
     }
 }
 
-/// `controller.mu_rule`'s spellings.
+// `controller.mu_rule`'s spellings.
 #[cfg(feature = "serde")]
-impl serde::Serialize for MuRule {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.as_str())
-    }
-}
-
-#[cfg(feature = "serde")]
-impl<'de> serde::Deserialize<'de> for MuRule {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl serde::de::Visitor<'_> for V {
-            type Value = MuRule;
-            fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
-                f.write_str("one of `remark7`, `literal-33`, `zero`")
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<MuRule, E> {
-                MuRule::parse(v)
-                    .ok_or_else(|| E::unknown_variant(v, &["remark7", "literal-33", "zero"]))
-            }
-        }
-        d.deserialize_str(V)
-    }
-}
+serde_by_name!(
+    MuRule,
+    "one of `remark7`, `literal-33`, `zero`",
+    ["remark7", "literal-33", "zero"]
+);
 
 /// `[controller.rbf]`: the network's grid, width and normalising scales.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -45,6 +45,7 @@ pub use exec::{execute, sweep, RunRow, SweepOptions};
 pub use merge::merge;
 pub use plan::{derive_seed, parse_shard, Plan};
 pub use results::{as_f64, results_csv, StudyRecord, METRIC_COLUMNS};
+pub(crate) use schema::load_toml;
 pub use schema::{
     value, Axis, AxisValues, Dist, Draw, MonteCarlo, Scale, Study, StudyError, MAX_RUNS,
 };

@@ -393,45 +393,56 @@ impl std::fmt::Display for StudyError {
 
 impl std::error::Error for StudyError {}
 
+/// Reads a TOML input file (a study, a tune file) into `T`; a failure is
+/// one line: the file, the line and column when TOML knows them, the key
+/// and the reason.
+pub(crate) fn load_toml<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    what: &str,
+) -> Result<T, StudyError> {
+    let file = path.display().to_string();
+    let bad = |key: &str, lc: Option<(usize, usize)>, reason: String| {
+        let at = lc.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
+        StudyError(if key.is_empty() {
+            format!("{file}{at}: {reason}")
+        } else {
+            format!("{file}{at}: `{key}`: {reason}")
+        })
+    };
+    let text =
+        crate::input::read_text(path).map_err(|r| bad("", None, format!("the {what} file {r}")))?;
+    let de = toml::Deserializer::parse(&text).map_err(|e| {
+        let lc = e
+            .span()
+            .map(|sp| crate::scenario::line_col(&text, sp.start));
+        bad(
+            "",
+            lc,
+            format!(
+                "TOML syntax error: {}",
+                e.message().lines().next().unwrap_or("")
+            ),
+        )
+    })?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let key = e.path().to_string();
+        let inner = e.into_inner();
+        let lc = inner
+            .span()
+            .map(|sp| crate::scenario::line_col(&text, sp.start));
+        bad(
+            if key == "." { "" } else { &key },
+            lc,
+            inner.message().lines().next().unwrap_or("").to_string(),
+        )
+    })
+}
+
 impl Plan {
     /// Reads and checks a study file (and its base scenario).
     pub fn load(path: &Path) -> Result<Plan, StudyError> {
         let file = path.display().to_string();
-        let bad = |key: &str, lc: Option<(usize, usize)>, reason: String| {
-            let at = lc.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
-            StudyError(if key.is_empty() {
-                format!("{file}{at}: {reason}")
-            } else {
-                format!("{file}{at}: `{key}`: {reason}")
-            })
-        };
-        let text = crate::input::read_text(path)
-            .map_err(|r| bad("", None, format!("the study file {r}")))?;
-        let de = toml::Deserializer::parse(&text).map_err(|e| {
-            let lc = e
-                .span()
-                .map(|sp| crate::scenario::line_col(&text, sp.start));
-            bad(
-                "",
-                lc,
-                format!(
-                    "TOML syntax error: {}",
-                    e.message().lines().next().unwrap_or("")
-                ),
-            )
-        })?;
-        let study: Study = serde_path_to_error::deserialize(de).map_err(|e| {
-            let key = e.path().to_string();
-            let inner = e.into_inner();
-            let lc = inner
-                .span()
-                .map(|sp| crate::scenario::line_col(&text, sp.start));
-            bad(
-                if key == "." { "" } else { &key },
-                lc,
-                inner.message().lines().next().unwrap_or("").to_string(),
-            )
-        })?;
+        let study: Study = load_toml(path, "study")?;
         let base_path = path.parent().unwrap_or(Path::new(".")).join(&study.base);
         let base = Scenario::load(&base_path, &study.set)
             .map_err(|e: ScenarioError| StudyError(format!("{file}: base: {e}")))?;

@@ -182,41 +182,7 @@ impl Tune {
     /// Reads and checks a tune file and its scenarios.
     pub fn load(path: &Path) -> Result<Tune, StudyError> {
         let file = path.display().to_string();
-        let bad = |key: &str, lc: Option<(usize, usize)>, reason: String| {
-            let at = lc.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
-            StudyError(if key.is_empty() {
-                format!("{file}{at}: {reason}")
-            } else {
-                format!("{file}{at}: `{key}`: {reason}")
-            })
-        };
-        let text = crate::input::read_text(path)
-            .map_err(|r| bad("", None, format!("the tune file {r}")))?;
-        let de = toml::Deserializer::parse(&text).map_err(|e| {
-            let lc = e
-                .span()
-                .map(|sp| crate::scenario::line_col(&text, sp.start));
-            bad(
-                "",
-                lc,
-                format!(
-                    "TOML syntax error: {}",
-                    e.message().lines().next().unwrap_or("")
-                ),
-            )
-        })?;
-        let mut tf: TuneFile = serde_path_to_error::deserialize(de).map_err(|e| {
-            let key = e.path().to_string();
-            let inner = e.into_inner();
-            let lc = inner
-                .span()
-                .map(|sp| crate::scenario::line_col(&text, sp.start));
-            bad(
-                if key == "." { "" } else { &key },
-                lc,
-                inner.message().lines().next().unwrap_or("").to_string(),
-            )
-        })?;
+        let mut tf: TuneFile = crate::study::load_toml(path, "tune")?;
         if tf.name.is_empty() {
             tf.name = path
                 .file_stem()
