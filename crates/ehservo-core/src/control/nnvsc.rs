@@ -322,19 +322,12 @@ impl<T: Real> NnVsc<T> {
         (out, sink.finite())
     }
 
-    /// The law of [`Controller::law`], the same
-    /// operations in the same order, with ξ + dt·ξ̇ written by `sink` as
-    /// each row of Ẇ is formed. (A copy of the law rather than one generic
-    /// body for both: sharing it cost the host's `law` about 290
-    /// instructions, its inlining decisions changed.
-    /// `law_euler_is_law_then_euler_to_the_bit` holds the two together.)
+    /// What [`Controller::law`] and [`NnVsc::law_euler`] compute before the
+    /// passes over W, in the same operations and order in both: Φ's
+    /// per-axis factors, b̄ both ways, N, the surface, σΔ, μ, ξ and the
+    /// switching term.
     #[inline(always)]
-    fn law_and_euler(
-        &self,
-        m: &Measurement<T>,
-        s: &NnState<T>,
-        sink: &mut Euler<'_, T>,
-    ) -> Output<SlidingParts<T>, T> {
+    fn prelude(&self, m: &Measurement<T>, s: &NnState<T>) -> Prelude<T> {
         let p = &self.params;
         let x = &m.x;
         // The load pressure (a sine) and Φ (four exponentials) first: the
@@ -390,6 +383,50 @@ impl<T: Real> NnVsc<T> {
         // (b̄ − β)·u_sw = γ1σΔ + γ2σΔ/(|σΔ| + μ), and b̄ − β = b̄(1 − bound_b).
         let sw_num = p.gamma1 * sd + gamma2 * frac;
         let sw_v = sw_num / self.one_minus_bb;
+        Prelude {
+            g,
+            gains,
+            n,
+            st,
+            phi_norm,
+            gamma2,
+            fl,
+            sd,
+            mu,
+            xi,
+            sw_num,
+            sw_v,
+        }
+    }
+
+    /// The law of [`Controller::law`], the same
+    /// operations in the same order, with ξ + dt·ξ̇ written by `sink` as
+    /// each row of Ẇ is formed. (A copy of the law rather than one generic
+    /// body for both: sharing it cost the host's `law` about 290
+    /// instructions, its inlining decisions changed.
+    /// `law_euler_is_law_then_euler_to_the_bit` holds the two together.)
+    #[inline(always)]
+    fn law_and_euler(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        sink: &mut Euler<'_, T>,
+    ) -> Output<SlidingParts<T>, T> {
+        let p = &self.params;
+        let Prelude {
+            g,
+            gains,
+            n,
+            st,
+            phi_norm,
+            gamma2,
+            mut fl,
+            sd,
+            mu,
+            xi,
+            sw_num,
+            sw_v,
+        } = self.prelude(m, s);
         // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
         // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
         // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
@@ -458,6 +495,22 @@ impl<T: Real> NnVsc<T> {
 #[inline(always)]
 fn row_of<T>(w: &[T; N_PHI], j: usize) -> &[T; N_LEVELS] {
     w[j..j + N_LEVELS].try_into().expect("five")
+}
+
+/// The part of the NNBVSC law before the passes over W ([`NnVsc::prelude`]).
+struct Prelude<T: Real> {
+    g: [[T; N_LEVELS]; 3],
+    gains: crate::servo::DirectionalGains<T>,
+    n: T,
+    st: crate::surface::SurfaceState<T>,
+    phi_norm: T,
+    gamma2: T,
+    fl: u8,
+    sd: T,
+    mu: T,
+    xi: T,
+    sw_num: T,
+    sw_v: T,
 }
 
 /// Writes ξ + dt·ξ̇, each component as [`OdeState::euler_from`] computes
@@ -531,60 +584,20 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         ds: &mut NnState<T>,
     ) -> Output<SlidingParts<T>, T> {
         let p = &self.params;
-        let x = &m.x;
-        // The load pressure (a sine) and Φ (four exponentials) first: the
-        // longest chains, needing only x. Then, while they run out, what
-        // else needs only the measurement: b̄ for both valve directions (a
-        // division and a root each; the end of the law only picks one by
-        // sgn v), N and the surface. Φ is never stored: its 125 kernels are
-        // the products of 15 per-axis factors (see the passes over W below).
-        let pl = self.model.load_pressure(x);
-        let g = self.rbf.gaussians(x);
-        let gains = self.model.directional_gains(pl, self.b_floor);
-        let n = self
-            .surface
-            .equivalent_numerator(&self.model.coeffs.as_array(), x, &m.z);
-        let st = self.surface.evaluate(x, &m.z, s.int_e);
-        let phi_norm = Rbf::norm_from(&g, &m.z);
-
-        // c = ηW²max/4 + ε0‖Φ‖ + ε1; γ2 = c + ε2 (34).
-        let c = self.c_fixed + p.eps0 * phi_norm;
-        let gamma2 = c + p.eps2;
-
-        let mut fl = 0;
-        let (sd, mu, xi) = if st.norm_e > T::ZERO {
-            let delta = p.alpha_bar * st.norm_e;
-            let sd = if st.sigma.abs() > delta {
-                st.sigma - delta * sgn(st.sigma)
-            } else {
-                T::ZERO
-            };
-            let mu = match p.mu_rule {
-                MuRule::Remark7 => self.alpha_gap * st.norm_e * p.eps2 / c,
-                MuRule::Literal33 => self.alpha_gap * st.norm_e * ((gamma2 - c) / c - T::ONE),
-                MuRule::Zero => T::ZERO,
-            };
-            let e = st.e_vec();
-            let ed = st.e_vec_dot();
-            let ete = e[0] * ed[0] + e[1] * ed[1] + e[2] * ed[2];
-            let xi = p.alpha_bar * ete * sgn(st.sigma) / st.norm_e;
-            (sd, mu, xi)
-        } else {
-            fl |= flags::ZERO_ERROR_NORM;
-            (T::ZERO, T::ZERO, T::ZERO)
-        };
-
-        let denom = sd.abs() + mu;
-        // |σΔ| + μ ≥ 0 under the default rule, and 0 only when σΔ = 0.
-        // (Under the literal (33) it can be negative: computed as printed.)
-        let frac = if denom != T::ZERO && sd != T::ZERO {
-            sd / denom
-        } else {
-            T::ZERO
-        };
-        // (b̄ − β)·u_sw = γ1σΔ + γ2σΔ/(|σΔ| + μ), and b̄ − β = b̄(1 − bound_b).
-        let sw_num = p.gamma1 * sd + gamma2 * frac;
-        let sw_v = sw_num / self.one_minus_bb;
+        let Prelude {
+            g,
+            gains,
+            n,
+            st,
+            phi_norm,
+            gamma2,
+            mut fl,
+            sd,
+            mu,
+            xi,
+            sw_num,
+            sw_v,
+        } = self.prelude(m, s);
         // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
         // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
         // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
