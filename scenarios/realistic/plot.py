@@ -13,25 +13,13 @@ Rows that share x and group (noise seeds) are reduced to their worst
 """
 import argparse
 import csv
+import os
+import sys
 import math
 import re
 
-
-def num(cell, index):
-    cell = cell.strip()
-    if cell.startswith("["):
-        parts = [p for p in re.split(r"[\[\],\s]+", cell) if p]
-        return float(parts[index])
-    return float(cell)
-
-
-def short(cell):
-    """`{ kind = "levant", lipschitz = 40.0 }` -> `levant lipschitz=40`."""
-    m = re.match(r'\{ kind = "([a-z-]+)"(.*)\}$', cell.strip())
-    if not m:
-        return cell
-    rest = re.sub(r"\.0\b", "", m.group(2)).replace(" = ", "=").strip(" ,")
-    return f"{m.group(1)} {rest}".strip()
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from table import num, short  # noqa: E402  (one parser for both scripts)
 
 
 def main():
