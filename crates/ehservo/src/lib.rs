@@ -14,11 +14,13 @@
 //! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
 //! | [`estimation`] | design of the linear observers of `ehservo_core::estimate`: discretisation, Luenberger, steady-state Kalman, noise gains |
 //! | [`study`] | sweeps and Monte Carlo, sharded across machines |
+//! | [`tune`], [`league`] | controller tuning by particle swarm; every controller of a suite, tuned alike, on every scenario |
 
 pub mod analysis;
 pub mod error;
 pub mod estimation;
 pub mod input;
+pub mod league;
 pub mod output;
 pub mod plot;
 pub mod reproduce;

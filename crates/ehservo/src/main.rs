@@ -161,6 +161,23 @@ enum Command {
         #[arg(long)]
         no_plot: bool,
     },
+    /// Run a league: every controller of a suite (tuned with the same budget, or with given parameters) on every scenario: league.md/html/csv, runs.csv, figures.
+    League {
+        /// The suite file (TOML).
+        file: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Worker threads, 1 to 1024 (default: every core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar, no summary.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Do not draw figures.
+        #[arg(long)]
+        no_plot: bool,
+    },
     /// Join the outputs of sharded sweeps into one results.csv.
     Merge {
         /// Shard output directories.
@@ -471,6 +488,51 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                         format!(" (defaults: {:.5})", r.defaults)
                     },
                     params.join(", "),
+                    out.display()
+                );
+            }
+            Ok(())
+        }
+        Command::League {
+            file,
+            out,
+            threads,
+            quiet,
+            no_plot,
+        } => {
+            use std::io::IsTerminal;
+            if let Some(t) = threads {
+                if !(1..=MAX_THREADS).contains(&t) {
+                    ehservo::bad_input!("--threads {t}: must be between 1 and {MAX_THREADS}");
+                }
+            }
+            let league = ehservo::league::League::load(&file)?;
+            output::probe_destination(&out)?;
+            let pb = if !quiet && std::io::stderr().is_terminal() {
+                indicatif::ProgressBar::new(league.work())
+            } else {
+                indicatif::ProgressBar::hidden()
+            };
+            let start = Instant::now();
+            let r = ehservo::league::league_to_dir(&league, &out, threads, &pb, !no_plot)?;
+            pb.finish_and_clear();
+            if !quiet {
+                let rows = ehservo::league::report::rows(&league, &r);
+                let ranks = ehservo::league::report::ranks(&league, &rows);
+                let mut best: Vec<usize> = (0..ranks.len()).collect();
+                best.sort_by(|&a, &b| ranks[a].1.total_cmp(&ranks[b].1).then(a.cmp(&b)));
+                out!(
+                    w,
+                    "{}: {} controllers × {} scenarios ({} runs) in {:.1} s; mean rank: {}\nwrote {}/league.md, league.html, league.csv",
+                    league.file.name,
+                    league.contestants.len(),
+                    league.cases.len(),
+                    r.cells.len(),
+                    start.elapsed().as_secs_f64(),
+                    best.iter()
+                        .map(|&i| format!("{} {:.2}", r.standings[i].name, ranks[i].1))
+                        .collect::<Vec<_>>()
+                        .join(", "),
                     out.display()
                 );
             }

@@ -137,16 +137,16 @@ pub struct TuneFile {
     pub param: Vec<ParamRange>,
 }
 
-fn default_budget() -> u64 {
+pub(crate) fn default_budget() -> u64 {
     2000
 }
-fn default_particles() -> u64 {
+pub(crate) fn default_particles() -> u64 {
     40
 }
-fn default_seed() -> u64 {
+pub(crate) fn default_seed() -> u64 {
     1
 }
-fn default_draws() -> u64 {
+pub(crate) fn default_draws() -> u64 {
     1
 }
 

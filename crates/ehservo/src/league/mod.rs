@@ -1,0 +1,976 @@
+//! `ehservo league SUITE`: every controller of a suite — tuned with the
+//! same budget, or with given parameters — on every scenario of the suite,
+//! with a robustness margin, reported as `league.md`, `league.html` and
+//! `league.csv`.
+//!
+//! ```toml
+//! name = "paper"
+//! description = "..."
+//!
+//! [[controller]]              # tuned by `[tuning]` (the default)
+//! kind = "pid"
+//!
+//! [[controller]]              # given parameters, not tuned
+//! kind = "nnvsc"
+//! name = "nnvsc-paper"        # its label (default: the kind)
+//! tune = false
+//! params = { gamma1 = 10.0 }  # on top of the kind's defaults
+//!
+//! [[scenario]]
+//! file = "../paper/fig8.toml" # relative to the suite file
+//! name = "fig8-mc"            # default: the file's stem
+//! set = ["simulation.horizon=5"]   # overrides, as `ehservo run --set`
+//! draws = 20                  # uncertainty draws (uncertainty.seed = first_seed, first_seed + 1, …)
+//! first_seed = 10             # default 0 (with one draw: the scenario's own seed)
+//!
+//! [tuning]                    # the one budget every tuned controller gets:
+//! scenarios = ["../paper/fig2.toml"]   # the keys of an `ehservo tune` file
+//! budget = 2000               # (no `name`, `controller` or `[[param]]`:
+//! objective = "worst"         #  each kind's declared tunables are searched)
+//! draws = 4
+//! [tuning.penalty]
+//! u_limit = 10.0
+//!
+//! [margin]                    # the robustness margin, bisected
+//! scenario = "../paper/fig3.toml"
+//! keys = ["uncertainty.a_bias", "uncertainty.b_bias"]   # set together to scale·x
+//! scale = 1.0                 # default 1; −1 bisects a negative bias
+//! low = 0.0                   # x known bounded for a sane controller
+//! high = 10.0                 # the largest x tried
+//! tolerance = 0.01
+//! e_limit_deg = 5.0           # optional: e_max above it counts as unbounded
+//! ```
+//!
+//! Every controller runs with one full `[controller]` table on every
+//! scenario: the kind's defaults, with the given `params` or the tuned
+//! values on top. Each run of the report is a scenario file written under
+//! `scenarios/`, which `ehservo run` reproduces (other draws with
+//! `--set uncertainty.seed=S`).
+//!
+//! The margin is the largest x in [low, high] for which the margin
+//! scenario with every key set to scale·x stays bounded (not diverged, and e_max
+//! within `e_limit_deg` when given), found by bisection to `tolerance`
+//! between a bounded `low` and an unbounded `high`. It assumes one
+//! boundary: a controller that is bounded again above its first failure is
+//! not seen. `high` bounded reports "≥ high"; `low` unbounded "< low".
+//!
+//! Runs are pure functions of (suite, controller, scenario, draw) and are
+//! collected in order, so the outputs are the same bit for bit whatever
+//! the thread count.
+
+pub mod report;
+
+use crate::metrics::Metrics;
+use crate::output::{write_atomic, Staging};
+use crate::scenario::{ControllerCfg, Scenario};
+use crate::study::StudyError;
+use crate::tune::{Objective, Penalty, Tune, TuneFile, TuneResult};
+use anyhow::{Context, Result};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One `[[controller]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerEntry {
+    /// The controller kind.
+    pub kind: String,
+    /// Its label in the report (default: the kind).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Tuned by `[tuning]` (default), or run with the kind's defaults and
+    /// `params`.
+    #[serde(default = "yes")]
+    pub tune: bool,
+    /// Given parameters (with `tune = false`), on top of the kind's defaults.
+    #[serde(default)]
+    pub params: toml::Table,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// One `[[scenario]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioEntry {
+    /// The scenario file, relative to the suite file.
+    pub file: PathBuf,
+    /// Its label (default: the file's stem).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Overrides, `key.path=value` as `ehservo run --set`.
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// Uncertainty draws (default 1).
+    #[serde(default = "one")]
+    pub draws: u64,
+    /// The first draw's `uncertainty.seed` (default: the scenario's own
+    /// with one draw, 0 with several).
+    #[serde(default)]
+    pub first_seed: Option<u64>,
+}
+
+fn one() -> u64 {
+    1
+}
+
+/// `[tuning]`: the budget every tuned controller gets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TuningCfg {
+    /// The scenarios of the objective (relative to the suite file).
+    pub scenarios: Vec<PathBuf>,
+    /// Evaluations of the objective per controller.
+    #[serde(default = "crate::tune::default_budget")]
+    pub budget: u64,
+    /// Particles of the swarm.
+    #[serde(default = "crate::tune::default_particles")]
+    pub particles: u64,
+    /// Seed of the swarm.
+    #[serde(default = "crate::tune::default_seed")]
+    pub seed: u64,
+    /// `"mean"` or `"worst"`.
+    #[serde(default)]
+    pub objective: Objective,
+    /// Uncertainty seeds per scenario.
+    #[serde(default = "crate::tune::default_draws")]
+    pub draws: u64,
+    /// Penalties.
+    #[serde(default)]
+    pub penalty: Penalty,
+}
+
+/// `[margin]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MarginCfg {
+    /// The scenario varied (relative to the suite file).
+    pub scenario: PathBuf,
+    /// Its overrides.
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// The keys all set to `scale`·x, x the bisected value.
+    pub keys: Vec<String>,
+    /// The factor on x (default 1; −1 bisects a negative bias).
+    #[serde(default = "unit")]
+    pub scale: f64,
+    /// The lowest x (default 0).
+    #[serde(default)]
+    pub low: f64,
+    /// The highest x.
+    pub high: f64,
+    /// Bisection stops when the bracket is narrower (default 0.01).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// e_max above this (°) counts as unbounded.
+    #[serde(default)]
+    pub e_limit_deg: Option<f64>,
+}
+
+fn default_tolerance() -> f64 {
+    0.01
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+/// A suite file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SuiteFile {
+    /// Name (default: the file's stem).
+    #[serde(default)]
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The controllers.
+    #[serde(default)]
+    pub controller: Vec<ControllerEntry>,
+    /// The scenarios.
+    #[serde(default)]
+    pub scenario: Vec<ScenarioEntry>,
+    /// The tuning budget.
+    #[serde(default)]
+    pub tuning: Option<TuningCfg>,
+    /// The robustness margin.
+    #[serde(default)]
+    pub margin: Option<MarginCfg>,
+}
+
+/// How a controller of the league gets its parameters.
+#[derive(Debug, Clone)]
+pub enum Source {
+    /// Tuned by the suite's `[tuning]`.
+    Tuned(Box<Tune>),
+    /// The kind's defaults with the given parameters.
+    Given,
+}
+
+/// A checked `[[controller]]`.
+#[derive(Debug, Clone)]
+pub struct Contestant {
+    /// Its label.
+    pub name: String,
+    /// Its kind.
+    pub kind: &'static str,
+    /// Its `[controller]` table before tuning.
+    pub table: toml::Table,
+    /// Tuned or given.
+    pub source: Source,
+}
+
+/// A checked `[[scenario]]`.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Its label.
+    pub name: String,
+    /// The scenario (overrides applied).
+    pub scenario: Scenario,
+    table: toml::Table,
+    /// The seed of each draw (None: the scenario's own).
+    pub seeds: Vec<Option<u64>>,
+}
+
+/// A checked `[margin]`.
+#[derive(Debug, Clone)]
+pub struct Margin {
+    /// As written.
+    pub cfg: MarginCfg,
+    scenario: Scenario,
+    table: toml::Table,
+}
+
+/// A suite, checked.
+#[derive(Debug, Clone)]
+pub struct League {
+    /// As written.
+    pub file: SuiteFile,
+    /// The controllers.
+    pub contestants: Vec<Contestant>,
+    /// The scenarios.
+    pub cases: Vec<Case>,
+    /// The margin.
+    pub margin: Option<Margin>,
+}
+
+/// The most draws of one scenario.
+pub const MAX_DRAWS: u64 = 10_000;
+
+impl League {
+    /// Reads and checks a suite file and the scenarios it names.
+    pub fn load(path: &Path) -> Result<League, StudyError> {
+        let file = path.display().to_string();
+        let mut sf: SuiteFile = crate::study::load_toml(path, "suite")?;
+        if sf.name.is_empty() {
+            sf.name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "league".into());
+        }
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let bad = |key: &str, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+        if sf.controller.is_empty() {
+            return Err(bad(
+                "controller",
+                "the suite has no [[controller]]: list at least one".into(),
+            ));
+        }
+        if sf.scenario.is_empty() {
+            return Err(bad(
+                "scenario",
+                "the suite has no [[scenario]]: list at least one".into(),
+            ));
+        }
+        // A scenario that fails to load is named by its file, or by its
+        // `set` when an override is what fails.
+        let load = |key: &str, p: &Path, set: &[String]| {
+            Scenario::load(&dir.join(p), set).map_err(|e| {
+                let msg = e.to_string();
+                let at = if msg.starts_with("--set") {
+                    "set"
+                } else {
+                    "file"
+                };
+                let key = match key.strip_suffix(".file") {
+                    Some(k) => format!("{k}.{at}"),
+                    None => key.to_string(),
+                };
+                bad(&key, msg)
+            })
+        };
+        let table_of = |key: &str, s: &Scenario| s.table().map_err(|e| bad(key, e.to_string()));
+
+        // Scenarios.
+        let mut cases = Vec::new();
+        for (i, e) in sf.scenario.iter().enumerate() {
+            let key = format!("scenario[{i}]");
+            if !(1..=MAX_DRAWS).contains(&e.draws) {
+                return Err(bad(
+                    &format!("{key}.draws"),
+                    format!("must be in 1..={MAX_DRAWS} (got {})", e.draws),
+                ));
+            }
+            let scenario = load(&format!("{key}.file"), &e.file, &e.set)?;
+            let name = e.name.clone().unwrap_or_else(|| {
+                e.file
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| format!("scenario-{i}"))
+            });
+            check_label(&name).map_err(|r| bad(&format!("{key}.name"), r))?;
+            if cases.iter().any(|c: &Case| c.name == name) {
+                return Err(bad(
+                    &format!("{key}.name"),
+                    format!("`{name}` names two scenarios: give each a distinct `name`"),
+                ));
+            }
+            let seeds = if e.draws == 1 && e.first_seed.is_none() {
+                vec![None]
+            } else {
+                let first = e.first_seed.unwrap_or(0);
+                (0..e.draws).map(|d| Some(first + d)).collect()
+            };
+            let table = table_of(&key, &scenario)?;
+            cases.push(Case {
+                name,
+                scenario,
+                table,
+                seeds,
+            });
+        }
+
+        // Controllers.
+        let mut contestants: Vec<Contestant> = Vec::new();
+        for (i, e) in sf.controller.iter().enumerate() {
+            let key = format!("controller[{i}]");
+            let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == e.kind) else {
+                return Err(bad(
+                    &format!("{key}.kind"),
+                    format!(
+                        "unknown controller kind `{}`: expected one of {}",
+                        e.kind,
+                        ControllerCfg::KINDS.join(", ")
+                    ),
+                ));
+            };
+            let name = e.name.clone().unwrap_or_else(|| kind.to_string());
+            check_label(&name).map_err(|r| bad(&format!("{key}.name"), r))?;
+            if contestants.iter().any(|c| c.name == name) {
+                return Err(bad(
+                    &format!("{key}.name"),
+                    format!("`{name}` names two controllers: give each a distinct `name`"),
+                ));
+            }
+            let mut table = ControllerCfg::default_of(kind)
+                .expect("a listed kind has defaults")
+                .to_table();
+            if e.tune && !e.params.is_empty() {
+                return Err(bad(
+                    &format!("{key}.params"),
+                    "given parameters with `tune = true`: set `tune = false` to run them as given, or drop `params` to tune".into(),
+                ));
+            }
+            if e.params.contains_key("kind") {
+                return Err(bad(
+                    &format!("{key}.params.kind"),
+                    "the kind is `kind`, not a parameter".into(),
+                ));
+            }
+            table.extend(e.params.clone());
+            // The table must build on every scenario of the suite.
+            for c in &cases {
+                build_with(c, &table, None).map_err(|r| {
+                    bad(
+                        &format!("{key}.params"),
+                        format!("on scenario `{}`: {r}", c.name),
+                    )
+                })?;
+            }
+            let source = if e.tune {
+                let Some(t) = &sf.tuning else {
+                    return Err(bad(
+                        "tuning",
+                        format!(
+                            "controller `{name}` is to be tuned (`tune` defaults to true) but the suite has no [tuning] section: add one, or set `tune = false`"
+                        ),
+                    ));
+                };
+                Source::Tuned(Box::new(tune_for(t, kind, &table, dir, &file)?))
+            } else {
+                Source::Given
+            };
+            contestants.push(Contestant {
+                name,
+                kind,
+                table,
+                source,
+            });
+        }
+        if sf.tuning.is_some()
+            && !contestants
+                .iter()
+                .any(|c| matches!(c.source, Source::Tuned(_)))
+        {
+            return Err(bad(
+                "tuning",
+                "no controller is tuned (every one has `tune = false`): drop [tuning]".into(),
+            ));
+        }
+
+        // Margin.
+        let margin = match &sf.margin {
+            None => None,
+            Some(m) => {
+                if m.keys.is_empty() {
+                    return Err(bad("margin.keys", "is empty: name the keys to vary".into()));
+                }
+                if !(m.low.is_finite() && m.high.is_finite() && m.low < m.high) {
+                    return Err(bad(
+                        "margin.high",
+                        format!("low = {} must be < high = {}, both finite", m.low, m.high),
+                    ));
+                }
+                if !(m.tolerance.is_finite() && m.tolerance > 0.0 && m.tolerance < m.high - m.low) {
+                    return Err(bad(
+                        "margin.tolerance",
+                        format!(
+                            "must be > 0 and below high − low = {} (got {})",
+                            m.high - m.low,
+                            m.tolerance
+                        ),
+                    ));
+                }
+                if !(m.scale.is_finite() && m.scale != 0.0) {
+                    return Err(bad(
+                        "margin.scale",
+                        format!("must be finite and nonzero (got {:?})", m.scale),
+                    ));
+                }
+                if let Some(l) = m.e_limit_deg {
+                    if !(l.is_finite() && l > 0.0) {
+                        return Err(bad(
+                            "margin.e_limit_deg",
+                            format!("must be finite and > 0 (got {l:?})"),
+                        ));
+                    }
+                }
+                let scenario = load("margin.file", &m.scenario, &m.set)
+                    .map_err(|e| StudyError(e.0.replace("`margin.file`", "`margin.scenario`")))?;
+                let table = table_of("margin", &scenario)?;
+                let margin = Margin {
+                    cfg: m.clone(),
+                    scenario,
+                    table,
+                };
+                // The keys must exist and take a number at both ends.
+                for x in [m.low, m.high] {
+                    for c in &contestants {
+                        if let Err(r) = margin.build(&c.table, x) {
+                            if r.contains("unknown") || r.contains("not used by") {
+                                return Err(bad("margin.keys", r));
+                            }
+                        }
+                    }
+                }
+                Some(margin)
+            }
+        };
+        Ok(League {
+            file: sf,
+            contestants,
+            cases,
+            margin,
+        })
+    }
+
+    /// The runs of the league, in report order: (controller, scenario,
+    /// draw).
+    pub fn cells(&self) -> Vec<(usize, usize, usize)> {
+        let mut out = Vec::new();
+        for ci in 0..self.contestants.len() {
+            for (si, c) in self.cases.iter().enumerate() {
+                for d in 0..c.seeds.len() {
+                    out.push((ci, si, d));
+                }
+            }
+        }
+        out
+    }
+
+    /// Evaluations the league makes (tuning, runs, and a bound on the
+    /// margin's), for a progress bar.
+    pub fn work(&self) -> u64 {
+        let tunes: u64 = self
+            .contestants
+            .iter()
+            .map(|c| match &c.source {
+                Source::Tuned(t) => t.file.budget,
+                Source::Given => 0,
+            })
+            .sum();
+        let margin = self
+            .margin
+            .as_ref()
+            .map(|m| m.steps() as u64 * self.contestants.len() as u64)
+            .unwrap_or(0);
+        tunes + self.cells().len() as u64 + margin
+    }
+}
+
+/// A label used as a file name and a CSV cell.
+fn check_label(s: &str) -> Result<(), String> {
+    if s.is_empty()
+        || !s
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+        || s.starts_with('.')
+    {
+        return Err(format!(
+            "`{s}` must be letters, digits, `-`, `_` or `.` (it names files), not starting with `.`"
+        ));
+    }
+    Ok(())
+}
+
+/// The tune of `kind` with the suite's budget, every tuning scenario
+/// starting from the league's table for the kind.
+fn tune_for(
+    t: &TuningCfg,
+    kind: &'static str,
+    table: &toml::Table,
+    dir: &Path,
+    file: &str,
+) -> Result<Tune, StudyError> {
+    let bad = |key: &str, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+    let scenarios = t
+        .scenarios
+        .iter()
+        .map(|p| {
+            let s = Scenario::load(&dir.join(p), &[])
+                .map_err(|e| bad("tuning.scenarios", e.to_string()))?;
+            let mut tab = s
+                .table()
+                .map_err(|e| bad("tuning.scenarios", e.to_string()))?;
+            tab.insert("controller".into(), toml::Value::Table(table.clone()));
+            s.with_values_built_on(tab, &[])
+                .map(|(s, _)| s)
+                .map_err(|e| bad("tuning.scenarios", e.to_string()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let tf = TuneFile {
+        name: format!("league-{kind}"),
+        scenarios: t.scenarios.clone(),
+        controller: Some(kind.to_string()),
+        budget: t.budget,
+        particles: t.particles,
+        seed: t.seed,
+        objective: t.objective,
+        draws: t.draws,
+        penalty: t.penalty,
+        param: Vec::new(),
+    };
+    // The tune's own messages name its keys; in a suite they sit under
+    // `tuning`.
+    Tune::build(tf, scenarios, file).map_err(|e| {
+        StudyError(e.0.replacen(&format!("{file}: `"), &format!("{file}: `tuning."), 1))
+    })
+}
+
+/// The scenario of case `c` with `[controller]` = `table`, at draw seed
+/// `seed`.
+fn build_with(
+    c: &Case,
+    table: &toml::Table,
+    seed: Option<u64>,
+) -> Result<(Scenario, crate::scenario::Setup), String> {
+    let mut tab = c.table.clone();
+    tab.insert("controller".into(), toml::Value::Table(table.clone()));
+    let sets: Vec<(String, toml::Value)> = seed
+        .map(|s| {
+            (
+                "uncertainty.seed".to_string(),
+                toml::Value::Integer(s as i64),
+            )
+        })
+        .into_iter()
+        .collect();
+    c.scenario
+        .with_values_built_on(tab, &sets)
+        .map_err(|e| e.to_string())
+}
+
+impl Margin {
+    fn build(
+        &self,
+        table: &toml::Table,
+        x: f64,
+    ) -> Result<(Scenario, crate::scenario::Setup), String> {
+        let mut tab = self.table.clone();
+        tab.insert("controller".into(), toml::Value::Table(table.clone()));
+        let sets: Vec<(String, toml::Value)> = self
+            .cfg
+            .keys
+            .iter()
+            .map(|k| (k.clone(), toml::Value::Float(self.cfg.scale * x)))
+            .collect();
+        self.scenario
+            .with_values_built_on(tab, &sets)
+            .map_err(|e| e.to_string())
+    }
+
+    /// Bisection steps at most (the two ends and the halvings).
+    fn steps(&self) -> u32 {
+        let span = (self.cfg.high - self.cfg.low) / self.cfg.tolerance;
+        2 + span.log2().ceil().max(0.0) as u32
+    }
+
+    /// Whether the run at x stays bounded.
+    fn bounded(&self, table: &toml::Table, x: f64) -> bool {
+        let Ok((_, setup)) = self.build(table, x) else {
+            return false;
+        };
+        let m = crate::run::run_setup(&setup, &mut |_| {}).1;
+        !m.diverged
+            && m.e_max_deg
+                .is_some_and(|e| e.is_finite() && self.cfg.e_limit_deg.is_none_or(|l| e <= l))
+    }
+
+    /// The margin of the controller with `table`.
+    fn bisect(&self, table: &toml::Table, progress: &indicatif::ProgressBar) -> MarginResult {
+        let (mut lo, mut hi) = (self.cfg.low, self.cfg.high);
+        let mut runs = 2;
+        progress.inc(2);
+        if self.bounded(table, hi) {
+            return MarginResult {
+                value: Some(hi),
+                unbounded_at: None,
+                at_least: true,
+                below_low: false,
+                runs,
+            };
+        }
+        if !self.bounded(table, lo) {
+            return MarginResult {
+                value: None,
+                unbounded_at: Some(lo),
+                at_least: false,
+                below_low: true,
+                runs,
+            };
+        }
+        while hi - lo > self.cfg.tolerance {
+            let mid = 0.5 * (lo + hi);
+            runs += 1;
+            progress.inc(1);
+            if self.bounded(table, mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        MarginResult {
+            value: Some(lo),
+            unbounded_at: Some(hi),
+            at_least: false,
+            below_low: false,
+            runs,
+        }
+    }
+}
+
+/// A controller's robustness margin.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct MarginResult {
+    /// The largest bounded x found (None: `low` itself is unbounded).
+    pub value: Option<f64>,
+    /// The smallest unbounded x found (None: `high` is bounded); the
+    /// margin lies between the two.
+    pub unbounded_at: Option<f64>,
+    /// `high` was bounded: the margin is at least `value`.
+    pub at_least: bool,
+    /// `low` was unbounded.
+    pub below_low: bool,
+    /// Runs made.
+    pub runs: u32,
+}
+
+impl MarginResult {
+    /// As a report cell: "1.23", "≥ 10", "< 0".
+    pub fn text(&self, low: f64) -> String {
+        match (self.value, self.at_least, self.below_low) {
+            (_, _, true) => format!("< {low}"),
+            (Some(v), true, _) => format!("≥ {v}"),
+            (Some(v), false, _) => format!("{v:.3}"),
+            (None, _, _) => "—".into(),
+        }
+    }
+}
+
+/// One run of the league.
+#[derive(Debug, Clone, Serialize)]
+pub struct Cell {
+    /// Controller index.
+    pub controller: usize,
+    /// Scenario index.
+    pub scenario: usize,
+    /// Draw index.
+    pub draw: usize,
+    /// `uncertainty.seed` of the run.
+    pub seed: u64,
+    /// Its metrics (None: the scenario refused the controller's
+    /// parameters).
+    pub metrics: Option<Metrics>,
+    /// Why it was refused.
+    pub refused: Option<String>,
+    /// Control energy ∫u² dt over [settle, horizon] (V²·s), from u_rms.
+    pub energy: Option<f64>,
+}
+
+impl Cell {
+    /// Bounded, with an e_max.
+    pub fn bounded(&self) -> bool {
+        self.metrics
+            .as_ref()
+            .is_some_and(|m| !m.diverged && m.e_max_deg.is_some())
+    }
+}
+
+/// A controller's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct Standing {
+    /// Label.
+    pub name: String,
+    /// Kind.
+    pub kind: &'static str,
+    /// "tuned", "tuned (defaults kept)" or "given".
+    pub parameters: String,
+    /// The `[controller]` table it ran with.
+    pub table: toml::Table,
+    /// The tune, when tuned.
+    pub tune: Option<TuneResult>,
+    /// The margin, when the suite asks for one.
+    pub margin: Option<MarginResult>,
+}
+
+/// What a league found.
+#[derive(Debug, Clone, Serialize)]
+pub struct LeagueResult {
+    /// Per controller.
+    pub standings: Vec<Standing>,
+    /// Per run, in [`League::cells`] order.
+    pub cells: Vec<Cell>,
+}
+
+/// Tunes the tuned controllers, runs every controller on every scenario
+/// and bisects the margins (on `threads` threads, default every core).
+/// With `tuned_dir`, each tune's outputs are written into
+/// `tuned_dir/<controller>/`.
+pub fn play(
+    l: &League,
+    threads: Option<usize>,
+    progress: &indicatif::ProgressBar,
+    tuned_dir: Option<&Path>,
+    plot: bool,
+) -> Result<LeagueResult> {
+    let pool = match threads {
+        Some(k) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(k.max(1))
+                .build()
+                .context("building the thread pool")?,
+        ),
+        None => None,
+    };
+    let install = |f: &(dyn Fn() -> Result<LeagueResult> + Sync)| match &pool {
+        Some(p) => p.install(f),
+        None => f(),
+    };
+    install(&|| {
+        // Tunes, one after another (each is parallel inside).
+        let mut standings = Vec::new();
+        for c in &l.contestants {
+            let mut table = c.table.clone();
+            let (parameters, tune) = match &c.source {
+                Source::Given => ("given".to_string(), None),
+                Source::Tuned(t) => {
+                    let r = match tuned_dir {
+                        Some(d) => {
+                            crate::tune::tune_to_dir(t, &d.join(&c.name), None, progress, plot)?
+                        }
+                        None => crate::tune::search(t, None, progress)?,
+                    };
+                    if !r.kept_defaults {
+                        for (k, v) in &r.params {
+                            table.insert(k.clone(), toml::Value::Float(*v));
+                        }
+                    }
+                    let p = if r.kept_defaults {
+                        "tuned (defaults kept)"
+                    } else {
+                        "tuned"
+                    };
+                    (p.to_string(), Some(r))
+                }
+            };
+            standings.push(Standing {
+                name: c.name.clone(),
+                kind: c.kind,
+                parameters,
+                table,
+                tune,
+                margin: None,
+            });
+        }
+        // Every run, in parallel, collected in order.
+        let cells: Vec<Cell> = l
+            .cells()
+            .par_iter()
+            .map(|&(ci, si, d)| {
+                let case = &l.cases[si];
+                let r = build_with(case, &standings[ci].table, case.seeds[d]);
+                progress.inc(1);
+                match r {
+                    Err(reason) => Cell {
+                        controller: ci,
+                        scenario: si,
+                        draw: d,
+                        seed: case.seeds[d].unwrap_or(case.scenario.uncertainty.seed),
+                        metrics: None,
+                        refused: Some(reason),
+                        energy: None,
+                    },
+                    Ok((s, setup)) => {
+                        let m = crate::run::run_setup(&setup, &mut |_| {}).1;
+                        let span = s.simulation.horizon - s.simulation.settle;
+                        let energy = match (m.diverged, m.u_rms) {
+                            (false, Some(u)) if span > 0.0 => Some(u * u * span),
+                            _ => None,
+                        };
+                        Cell {
+                            controller: ci,
+                            scenario: si,
+                            draw: d,
+                            seed: s.uncertainty.seed,
+                            metrics: Some(m),
+                            refused: None,
+                            energy,
+                        }
+                    }
+                }
+            })
+            .collect();
+        // Margins, one controller per task.
+        if let Some(m) = &l.margin {
+            let margins: Vec<MarginResult> = standings
+                .par_iter()
+                .map(|s| m.bisect(&s.table, progress))
+                .collect();
+            for (s, r) in standings.iter_mut().zip(margins) {
+                s.margin = Some(r);
+            }
+        }
+        Ok(LeagueResult { standings, cells })
+    })
+}
+
+/// The scenario file of controller `ci` on case `si` (its first draw).
+fn cell_scenario(l: &League, r: &LeagueResult, ci: usize, si: usize) -> Result<String> {
+    let case = &l.cases[si];
+    let (mut s, _) = build_with(case, &r.standings[ci].table, case.seeds[0])
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    s.name = format!("{}--{}", r.standings[ci].name, case.name);
+    s.description = format!(
+        "league `{}`: controller `{}` ({}, {}) on scenario `{}`",
+        l.file.name,
+        r.standings[ci].name,
+        r.standings[ci].kind,
+        r.standings[ci].parameters,
+        case.name
+    );
+    let mut text = format!(
+        "# Written by `ehservo league` ({} {}): re-run with `ehservo run` (this is draw 0;\n# draw d is `--set uncertainty.seed=S` with S in league.csv's runs).\n",
+        crate::output::SOFTWARE.name,
+        crate::output::SOFTWARE.version
+    );
+    text.push_str(&toml::to_string(&s).context("writing a scenario")?);
+    Ok(text)
+}
+
+/// Runs a league and writes its outputs into `out`: `league.md`,
+/// `league.html`, `league.csv` (a row per controller × scenario),
+/// `runs.csv` (a row per run), `league.json`, `pareto.png/svg`,
+/// `bars.png/svg`, `scenarios/<controller>/<scenario>.toml` and
+/// `tuned/<controller>/` (each tune's outputs).
+pub fn league_to_dir(
+    l: &League,
+    out: &Path,
+    threads: Option<usize>,
+    progress: &indicatif::ProgressBar,
+    plot: bool,
+) -> Result<LeagueResult> {
+    let stage = Staging::new(out)?;
+    let tuned = stage.path().join("tuned");
+    std::fs::create_dir_all(&tuned).with_context(|| format!("creating {}", tuned.display()))?;
+    let r = play(l, threads, progress, Some(&tuned), plot)?;
+    for (ci, s) in r.standings.iter().enumerate() {
+        let d = stage.path().join("scenarios").join(&s.name);
+        std::fs::create_dir_all(&d).with_context(|| format!("creating {}", d.display()))?;
+        for (si, c) in l.cases.iter().enumerate() {
+            write_atomic(
+                &d.join(format!("{}.toml", c.name)),
+                cell_scenario(l, &r, ci, si)?.as_bytes(),
+            )?;
+        }
+    }
+    let rows = report::rows(l, &r);
+    write_atomic(
+        &stage.path().join("league.csv"),
+        report::league_csv(&rows).as_bytes(),
+    )?;
+    write_atomic(
+        &stage.path().join("runs.csv"),
+        report::runs_csv(l, &r).as_bytes(),
+    )?;
+    let json = serde_json::json!({
+        "software": crate::output::SOFTWARE,
+        "suite": l.file,
+        "standings": r.standings,
+        "rows": rows,
+    });
+    write_atomic(
+        &stage.path().join("league.json"),
+        serde_json::to_string_pretty(&json)?.as_bytes(),
+    )?;
+    let figures = if plot {
+        let p = report::pareto(l, &rows);
+        p.png(&stage.path().join("pareto.png"))?;
+        p.svg(&stage.path().join("pareto.svg"))?;
+        let b = report::bars(l, &rows);
+        b.png(&stage.path().join("bars.png"))?;
+        b.svg(&stage.path().join("bars.svg"))?;
+        true
+    } else {
+        false
+    };
+    write_atomic(
+        &stage.path().join("league.md"),
+        report::markdown(l, &r, &rows, figures).as_bytes(),
+    )?;
+    let svgs = if figures {
+        let read = |f: &str| std::fs::read_to_string(stage.path().join(f)).unwrap_or_default();
+        Some((read("pareto.svg"), read("bars.svg")))
+    } else {
+        None
+    };
+    write_atomic(
+        &stage.path().join("league.html"),
+        report::html(l, &r, &rows, svgs).as_bytes(),
+    )?;
+    stage.commit()?;
+    Ok(r)
+}
