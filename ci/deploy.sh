@@ -18,13 +18,11 @@ skip() {
 venv=$(mktemp -d)
 trap 'rm -rf "$venv"' EXIT
 if ! python3 -m venv "$venv" >/dev/null 2>&1; then
-  sudo=""
-  if [ "$(id -u)" -ne 0 ]; then sudo="sudo -n"; fi
   apt_install() {
-    timeout 600 $sudo env DEBIAN_FRONTEND=noninteractive \
+    timeout 600 env DEBIAN_FRONTEND=noninteractive \
       apt-get install -y -q --no-install-recommends python3-venv python3-pip >/dev/null 2>&1
   }
-  apt_install || { timeout 300 $sudo apt-get update -q >/dev/null 2>&1 && apt_install; } || true
+  apt_install || { timeout 300 apt-get update -q >/dev/null 2>&1 && apt_install; } || true
   rm -rf "$venv" && mkdir -p "$venv"
   python3 -m venv "$venv" >/dev/null 2>&1 || skip "python3 -m venv does not work and python3-venv could not be installed"
 fi
@@ -42,6 +40,7 @@ echo "hadolint: Dockerfile clean"
 job=deploy/k8s/sweep-job.yaml
 n=$(sed -n 's/^  completions: *\([0-9]*\)$/\1/p' "$job")
 p=$(sed -n 's/^  parallelism: *\([0-9]*\)$/\1/p' "$job")
+# shellcheck disable=SC2016 # the manifest's text, not a shell expansion
 s=$(grep -o -- '--shard $JOB_COMPLETION_INDEX/[0-9]*' "$job" | sed 's|.*/||')
 if [ -z "$n" ] || [ "$n" != "$s" ] || [ "$p" -gt "$n" ]; then
   echo "$job: completions ($n), parallelism ($p) and --shard .../N ($s) disagree" >&2
