@@ -82,7 +82,10 @@ start=$(date +%s)
 job=$(sub --array=0-3 "$repo/deploy/slurm/sweep.sbatch" "$study" shards 4)
 for _ in $(seq 120); do [ "$(state "${job}_1")" = RUNNING ] && break; sleep 0.5; done
 [ "$(state "${job}_1")" = RUNNING ] || fail "task 1 did not start: $(squeue 2>&1)"
-sleep 2
+# Its ehservo has started (a shard lasts seconds, the start milliseconds).
+for _ in $(seq 100); do pgrep -f -- "--out shards/1 --shard 1/4" >/dev/null && break; sleep 0.1; done
+pgrep -f -- "--out shards/1 --shard 1/4" >/dev/null || fail "task 1's ehservo is not running"
+sleep 0.5
 [ ! -e shards/1 ] || fail "shard 1/4 was done before it could be cancelled: the study is too short"
 scancel "${job}_1"
 wait_job "$job" 600
