@@ -143,6 +143,11 @@ enum Command {
         /// Do not draw plots.
         #[arg(long)]
         no_plot: bool,
+        /// Skip the sweep if --out already holds its output whole (the same
+        /// study.json, every row of results.csv checked as merge does);
+        /// otherwise run it, replacing what is there. For resubmitted jobs.
+        #[arg(long)]
+        resume: bool,
     },
     /// Tune a controller's parameters over a set of scenarios by particle swarm: tuned.toml, convergence.csv/png, tune.json.
     Tune {
@@ -184,8 +189,13 @@ enum Command {
         #[arg(required = true)]
         dirs: Vec<PathBuf>,
         /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
+        #[arg(long, required_unless_present = "missing")]
+        out: Option<PathBuf>,
+        /// Write nothing: print the indices K of the shards that are not
+        /// among DIRS whole (comma-separated, for `sbatch --array=`; nothing
+        /// if none is missing), and on stderr why any folder was set aside.
+        #[arg(long, conflicts_with = "out")]
+        missing: bool,
     },
     /// Print the default scenario (the paper's Fig. 2 case) as TOML.
     Defaults,
@@ -391,6 +401,7 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             threads,
             quiet,
             no_plot,
+            resume,
         } => {
             use std::io::IsTerminal;
             if let Some(t) = threads {
@@ -416,6 +427,27 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                 progress: !quiet && std::io::stderr().is_terminal(),
                 plots: !no_plot,
             };
+            if resume {
+                use ehservo::study::Resume;
+                match ehservo::study::resume_state(&plan, &opts)? {
+                    Resume::Complete => {
+                        note!(
+                            "{}{}: already complete in {} (--resume): skipped",
+                            plan.study.name,
+                            match shard {
+                                Some((k, n)) => format!(" shard {k}/{n}"),
+                                None => String::new(),
+                            },
+                            out.display()
+                        );
+                        return Ok(());
+                    }
+                    Resume::Redo(why) => {
+                        note!("--resume: running again, replacing what is there: {why}");
+                    }
+                    Resume::Absent => {}
+                }
+            }
             let start = Instant::now();
             let rows = ehservo::study::sweep(&plan, &opts)?;
             if !quiet {
@@ -538,7 +570,31 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             }
             Ok(())
         }
-        Command::Merge { dirs, out } => {
+        Command::Merge { dirs, out, missing } => {
+            let Some(out) = out.filter(|_| !missing) else {
+                let m = ehservo::study::missing(&dirs)?;
+                for (d, why) in &m.set_aside {
+                    note!(
+                        "{}: not a whole shard, counted as missing: {why}",
+                        d.display()
+                    );
+                }
+                let list = ehservo::study::index_list(&m.missing);
+                if !list.is_empty() {
+                    out!(w, "{list}");
+                }
+                note!(
+                    "{} of {} shard(s) missing{}",
+                    m.missing.len(),
+                    m.n,
+                    if list.is_empty() {
+                        ": ready to merge".to_string()
+                    } else {
+                        format!(": rerun each with --shard K/{} for K in {list}", m.n)
+                    }
+                );
+                return Ok(());
+            };
             let n = ehservo::study::merge(&dirs, &out)?;
             out!(
                 w,

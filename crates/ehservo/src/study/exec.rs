@@ -85,6 +85,59 @@ pub struct SweepOptions {
     pub plots: bool,
 }
 
+/// The study.json a sweep of `plan` (or of its `shard`) writes.
+fn study_json(plan: &Plan, shard: Option<(u64, u64)>) -> Result<String> {
+    let range = match shard {
+        Some((k, n)) => plan.shard_range(k, n),
+        None => 0..plan.runs,
+    };
+    let record = StudyRecord {
+        software: SOFTWARE.name.into(),
+        version: SOFTWARE.version.into(),
+        study: plan.study.clone(),
+        base: serde_json::to_value(&plan.base)?,
+        runs: plan.runs,
+        shard: shard.map(|(k, n)| [k, n]),
+        range: [range.start, range.end],
+    };
+    Ok(serde_json::to_string_pretty(&record)?)
+}
+
+/// What `sweep --resume` finds in the output folder.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Resume {
+    /// Nothing there (or no study.json): run.
+    Absent,
+    /// An output is there but is not this sweep's, whole: run again,
+    /// replacing it (the reason says why).
+    Redo(String),
+    /// This sweep's output is there, whole: its study.json is the one this
+    /// sweep would write, byte for byte (same study, base scenario, shard
+    /// and version), and its results.csv holds every row it promises, as
+    /// `merge` checks them.
+    Complete,
+}
+
+/// Whether `opts.out` already holds this sweep's output, whole (for
+/// `sweep --resume`: a resubmitted job array reruns only what is missing).
+pub fn resume_state(plan: &Plan, opts: &SweepOptions) -> Result<Resume> {
+    if !opts.out.join("study.json").exists() {
+        return Ok(Resume::Absent);
+    }
+    let text = match super::check_shard(&opts.out) {
+        Ok(t) => t,
+        Err(e) if crate::error::is_bad_input(&e) => return Ok(Resume::Redo(format!("{e:#}"))),
+        Err(e) => return Err(e),
+    };
+    if text != study_json(plan, opts.shard)? {
+        return Ok(Resume::Redo(format!(
+            "{}: is not this sweep's study.json (another study, shard, base scenario or version)",
+            opts.out.join("study.json").display()
+        )));
+    }
+    Ok(Resume::Complete)
+}
+
 /// Runs a study and writes results.csv, study.json and plots.
 pub fn sweep(plan: &Plan, opts: &SweepOptions) -> Result<Vec<RunRow>> {
     let range = match opts.shard {
@@ -115,18 +168,9 @@ pub fn sweep(plan: &Plan, opts: &SweepOptions) -> Result<Vec<RunRow>> {
         &stage.path().join("results.csv"),
         &results_csv(plan, &rows)?,
     )?;
-    let record = StudyRecord {
-        software: SOFTWARE.name.into(),
-        version: SOFTWARE.version.into(),
-        study: plan.study.clone(),
-        base: serde_json::to_value(&plan.base)?,
-        runs: plan.runs,
-        shard: opts.shard.map(|(k, n)| [k, n]),
-        range: [range.start, range.end],
-    };
     write_atomic(
         &stage.path().join("study.json"),
-        serde_json::to_string_pretty(&record)?.as_bytes(),
+        study_json(plan, opts.shard)?.as_bytes(),
     )?;
     if opts.plots && opts.shard.is_none() {
         plots::study_plots(plan, &rows, stage.path())?;

@@ -114,6 +114,240 @@ fn check_row(
     Ok(())
 }
 
+/// Reads and checks a shard folder's study.json (its text and the record).
+fn read_record_text(d: &Path) -> Result<(String, StudyRecord)> {
+    let p = d.join("study.json");
+    // A shard folder without its study.json is a wrong argument, like a
+    // scenario file that is not there: bad input.
+    let text = match crate::input::read_text(&p) {
+        Ok(t) => t,
+        Err(r) => crate::bad_input!("{}: not a shard output: study.json {r}", d.display()),
+    };
+    let r: StudyRecord = match serde_json::from_str(&text) {
+        Ok(r) => r,
+        Err(e) => crate::bad_input!("{}: not a study record: {e}", p.display()),
+    };
+    check_record(&p, &r)?;
+    Ok((text, r))
+}
+
+/// Reads and checks a shard folder's study.json.
+fn read_record(d: &Path) -> Result<StudyRecord> {
+    read_record_text(d).map(|(_, r)| r)
+}
+
+/// The rows of shard folder `d`'s results.csv, each checked against its
+/// record `r` (the rows its range promises, in order, with their seeds,
+/// under the study's header).
+fn shard_rows(d: &Path, r: &StudyRecord) -> Result<Vec<csv::StringRecord>> {
+    let columns = r.study.columns();
+    let n_values = columns.len();
+    let head = header(columns);
+    let p = d.join("results.csv");
+    let shown = p.display().to_string();
+    let bytes = match std::fs::read(&p) {
+        Ok(b) => b,
+        // study.json without results.csv: not a whole shard.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            crate::bad_input!("{shown}: is not there: the shard is incomplete")
+        }
+        Err(e) => return Err(e).with_context(|| format!("reading {shown}")),
+    };
+    if bytes.is_empty() {
+        crate::bad_input!("{shown}: is empty: not a results.csv");
+    }
+    if !bytes.ends_with(b"\n") {
+        crate::bad_input!("{shown}: does not end with a line break: truncated");
+    }
+    let mut rd = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(&bytes[..]);
+    let mut rows = rd.records();
+    let bad_csv = |e: csv::Error| {
+        anyhow::Error::from(InputError(format!(
+            "{shown}: {}: truncated or corrupted",
+            e.to_string().lines().next().unwrap_or_default()
+        )))
+    };
+    let h = rows
+        .next()
+        .ok_or_else(|| anyhow!(InputError(format!("{shown}: no header"))))?
+        .map_err(bad_csv)?;
+    if h.iter().ne(head.iter()) {
+        crate::bad_input!(
+            "{shown}: its header is not the one of study `{}` (expected {})",
+            r.study.name,
+            head.join(",")
+        );
+    }
+    let [lo, hi] = r.range;
+    let mut i = lo;
+    let mut out = Vec::new();
+    for rec in rows {
+        let rec = rec.map_err(bad_csv)?;
+        let line = rec.position().map_or(0, |p| p.line());
+        if i >= hi {
+            crate::bad_input!(
+                "{shown}: line {line}: more rows than the {} runs {lo}..{hi} its study.json promises",
+                hi - lo
+            );
+        }
+        check_row(&shown, &rec, line, i, r.study.seed, &head, n_values)?;
+        out.push(rec);
+        i += 1;
+    }
+    if i < hi {
+        crate::bad_input!(
+            "{shown}: {} of the {} rows its study.json promises (runs {lo}..{hi}): truncated or incomplete",
+            i - lo,
+            hi - lo
+        );
+    }
+    Ok(out)
+}
+
+/// Checks a shard output folder whole — its study.json and every row of
+/// its results.csv, as [`merge`] does — and returns the text of its
+/// study.json. An error says what is wrong (bad input).
+pub fn check_shard(dir: &Path) -> Result<String> {
+    let (text, r) = read_record_text(dir)?;
+    shard_rows(dir, &r)?;
+    Ok(text)
+}
+
+/// The shards `k` of `n` (of a study of `runs` runs) holding runs and lying
+/// inside runs `lo..hi`.
+fn shards_within(runs: u64, n: u64, lo: u64, hi: u64) -> Vec<u64> {
+    (0..n)
+        .filter(|&k| {
+            let r = shard_range(runs, k, n);
+            !r.is_empty() && r.start >= lo && r.end <= hi
+        })
+        .collect()
+}
+
+/// "runs lo..hi are missing" told as the shards to rerun when every shard
+/// given is one of `n` and the gap is made of whole shards.
+fn missing_message(runs: u64, split: Option<u64>, lo: u64, hi: u64, place: &str) -> String {
+    if let Some(n) = split {
+        let ks = shards_within(runs, n, lo, hi);
+        let covered: u64 = ks
+            .iter()
+            .map(|&k| shard_range(runs, k, n))
+            .map(|r| r.end - r.start)
+            .sum();
+        if let ([k], true) = (&ks[..], covered == hi - lo) {
+            return format!(
+                "shard {k}/{n} (runs {lo}..{hi}) is missing ({place}): rerun it with --shard {k}/{n}"
+            );
+        }
+        if !ks.is_empty() && covered == hi - lo {
+            return format!(
+                "shards K/{n} for K in {} (runs {lo}..{hi}) are missing ({place}): rerun each with --shard K/{n} (`ehservo merge --missing` lists every index to resubmit)",
+                index_list(&ks)
+            );
+        }
+    }
+    format!("runs {lo}..{hi} are missing ({place}): a shard is absent")
+}
+
+/// Indices as Slurm's `--array=` takes them: ascending, runs of three or
+/// more as `a-b`, the rest separated by commas (`0,2,5-9`).
+pub fn index_list(ks: &[u64]) -> String {
+    let mut parts = Vec::new();
+    let mut i = 0;
+    while i < ks.len() {
+        let mut j = i;
+        while j + 1 < ks.len() && ks[j + 1] == ks[j] + 1 {
+            j += 1;
+        }
+        if j >= i + 2 {
+            parts.push(format!("{}-{}", ks[i], ks[j]));
+        } else {
+            parts.extend(ks[i..=j].iter().map(u64::to_string));
+        }
+        i = j + 1;
+    }
+    parts.join(",")
+}
+
+/// The split every record is a shard of: `Some(n)` if each is a shard of
+/// `n`, the same `n` for all.
+fn common_split<'a>(records: impl IntoIterator<Item = &'a StudyRecord>) -> Option<u64> {
+    let mut n = None;
+    for r in records {
+        match (r.shard, n) {
+            (Some([_, m]), None) => n = Some(m),
+            (Some([_, m]), Some(k)) if m == k => {}
+            _ => return None,
+        }
+    }
+    n
+}
+
+/// What `ehservo merge --missing` finds: the split, the shard indices
+/// missing from it, and why each folder that was given but not counted was
+/// set aside.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Missing {
+    /// N of the split.
+    pub n: u64,
+    /// The indices K (of N) that no whole shard holds, ascending.
+    pub missing: Vec<u64>,
+    /// Folders given that are not whole shards, each with the reason.
+    pub set_aside: Vec<(PathBuf, String)>,
+}
+
+/// The shards of a split that are not among `dirs` whole: each folder is
+/// checked as [`merge`] checks it, and one that fails is set aside (its
+/// shard counts as missing). The split N is read from the whole shards,
+/// which must be shards of one study and one N (bad input otherwise, and
+/// when there is no whole shard to read it from).
+pub fn missing(dirs: &[PathBuf]) -> Result<Missing> {
+    let mut whole: Vec<(PathBuf, StudyRecord)> = Vec::new();
+    let mut set_aside = Vec::new();
+    for d in dirs {
+        let checked = read_record(d).and_then(|r| shard_rows(d, &r).map(|_| r));
+        match checked {
+            Ok(r) => whole.push((d.clone(), r)),
+            Err(e) if crate::error::is_bad_input(&e) => {
+                set_aside.push((d.clone(), format!("{e:#}")))
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let Some((first_dir, first)) = whole.first().cloned() else {
+        crate::bad_input!(
+            "none of the {} folder(s) given is a whole shard, so the split N is unknown: rerun every shard",
+            dirs.len()
+        );
+    };
+    for (d, r) in &whole[1..] {
+        if r.study != first.study || r.base != first.base || r.runs != first.runs {
+            crate::bad_input!(
+                "{} and {} are outputs of different studies: refusing to list their missing shards",
+                first_dir.display(),
+                d.display()
+            );
+        }
+    }
+    let Some(n) = common_split(whole.iter().map(|(_, r)| r)) else {
+        crate::bad_input!(
+            "{}: the outputs given are not all shards K/N of one N (a whole-study output, or shards of different splits): cannot list missing shards",
+            first_dir.display()
+        );
+    };
+    let present: std::collections::BTreeSet<u64> = whole
+        .iter()
+        .filter_map(|(_, r)| r.shard.map(|[k, _]| k))
+        .collect();
+    Ok(Missing {
+        n,
+        missing: (0..n).filter(|k| !present.contains(k)).collect(),
+        set_aside,
+    })
+}
+
 /// Joins shard outputs into one results.csv (rows in run order), refusing
 /// shards of different studies, overlaps and gaps, and rows that are not
 /// exactly those the shards' study.json promise. Returns the runs written.
@@ -147,19 +381,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
 
     let mut records: Vec<(PathBuf, StudyRecord)> = Vec::new();
     for d in dirs {
-        let p = d.join("study.json");
-        // A shard folder without its study.json is a wrong argument, like a
-        // scenario file that is not there: bad input.
-        let text = match crate::input::read_text(&p) {
-            Ok(t) => t,
-            Err(r) => crate::bad_input!("{}: not a shard output: study.json {r}", d.display()),
-        };
-        let r: StudyRecord = match serde_json::from_str(&text) {
-            Ok(r) => r,
-            Err(e) => crate::bad_input!("{}: not a study record: {e}", p.display()),
-        };
-        check_record(&p, &r)?;
-        records.push((d.clone(), r));
+        records.push((d.clone(), read_record(d)?));
     }
     let (first_dir, first) = records[0].clone();
     for (d, r) in &records[1..] {
@@ -182,14 +404,21 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
         }
     }
     records.sort_by_key(|(_, r)| r.range);
+    let split = common_split(records.iter().map(|(_, r)| r));
     let mut next = 0u64;
     let mut prev: Option<&Path> = None;
     for (d, r) in &records {
         let [lo, hi] = r.range;
         if lo > next {
             crate::bad_input!(
-                "runs {next}..{lo} are missing (before {}): a shard is absent",
-                d.display()
+                "{}",
+                missing_message(
+                    first.runs,
+                    split,
+                    next,
+                    lo,
+                    &format!("before {}", d.display())
+                )
             );
         }
         if lo < next {
@@ -205,73 +434,30 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     }
     if next != first.runs {
         crate::bad_input!(
-            "runs {next}..{} are missing (after {}): a shard is absent",
-            first.runs,
-            prev.map_or_else(|| "?".into(), |p| p.display().to_string())
+            "{}",
+            missing_message(
+                first.runs,
+                split,
+                next,
+                first.runs,
+                &format!(
+                    "after {}",
+                    prev.map_or_else(|| "?".into(), |p| p.display().to_string())
+                )
+            )
         );
     }
 
     // The rows, each checked, rewritten through one writer (the bytes a
     // whole run writes).
-    let columns = first.study.columns();
-    let n_values = columns.len();
-    let head = header(columns);
+    let head = header(first.study.columns());
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(&head)?;
     let mut written = 0u64;
     for (d, r) in &records {
-        let p = d.join("results.csv");
-        let shown = p.display().to_string();
-        let bytes = std::fs::read(&p).with_context(|| format!("reading {shown}"))?;
-        if bytes.is_empty() {
-            crate::bad_input!("{shown}: is empty: not a results.csv");
-        }
-        if !bytes.ends_with(b"\n") {
-            crate::bad_input!("{shown}: does not end with a line break: truncated");
-        }
-        let mut rd = csv::ReaderBuilder::new()
-            .has_headers(false)
-            .from_reader(&bytes[..]);
-        let mut rows = rd.records();
-        let bad_csv = |e: csv::Error| {
-            anyhow::Error::from(InputError(format!(
-                "{shown}: {}: truncated or corrupted",
-                e.to_string().lines().next().unwrap_or_default()
-            )))
-        };
-        let h = rows
-            .next()
-            .ok_or_else(|| anyhow!(InputError(format!("{shown}: no header"))))?
-            .map_err(bad_csv)?;
-        if h.iter().ne(head.iter()) {
-            crate::bad_input!(
-                "{shown}: its header is not the one of study `{}` (expected {})",
-                first.study.name,
-                head.join(",")
-            );
-        }
-        let [lo, hi] = r.range;
-        let mut i = lo;
-        for rec in rows {
-            let rec = rec.map_err(bad_csv)?;
-            let line = rec.position().map_or(0, |p| p.line());
-            if i >= hi {
-                crate::bad_input!(
-                    "{shown}: line {line}: more rows than the {} runs {lo}..{hi} its study.json promises",
-                    hi - lo
-                );
-            }
-            check_row(&shown, &rec, line, i, first.study.seed, &head, n_values)?;
+        for rec in shard_rows(d, r)? {
             w.write_record(&rec)?;
-            i += 1;
             written += 1;
-        }
-        if i < hi {
-            crate::bad_input!(
-                "{shown}: {} of the {} rows its study.json promises (runs {lo}..{hi}): truncated or incomplete",
-                i - lo,
-                hi - lo
-            );
         }
     }
     if written != first.runs {
@@ -292,4 +478,42 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     )?;
     stage.commit()?;
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn index_lists_are_slurm_arrays() {
+        assert_eq!(index_list(&[]), "");
+        assert_eq!(index_list(&[3]), "3");
+        assert_eq!(index_list(&[1, 2]), "1,2");
+        assert_eq!(index_list(&[0, 2, 5, 6, 7, 8, 9]), "0,2,5-9");
+        assert_eq!(index_list(&[1, 2, 3, 7, 8, 10]), "1-3,7,8,10");
+    }
+
+    #[test]
+    fn gaps_of_whole_shards_are_named_as_shards() {
+        // 10 runs in 4 shards: 0..2, 2..5, 5..7, 7..10.
+        let m = missing_message(10, Some(4), 2, 5, "before x");
+        assert_eq!(
+            m,
+            "shard 1/4 (runs 2..5) is missing (before x): rerun it with --shard 1/4"
+        );
+        let m = missing_message(10, Some(4), 5, 10, "after y");
+        assert!(
+            m.starts_with("shards K/4 for K in 2,3 (runs 5..10) are missing (after y)"),
+            "{m}"
+        );
+        // Not a split of whole shards, or no common split: runs only.
+        assert_eq!(
+            missing_message(10, Some(4), 3, 5, "before x"),
+            "runs 3..5 are missing (before x): a shard is absent"
+        );
+        assert_eq!(
+            missing_message(10, None, 2, 5, "before x"),
+            "runs 2..5 are missing (before x): a shard is absent"
+        );
+    }
 }

@@ -41,8 +41,8 @@ pub mod plots;
 mod results;
 mod schema;
 
-pub use exec::{execute, sweep, RunRow, SweepOptions};
-pub use merge::merge;
+pub use exec::{execute, resume_state, sweep, Resume, RunRow, SweepOptions};
+pub use merge::{check_shard, index_list, merge, missing, Missing};
 pub use plan::{derive_seed, parse_shard, Plan};
 pub use results::{as_f64, results_csv, StudyRecord, METRIC_COLUMNS};
 pub(crate) use schema::load_toml;
