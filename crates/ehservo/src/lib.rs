@@ -18,6 +18,7 @@
 pub mod analysis;
 pub mod error;
 pub mod estimation;
+pub mod fmu;
 pub mod input;
 pub mod output;
 pub mod plot;
@@ -25,6 +26,7 @@ pub mod reproduce;
 pub mod run;
 pub mod scenario;
 pub mod signals;
+pub mod stepper;
 pub mod study;
 pub mod tune;
 
