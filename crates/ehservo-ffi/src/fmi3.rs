@@ -470,7 +470,7 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
             return i.fail(&format!("startTime must be finite (got {start_time:?})"));
         }
         if let Body::Loop { sim, .. } = &i.body {
-            if start_time != 0.0 {
+            if start_time.abs() > 0.0 {
                 return i.fail(&format!(
                     "startTime = {start_time:?}: the closed loop starts at t = 0"
                 ));
@@ -624,6 +624,7 @@ pub unsafe extern "C" fn fmi3SetFloat64(
 /// # Safety
 /// FMI 3.0's contract; the output pointers may be null.
 #[no_mangle]
+#[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn fmi3DoStep(
     instance: *mut c_void,
     current_communication_point: f64,
@@ -672,6 +673,7 @@ macro_rules! unsupported {
         /// # Safety
         /// FMI 3.0's contract.
         #[no_mangle]
+        #[allow(clippy::too_many_arguments)]
         pub unsafe extern "C" fn $name(instance: *mut c_void, $($arg: $ty),*) -> Status {
             $(let _ = $arg;)*
             with(instance, stringify!($name), |i| {

@@ -14,6 +14,8 @@
 //! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
 //! | [`estimation`] | design of the linear observers of `ehservo_core::estimate`: discretisation, Luenberger, steady-state Kalman, noise gains |
 //! | [`study`] | sweeps and Monte Carlo, sharded across machines |
+//! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
+//! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
 
 pub mod analysis;
 pub mod error;
