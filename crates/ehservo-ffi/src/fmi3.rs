@@ -225,7 +225,8 @@ impl Instance {
         }
         let end = t + step;
         let n_f = ((end - self.t0) / h).round();
-        if !(step > 0.0)
+        if step.is_nan()
+            || step <= 0.0
             || !end.is_finite()
             || n_f <= self.k as f64
             || (self.t0 + n_f * h - end).abs() > 1e-6 * h
