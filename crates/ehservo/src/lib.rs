@@ -15,10 +15,13 @@
 //! | [`estimation`] | design of the linear observers of `ehservo_core::estimate`: discretisation, Luenberger, steady-state Kalman, noise gains |
 //! | [`study`] | sweeps and Monte Carlo, sharded across machines |
 //! | [`tune`], [`league`] | controller tuning by particle swarm; every controller of a suite, tuned alike, on every scenario |
+//! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
+//! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
 
 pub mod analysis;
 pub mod error;
 pub mod estimation;
+pub mod fmu;
 pub mod input;
 pub mod league;
 pub mod output;
@@ -27,6 +30,7 @@ pub mod reproduce;
 pub mod run;
 pub mod scenario;
 pub mod signals;
+pub mod stepper;
 pub mod study;
 pub mod tune;
 

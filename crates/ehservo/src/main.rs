@@ -199,6 +199,23 @@ enum Command {
     },
     /// Print the default scenario (the paper's Fig. 2 case) as TOML.
     Defaults,
+    /// Export the scenario's controller (or, with --closed-loop, its whole loop) as an FMI 3.0 co-simulation FMU.
+    Fmu {
+        /// The scenario file (TOML).
+        scenario: PathBuf,
+        /// The FMU to write (e.g. controller.fmu).
+        #[arg(long)]
+        out: PathBuf,
+        /// Export the closed loop (plant, actuator, sensors and controller; no inputs) instead of the controller alone.
+        #[arg(long)]
+        closed_loop: bool,
+        /// The FMU's binary (default: libehservo_ffi.so beside this ehservo; build it with cargo build -p ehservo-ffi).
+        #[arg(long)]
+        binary: Option<PathBuf>,
+        /// Override a key (repeatable).
+        #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+        set: Vec<String>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -601,6 +618,38 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                 "merged {} shard(s), {n} runs, into {}/results.csv",
                 dirs.len(),
                 out.display()
+            );
+            Ok(())
+        }
+        Command::Fmu {
+            scenario,
+            out,
+            closed_loop,
+            binary,
+            set,
+        } => {
+            use ehservo::fmu::{write_fmu, FmuKind};
+            let s = load(&scenario, &set)?;
+            let kind = if closed_loop {
+                FmuKind::ClosedLoop
+            } else {
+                FmuKind::Controller
+            };
+            let Some(binary) = binary.or_else(ehservo::fmu::default_binary) else {
+                ehservo::bad_input!(
+                    "the FMU's binary libehservo_ffi.so is not beside this ehservo: build it (cargo build -p ehservo-ffi, same profile) or pass --binary PATH"
+                );
+            };
+            if out.extension().and_then(|e| e.to_str()) != Some("fmu") {
+                ehservo::bad_input!("--out {}: an FMU's file name ends in .fmu", out.display());
+            }
+            write_fmu(&out, kind, &s, &binary)?;
+            note!(
+                "{}: the {} FMU of {} (FMI 3.0 co-simulation, step {} s)",
+                out.display(),
+                kind.as_str(),
+                s.name,
+                s.simulation.step
             );
             Ok(())
         }

@@ -310,7 +310,7 @@ pub trait Config {
     /// to tune.
     const TUNABLE: &'static [Tunable] = &[];
     /// The controller built.
-    type Controller: Controller;
+    type Controller: Controller + Clone;
     /// Checks every parameter (all of them, whether or not this law reads
     /// them) and builds the controller; the error names the parameter.
     fn build(&self, design: &Design) -> Result<Self::Controller, ParamError>;

@@ -1,0 +1,504 @@
+//! `ehservo fmu`: a scenario's controller (or its whole closed loop) as an
+//! FMI 3.0 co-simulation FMU.
+//!
+//! The FMU is a zip holding `modelDescription.xml` (written here),
+//! `binaries/x86_64-linux/ehservo.so` (the `ehservo-ffi` cdylib, whose
+//! `fmi3*` functions are the FMI entry points) and
+//! `resources/scenario.toml` (the scenario with every default filled in and
+//! the `--set` overrides applied: what the FMU builds its controller from).
+//! The instantiation token names the kind of FMU and a hash of that file,
+//! so the binary knows which FMU it is and refuses resources that are not
+//! the ones it was exported with.
+//!
+//! The variables, their value references and units are the tables below
+//! ([`variables`]); the binary serves the same tables. Angles are in rad
+//! (SI, as everywhere in the C ABI); `e_deg` and `e_max_deg` are in degrees
+//! as `summary.json` gives them.
+
+use crate::scenario::{ReferenceKind, Scenario};
+use crate::simulation::Mode;
+use anyhow::{Context, Result};
+use std::io::Write;
+use std::path::Path;
+
+/// The FMU's `modelIdentifier` (and the binary's file stem).
+pub const MODEL_IDENTIFIER: &str = "ehservo";
+
+/// The platform folder of the binary.
+pub const PLATFORM: &str = "x86_64-linux";
+
+/// Which FMU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FmuKind {
+    /// The controller alone: inputs θ, θ̇, θ̈; output u.
+    Controller,
+    /// The whole loop (plant, actuator, sensors, controller): no inputs.
+    ClosedLoop,
+}
+
+impl FmuKind {
+    /// Its name in the instantiation token.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FmuKind::Controller => "controller",
+            FmuKind::ClosedLoop => "closed-loop",
+        }
+    }
+}
+
+/// A variable's role.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Causality {
+    /// The independent variable, time.
+    Independent,
+    /// Set by the importer.
+    Input,
+    /// Computed by the FMU.
+    Output,
+}
+
+/// One Float64 variable of an FMU.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variable {
+    /// Its value reference.
+    pub vr: u32,
+    /// Its name.
+    pub name: &'static str,
+    /// Its role.
+    pub causality: Causality,
+    /// Its unit (a `<Unit>` of the model description).
+    pub unit: &'static str,
+    /// What it is.
+    pub description: &'static str,
+}
+
+/// Value references: the same numbers in both kinds where they mean the
+/// same thing.
+pub mod vr {
+    /// Time (s).
+    pub const TIME: u32 = 0;
+    /// θ (rad).
+    pub const THETA: u32 = 1;
+    /// θ̇ (rad/s).
+    pub const THETA_DOT: u32 = 2;
+    /// θ̈ (rad/s²).
+    pub const THETA_DDOT: u32 = 3;
+    /// u (V).
+    pub const U: u32 = 4;
+    /// θd (rad).
+    pub const THETA_D: u32 = 5;
+    /// e = θd − θ (rad).
+    pub const E: u32 = 6;
+    /// e in degrees.
+    pub const E_DEG: u32 = 7;
+    /// max |e| over t ≥ settle so far (deg).
+    pub const E_MAX_DEG: u32 = 8;
+    /// What the plant receives after the actuator (V).
+    pub const U_PLANT: u32 = 9;
+}
+
+const TIME: Variable = Variable {
+    vr: vr::TIME,
+    name: "time",
+    causality: Causality::Independent,
+    unit: "s",
+    description: "Simulation time",
+};
+
+const CONTROLLER: &[Variable] = &[
+    TIME,
+    Variable {
+        vr: vr::THETA,
+        name: "theta",
+        causality: Causality::Input,
+        unit: "rad",
+        description: "Measured angle θ",
+    },
+    Variable {
+        vr: vr::THETA_DOT,
+        name: "theta_dot",
+        causality: Causality::Input,
+        unit: "rad/s",
+        description: "Measured angular velocity θ̇",
+    },
+    Variable {
+        vr: vr::THETA_DDOT,
+        name: "theta_ddot",
+        causality: Causality::Input,
+        unit: "rad/s2",
+        description: "Measured angular acceleration θ̈",
+    },
+    Variable {
+        vr: vr::U,
+        name: "u",
+        causality: Causality::Output,
+        unit: "V",
+        description: "Command to the servo valve, the law at the current sample (direct feedthrough of the inputs)",
+    },
+    Variable {
+        vr: vr::THETA_D,
+        name: "theta_d",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "The scenario's reference θd at the current sample",
+    },
+];
+
+const CLOSED_LOOP: &[Variable] = &[
+    TIME,
+    Variable {
+        vr: vr::THETA,
+        name: "theta",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "Angle θ of the plant",
+    },
+    Variable {
+        vr: vr::THETA_DOT,
+        name: "theta_dot",
+        causality: Causality::Output,
+        unit: "rad/s",
+        description: "Angular velocity θ̇ of the plant",
+    },
+    Variable {
+        vr: vr::THETA_DDOT,
+        name: "theta_ddot",
+        causality: Causality::Output,
+        unit: "rad/s2",
+        description: "Angular acceleration θ̈ of the plant",
+    },
+    Variable {
+        vr: vr::U,
+        name: "u",
+        causality: Causality::Output,
+        unit: "V",
+        description: "The controller's command",
+    },
+    Variable {
+        vr: vr::THETA_D,
+        name: "theta_d",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "Reference θd",
+    },
+    Variable {
+        vr: vr::E,
+        name: "e",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "Tracking error e = θd − θ",
+    },
+    Variable {
+        vr: vr::E_DEG,
+        name: "e_deg",
+        causality: Causality::Output,
+        unit: "deg",
+        description: "Tracking error in degrees",
+    },
+    Variable {
+        vr: vr::E_MAX_DEG,
+        name: "e_max_deg",
+        causality: Causality::Output,
+        unit: "deg",
+        description: "max |e| over the samples at t >= simulation.settle so far (summary.json's e_max_deg at the horizon; 0 before settle)",
+    },
+    Variable {
+        vr: vr::U_PLANT,
+        name: "u_plant",
+        causality: Causality::Output,
+        unit: "V",
+        description: "What the plant receives after the actuator",
+    },
+];
+
+/// The variables of a kind of FMU.
+pub fn variables(kind: FmuKind) -> &'static [Variable] {
+    match kind {
+        FmuKind::Controller => CONTROLLER,
+        FmuKind::ClosedLoop => CLOSED_LOOP,
+    }
+}
+
+/// FNV-1a, 64 bits: a fingerprint of the scenario file in the token (not
+/// a security measure: it catches resources swapped by mistake).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// The instantiation token of an FMU of `kind` built from `scenario_toml`.
+pub fn token(kind: FmuKind, scenario_toml: &str) -> String {
+    format!(
+        "{{ehservo-{}-{:016x}}}",
+        kind.as_str(),
+        fnv1a(scenario_toml.as_bytes())
+    )
+}
+
+/// The kind a token names, if it is one of ours for exactly this scenario
+/// text; otherwise why not.
+pub fn check_token(token_text: &str, scenario_toml: &str) -> Result<FmuKind, String> {
+    for kind in [FmuKind::Controller, FmuKind::ClosedLoop] {
+        if token_text == token(kind, scenario_toml) {
+            return Ok(kind);
+        }
+    }
+    Err(format!(
+        "the instantiation token {token_text:?} is not {:?} or {:?}: resources/scenario.toml is not the file this FMU was exported with",
+        token(FmuKind::Controller, scenario_toml),
+        token(FmuKind::ClosedLoop, scenario_toml)
+    ))
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The scenario as the FMU's `resources/scenario.toml`: every default
+/// filled in, the overrides applied. Refuses what the FMU could not
+/// rebuild from that file alone.
+pub fn resource_toml(s: &Scenario, kind: FmuKind) -> Result<String> {
+    if s.reference.kind == ReferenceKind::Csv {
+        crate::bad_input!(
+            "`reference.kind` = \"csv\": an FMU carries only its scenario.toml, not the reference's table; use another kind of reference"
+        );
+    }
+    if kind == FmuKind::Controller && s.simulation.mode != Mode::Sampled {
+        crate::bad_input!(
+            "`simulation.mode` = \"continuous\": a controller FMU is the sampled controller; set simulation.mode = \"sampled\" (or export --closed-loop)"
+        );
+    }
+    let text = s.to_toml();
+    // The FMU rebuilds its controller from this text: check that it does,
+    // to the same scenario, before shipping it.
+    let back = Scenario::parse(&text)
+        .map_err(|e| anyhow::anyhow!("the filled-in scenario does not parse back: {e}"))?;
+    let mut expected = s.clone();
+    expected.base_dir = None;
+    if back != expected {
+        anyhow::bail!("the filled-in scenario does not read back as the same scenario");
+    }
+    Ok(text)
+}
+
+/// `modelDescription.xml`.
+pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> String {
+    let cfg = s.sim_config();
+    let horizon = cfg.steps as f64 * cfg.step;
+    let what = match kind {
+        FmuKind::Controller => format!(
+            "The {} controller of scenario {:?}, sampled every {} s (inputs theta, theta_dot, theta_ddot in rad, rad/s, rad/s2; output u in V)",
+            s.controller.kind(),
+            s.name,
+            cfg.step
+        ),
+        FmuKind::ClosedLoop => format!(
+            "The closed loop of scenario {:?} ({} controller, {} plant), sampled every {} s, horizon {} s",
+            s.name,
+            s.controller.kind(),
+            s.plant.model.as_str(),
+            cfg.step,
+            horizon
+        ),
+    };
+    let mut x = String::new();
+    x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    x.push_str(&format!(
+        "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"{}\" instantiationToken=\"{}\" description=\"{}\" generationTool=\"ehservo {}\" variableNamingConvention=\"flat\">\n",
+        xml_escape(&format!("ehservo-{}-{}", s.name, kind.as_str())),
+        token(kind, scenario_toml),
+        xml_escape(&what),
+        env!("CARGO_PKG_VERSION"),
+    ));
+    x.push_str(&format!(
+        "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" fixedInternalStepSize=\"{:?}\" canGetAndSetFMUState=\"false\" canSerializeFMUState=\"false\" hasEventMode=\"false\"/>\n",
+        cfg.step
+    ));
+    x.push_str(concat!(
+        "  <UnitDefinitions>\n",
+        "    <Unit name=\"s\"><BaseUnit s=\"1\"/></Unit>\n",
+        "    <Unit name=\"rad\"><BaseUnit rad=\"1\"/></Unit>\n",
+        "    <Unit name=\"rad/s\"><BaseUnit s=\"-1\" rad=\"1\"/></Unit>\n",
+        "    <Unit name=\"rad/s2\"><BaseUnit s=\"-2\" rad=\"1\"/></Unit>\n",
+        "    <Unit name=\"deg\"><BaseUnit rad=\"1\" factor=\"0.017453292519943295\"/></Unit>\n",
+        "    <Unit name=\"V\"><BaseUnit kg=\"1\" m=\"2\" s=\"-3\" A=\"-1\"/></Unit>\n",
+        "  </UnitDefinitions>\n",
+        "  <LogCategories>\n",
+        "    <Category name=\"logStatusError\" description=\"Errors: bad calls, bad values\"/>\n",
+        "    <Category name=\"logStatusWarning\" description=\"Warnings: the run diverged\"/>\n",
+        "  </LogCategories>\n",
+    ));
+    x.push_str(&format!(
+        "  <DefaultExperiment startTime=\"0\" stopTime=\"{horizon:?}\" stepSize=\"{:?}\"/>\n",
+        cfg.step
+    ));
+    x.push_str("  <ModelVariables>\n");
+    let vars = variables(kind);
+    for v in vars {
+        let (causality, rest) = match v.causality {
+            Causality::Independent => ("independent", String::new()),
+            Causality::Input => ("input", " start=\"0\"".to_string()),
+            Causality::Output => ("output", String::new()),
+        };
+        let variability = if v.vr == vr::U {
+            "discrete"
+        } else {
+            "continuous"
+        };
+        x.push_str(&format!(
+            "    <Float64 name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\" unit=\"{}\"{rest}/>\n",
+            v.name,
+            v.vr,
+            xml_escape(v.description),
+            v.unit
+        ));
+    }
+    x.push_str("  </ModelVariables>\n  <ModelStructure>\n");
+    let inputs: Vec<String> = vars
+        .iter()
+        .filter(|v| v.causality == Causality::Input)
+        .map(|v| v.vr.to_string())
+        .collect();
+    for tag in ["Output", "InitialUnknown"] {
+        for v in vars.iter().filter(|v| v.causality == Causality::Output) {
+            // u depends on the inputs (the law at the current sample);
+            // everything else on none of them.
+            let deps = if v.vr == vr::U {
+                inputs.join(" ")
+            } else {
+                String::new()
+            };
+            let kinds = if deps.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " dependenciesKind=\"{}\"",
+                    vec!["dependent"; inputs.len()].join(" ")
+                )
+            };
+            x.push_str(&format!(
+                "    <{tag} valueReference=\"{}\" dependencies=\"{deps}\"{kinds}/>\n",
+                v.vr
+            ));
+        }
+    }
+    x.push_str("  </ModelStructure>\n</fmiModelDescription>\n");
+    x
+}
+
+/// Where `ehservo fmu` looks for the FMU's binary when `--binary` is not
+/// given: `libehservo_ffi.so` beside the running `ehservo` (both are in
+/// `target/<profile>/` after `cargo build -p ehservo -p ehservo-ffi`).
+pub fn default_binary() -> Option<std::path::PathBuf> {
+    let exe = std::env::current_exe().ok()?;
+    let dir = exe.parent()?;
+    // `target/debug/deps/ehservo-…` when run by `cargo test`.
+    [dir.to_path_buf(), dir.parent()?.to_path_buf()]
+        .into_iter()
+        .map(|d| d.join("libehservo_ffi.so"))
+        .find(|p| p.is_file())
+}
+
+/// Writes the FMU of `s` to `out` (a temporary sibling renamed into place).
+pub fn write_fmu(out: &Path, kind: FmuKind, s: &Scenario, binary: &Path) -> Result<()> {
+    let toml_text = resource_toml(s, kind)?;
+    let xml = model_description(kind, s, &toml_text);
+    let so = std::fs::read(binary)
+        .with_context(|| format!("reading the FMU's binary {}", binary.display()))?;
+    if !so.starts_with(b"\x7fELF") {
+        crate::bad_input!(
+            "--binary {}: not an ELF shared library (the FMU's binary is libehservo_ffi.so)",
+            binary.display()
+        );
+    }
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let tmp = tempfile_in(&dir, out)?;
+    let result = (|| -> Result<()> {
+        let f =
+            std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+        let mut zip = zip::ZipWriter::new(std::io::BufWriter::new(f));
+        let opts = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated);
+        zip.start_file("modelDescription.xml", opts)?;
+        zip.write_all(xml.as_bytes())?;
+        zip.start_file("resources/scenario.toml", opts)?;
+        zip.write_all(toml_text.as_bytes())?;
+        zip.start_file(
+            format!("binaries/{PLATFORM}/{MODEL_IDENTIFIER}.so"),
+            opts.unix_permissions(0o755),
+        )?;
+        zip.write_all(&so)?;
+        let w = zip.finish()?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
+        f.sync_all()?;
+        Ok(())
+    })();
+    match result {
+        Ok(()) => std::fs::rename(&tmp, out)
+            .with_context(|| format!("renaming {} to {}", tmp.display(), out.display())),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e.context(format!("writing {}", out.display())))
+        }
+    }
+}
+
+/// A fresh temporary file name beside `out`.
+fn tempfile_in(dir: &Path, out: &Path) -> Result<std::path::PathBuf> {
+    let stem = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "fmu".into());
+    let p = dir.join(format!(".{stem}.tmp-{}", std::process::id()));
+    Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tokens_name_the_kind_and_the_exact_scenario_text() {
+        let t = token(FmuKind::Controller, "name = \"a\"\n");
+        assert!(
+            t.starts_with("{ehservo-controller-") && t.ends_with('}'),
+            "{t}"
+        );
+        assert_eq!(check_token(&t, "name = \"a\"\n"), Ok(FmuKind::Controller));
+        assert!(check_token(&t, "name = \"b\"\n").is_err());
+        let c = token(FmuKind::ClosedLoop, "x");
+        assert_eq!(check_token(&c, "x"), Ok(FmuKind::ClosedLoop));
+        // FNV-1a's published test vectors.
+        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+    }
+
+    #[test]
+    fn the_model_description_lists_every_variable_once_with_its_unit() {
+        let s = Scenario::parse("name = \"fig2\"").unwrap();
+        let toml_text = resource_toml(&s, FmuKind::Controller).unwrap();
+        let x = model_description(FmuKind::Controller, &s, &toml_text);
+        for v in variables(FmuKind::Controller) {
+            let tag = format!("name=\"{}\" valueReference=\"{}\"", v.name, v.vr);
+            assert_eq!(x.matches(&tag).count(), 1, "{tag}");
+        }
+        assert!(x.contains("<Output valueReference=\"4\" dependencies=\"1 2 3\""));
+        assert!(x.contains("stopTime=\"10.0\" stepSize=\"0.01\""));
+        assert!(x.contains(&token(FmuKind::Controller, &toml_text)));
+    }
+
+    #[test]
+    fn what_an_fmu_cannot_carry_is_refused() {
+        let s = Scenario::parse("[simulation]\nmode = \"continuous\"\n").unwrap();
+        let e = resource_toml(&s, FmuKind::Controller).unwrap_err();
+        assert!(e.to_string().contains("`simulation.mode`"), "{e}");
+        assert!(resource_toml(&s, FmuKind::ClosedLoop).is_ok());
+    }
+}

@@ -1,0 +1,360 @@
+//! A scenario's loop and its controller as values a caller steps one sample
+//! at a time, with the controller kind and the plant model erased behind a
+//! trait object: what the C ABI (`crates/ehservo-ffi`), its FMI 3.0 export
+//! and other bindings hold in a handle.
+//!
+//! [`LoopStepper`] is the simulation `ehservo run` runs (the same
+//! [`Simulation`], reference and stages, metrics accumulated the same way),
+//! so stepping it to the horizon gives `ehservo run`'s metrics to the bit.
+//! [`ControllerStepper`] is the scenario's controller alone in the sampled
+//! loop ([`SampledController`]: the law, forward Euler on its state, the
+//! `[fault]` policy) at the scenario's step: fed the measurements a run's
+//! controller saw, it returns the run's commands to the bit.
+
+use crate::cylinder::CylinderPlant;
+use crate::metrics::{Metrics, MetricsAccumulator};
+use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant};
+use crate::scenario::{AnyReference, ControllerConfig, PlantModel, Scenario, ScenarioError};
+use crate::scenario::{Setup, Visit};
+use crate::simulation::{Mode, Sample, Simulation, Stop};
+use ehservo_core::control::{Controller, Signal, Signals};
+use ehservo_core::reference::Reference;
+use ehservo_core::rk4::OdeState;
+use ehservo_core::sampled::SampledController;
+
+/// A simulation of any kind and plant, stepped by the caller.
+trait LoopStep {
+    fn step(&mut self) -> Option<Sample>;
+    fn metrics(&self) -> Metrics;
+    fn stopped(&self) -> Option<Stop>;
+    fn time(&self) -> f64;
+}
+
+struct Looped<P: Plant, C: Controller> {
+    sim: Simulation<P, C, AnyReference>,
+    acc: MetricsAccumulator,
+}
+
+impl<P: Plant, C: Controller> LoopStep for Looped<P, C> {
+    fn step(&mut self) -> Option<Sample> {
+        let s = self.sim.step()?;
+        self.acc.push(&s);
+        Some(s)
+    }
+    fn metrics(&self) -> Metrics {
+        self.acc.finish(self.sim.outcome().diverged)
+    }
+    fn stopped(&self) -> Option<Stop> {
+        self.sim.stopped()
+    }
+    fn time(&self) -> f64 {
+        self.sim.time()
+    }
+}
+
+/// A scenario's closed loop, one sample per [`LoopStepper::step`].
+pub struct LoopStepper {
+    inner: Box<dyn LoopStep>,
+    step: f64,
+    steps: u64,
+}
+
+impl std::fmt::Debug for LoopStepper {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LoopStepper")
+            .field("step", &self.step)
+            .field("steps", &self.steps)
+            .field("time", &self.inner.time())
+            .finish()
+    }
+}
+
+struct BuildLoop<'a>(&'a Setup);
+
+impl Visit for BuildLoop<'_> {
+    type Out = Box<dyn LoopStep>;
+    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
+        let setup = self.0;
+        let ctrl = cfg
+            .build(&setup.design)
+            .expect("Setup::new built this controller once already");
+        let (p, l) = (setup.model.params, setup.model.load);
+        match setup.plant {
+            PlantModel::ThirdOrder => looped(ThirdOrderPlant::new(p, l), ctrl, setup),
+            PlantModel::Physical => looped(PhysicalPlant::new(p, l), ctrl, setup),
+            PlantModel::Cylinder => {
+                let c = setup
+                    .cylinder
+                    .expect("Setup::new keeps the cylinder of a cylinder scenario");
+                looped(CylinderPlant::new(c, l), ctrl, setup)
+            }
+        }
+    }
+}
+
+/// As `run::execute` builds its simulation and accumulator.
+fn looped<P, C>(plant: P, ctrl: C, setup: &Setup) -> Box<dyn LoopStep>
+where
+    P: Plant + 'static,
+    C: Controller + 'static,
+{
+    let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
+    let acc = MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network);
+    let sim = Simulation::new(
+        plant,
+        ctrl,
+        setup.reference.clone(),
+        setup.stages.clone(),
+        setup.sim,
+    )
+    .expect("Setup::new validated the sample period and the policy");
+    Box::new(Looped { sim, acc })
+}
+
+impl LoopStepper {
+    /// The loop of a validated scenario, at t = 0.
+    pub fn new(s: &Scenario) -> Result<Self, ScenarioError> {
+        let setup = s.setup()?;
+        Ok(Self::from_setup(&setup))
+    }
+
+    /// The loop of a built scenario, at t = 0.
+    pub fn from_setup(setup: &Setup) -> Self {
+        Self {
+            inner: setup.controller.visit(BuildLoop(setup)),
+            step: setup.sim.step,
+            steps: setup.sim.steps,
+        }
+    }
+
+    /// The sample at t_k, and the loop advanced to t_{k+1}; `None` once the
+    /// run has stopped (the horizon's sample was produced, or it diverged:
+    /// see [`LoopStepper::stopped`]).
+    pub fn step(&mut self) -> Option<Sample> {
+        self.inner.step()
+    }
+
+    /// The metrics of the samples so far, as `ehservo run` computes them at
+    /// the end of a run (`e_max_deg` is `None` before the settling time).
+    pub fn metrics(&self) -> Metrics {
+        self.inner.metrics()
+    }
+
+    /// Why the run stopped, once it has.
+    pub fn stopped(&self) -> Option<Stop> {
+        self.inner.stopped()
+    }
+
+    /// The time of the next sample (s).
+    pub fn time(&self) -> f64 {
+        self.inner.time()
+    }
+
+    /// The sample period h (s).
+    pub fn period(&self) -> f64 {
+        self.step
+    }
+
+    /// The number of steps N to the horizon (N + 1 samples, t_N = N·h).
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+}
+
+/// What one sample of a [`ControllerStepper`] returns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawOutput {
+    /// The command u (V), after the `[fault]` policy and the valve range.
+    pub u: f64,
+    /// The law's flags ([`ehservo_core::control::flags`]).
+    pub flags: u8,
+}
+
+trait LawStep {
+    fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput;
+    fn reset(&mut self);
+    fn signals(&self) -> &'static [Signal];
+    fn boxed(&self) -> Box<dyn LawStep>;
+}
+
+impl<C: Controller + Clone + 'static> LawStep for SampledController<C> {
+    fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput {
+        let o = SampledController::step(self, t, x, z);
+        LawOutput {
+            u: o.u,
+            flags: o.flags,
+        }
+    }
+    fn reset(&mut self) {
+        SampledController::reset(self)
+    }
+    fn signals(&self) -> &'static [Signal] {
+        C::Parts::SIGNALS
+    }
+    fn boxed(&self) -> Box<dyn LawStep> {
+        Box::new(self.clone())
+    }
+}
+
+struct BuildLaw<'a>(&'a Setup);
+
+impl Visit for BuildLaw<'_> {
+    type Out = Box<dyn LawStep>;
+    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
+        let setup = self.0;
+        let ctrl = cfg
+            .build(&setup.design)
+            .expect("Setup::new built this controller once already");
+        Box::new(
+            SampledController::with_policy(ctrl, setup.sim.step, setup.stages.policy)
+                .expect("Setup::new validated the sample period and the policy"),
+        )
+    }
+}
+
+/// A scenario's controller in the sampled loop, stepped by the caller.
+pub struct ControllerStepper {
+    inner: Box<dyn LawStep>,
+    reference: AnyReference,
+    step: f64,
+    steps: u64,
+}
+
+impl Clone for ControllerStepper {
+    fn clone(&self) -> Self {
+        Self {
+            inner: self.inner.boxed(),
+            reference: self.reference.clone(),
+            step: self.step,
+            steps: self.steps,
+        }
+    }
+}
+
+impl std::fmt::Debug for ControllerStepper {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ControllerStepper")
+            .field("step", &self.step)
+            .field("signals", &self.inner.signals().len())
+            .finish()
+    }
+}
+
+impl ControllerStepper {
+    /// The controller of a validated scenario, in its initial state. The
+    /// scenario must be in the sampled mode (a continuous law has no
+    /// samples to be stepped at); its sensors, estimator and actuator are
+    /// not part of it (they are the caller's hardware).
+    pub fn new(s: &Scenario) -> Result<Self, ScenarioError> {
+        let setup = s.setup()?;
+        if setup.sim.mode != Mode::Sampled {
+            return Err(ScenarioError {
+                file: s.name.clone(),
+                key: "simulation.mode".into(),
+                line_col: None,
+                reason: "a controller stepped sample by sample needs the sampled mode (got \"continuous\")".into(),
+            });
+        }
+        Ok(Self {
+            inner: setup.controller.visit(BuildLaw(&setup)),
+            reference: setup.reference.clone(),
+            step: setup.sim.step,
+            steps: setup.sim.steps,
+        })
+    }
+
+    /// One sample: the law at (t, x, z), then its state advanced by one
+    /// period. A non-finite or out-of-range measurement (`[fault]`) gives
+    /// the safe command with `flags::MEASUREMENT_FAULT` and leaves the state.
+    pub fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput {
+        self.inner.step(t, x, z)
+    }
+
+    /// The scenario's reference z = (θd, θ̇d, θ̈d, θ⃛d) at t (rad, rad/s, …).
+    pub fn reference(&self, t: f64) -> [f64; 4] {
+        self.reference.z(t)
+    }
+
+    /// Back to the initial state.
+    pub fn reset(&mut self) {
+        self.inner.reset()
+    }
+
+    /// The law's signals (what `trace.csv` logs for this kind).
+    pub fn signals(&self) -> &'static [Signal] {
+        self.inner.signals()
+    }
+
+    /// The sample period h (s).
+    pub fn period(&self) -> f64 {
+        self.step
+    }
+
+    /// The number of steps N to the scenario's horizon.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // bit-identical results are the point
+mod tests {
+    use super::*;
+    use crate::run::{run, Keep};
+
+    fn fig2(extra: &str) -> Scenario {
+        Scenario::parse(&format!("name = \"fig2\"\n{extra}")).unwrap()
+    }
+
+    #[test]
+    fn stepping_the_loop_gives_the_runs_metrics_and_samples() {
+        let s = fig2("[simulation]\nhorizon = 3.0\n");
+        let r = run(&s, Keep::Every(1)).unwrap();
+        let mut l = LoopStepper::new(&s).unwrap();
+        assert_eq!(l.steps(), 300);
+        let mut n = 0;
+        while let Some(smp) = l.step() {
+            assert_eq!(smp.u.to_bits(), r.trace[n].u.to_bits(), "k = {n}");
+            assert_eq!(smp.e.to_bits(), r.trace[n].e.to_bits(), "k = {n}");
+            n += 1;
+        }
+        assert_eq!(n, 301);
+        assert_eq!(l.stopped(), Some(Stop::Horizon));
+        let (a, b) = (l.metrics(), r.metrics);
+        assert_eq!(
+            a.e_max_deg.unwrap().to_bits(),
+            b.e_max_deg.unwrap().to_bits()
+        );
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn the_controller_alone_reproduces_the_runs_commands() {
+        // nnvsc (the weights carry state) and pid, exact sensors.
+        for extra in ["", "[controller]\nkind = \"pid\"\n"] {
+            let s = fig2(&format!("[simulation]\nhorizon = 1.0\n{extra}"));
+            let r = run(&s, Keep::Every(1)).unwrap();
+            let mut c = ControllerStepper::new(&s).unwrap();
+            for smp in &r.trace {
+                assert_eq!(c.reference(smp.t), smp.z);
+                let o = c.step(smp.t, smp.x, smp.z);
+                assert_eq!(o.u.to_bits(), smp.u.to_bits(), "{extra:?} k = {}", smp.k);
+            }
+            // A snapshot continues as the original does.
+            let mut d = c.clone();
+            let last = r.trace.last().unwrap();
+            assert_eq!(
+                c.step(1.01, last.x, last.z).u.to_bits(),
+                d.step(1.01, last.x, last.z).u.to_bits()
+            );
+        }
+    }
+
+    #[test]
+    fn a_continuous_scenario_has_no_sampled_controller() {
+        let s = fig2("[simulation]\nmode = \"continuous\"\n");
+        let e = ControllerStepper::new(&s).unwrap_err();
+        assert_eq!(e.key, "simulation.mode");
+        assert!(LoopStepper::new(&s).is_ok());
+    }
+}
