@@ -25,7 +25,7 @@ use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
 
 create_exception!(
-    _ehservo,
+    ehservo,
     ScenarioError,
     PyValueError,
     "A bad scenario, study or override: the message is the command line's \
