@@ -100,3 +100,15 @@ def test_check_prints_what_the_cli_prints(cli, repo, monkeypatch):
     monkeypatch.chdir(repo)
     out = cli("check", FIG2, "--set", "controller.gamma1=50").stdout
     assert ehservo.check(FIG2, controller__gamma1=50) + "" in (out, out.rstrip("\n"))
+
+
+def test_a_diverging_run_reports_what_summary_json_reports(cli, repo, tmp_path, monkeypatch):
+    """Fig. 3 (the traditional VSC at the printed set-up) leaves |θ| ≤ 1 rad."""
+    monkeypatch.chdir(repo)
+    summary, trace = cli_run(cli, tmp_path, "scenarios/paper/fig3.toml")
+    r = ehservo.run("scenarios/paper/fig3.toml")
+    assert summary["divergence"] is not None
+    assert r.divergence == summary["divergence"]
+    assert r.metrics == summary["metrics"] and r.metrics["diverged"] is True
+    assert len(r.trace) == len(trace)
+    np.testing.assert_array_equal(r.trace["theta_deg"].to_numpy(), trace["theta_deg"].to_numpy())
