@@ -132,7 +132,10 @@ impl TraceLayout {
         )
     }
 
-    fn row(&self, s: &Sample, out: &mut Vec<f64>) {
+    /// A sample's row, in the order of [`TraceLayout::columns`], as
+    /// numbers (`trace.csv` prints them; the Python bindings hand them to
+    /// numpy column by column).
+    pub fn row(&self, s: &Sample, out: &mut Vec<f64>) {
         out.clear();
         out.extend([s.t, s.theta_d_deg(), s.theta_deg(), s.e_deg(), s.u]);
         out.extend(self.parts.iter().map(|&i| s.values[i]));

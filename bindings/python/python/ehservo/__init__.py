@@ -1,0 +1,288 @@
+"""ehservo from Python: run scenarios and studies, step the controllers.
+
+Every number is computed by the Rust crates the ``ehservo`` command line is
+built from (the same functions, so the same bits)::
+
+    import ehservo
+    r = ehservo.run("scenarios/paper/fig2.toml")
+    r.metrics["e_max_deg"]          # == summary.json's metrics.e_max_deg
+    r.trace["e_deg"]                # trace.csv's columns (a DataFrame with pandas)
+
+Overrides follow ``ehservo run --set key.path=value``: pass them as a dict
+``set={"controller.gamma1": 200}``, as keywords with ``__`` for the dots
+(``controller__gamma1=200``), or both (keywords last). A value may be a
+Python number, bool, string or list; a string is read as the command line
+reads the text after ``=`` (a TOML value, or a bare word such as ``vsc``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import os
+from typing import Any, Dict, Iterable, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _ehservo
+from ._ehservo import ScenarioError
+
+__all__ = [
+    "run",
+    "sweep",
+    "check",
+    "Controller",
+    "RunResult",
+    "Signal",
+    "ScenarioError",
+    "overrides",
+    "__version__",
+]
+
+__version__: str = _ehservo.__version__
+
+PathLike = Union[str, "os.PathLike[str]"]
+SetArg = Union[Mapping[str, Any], Iterable[str], None]
+
+
+def _toml(value: Any) -> str:
+    """A Python value as the TOML text ``--set key=value`` takes after ``=``."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        v = float(value)
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)  # shortest text that reads back to the same float
+    if isinstance(value, str):
+        return value  # as on the command line: TOML, or a bare word
+    if isinstance(value, Mapping):
+        items = ", ".join(f"{json.dumps(str(k))} = {_element(v)}" for k, v in value.items())
+        return "{" + items + "}"
+    if isinstance(value, (Sequence, np.ndarray)):
+        return "[" + ", ".join(_element(v) for v in value) + "]"
+    raise TypeError(f"cannot pass a {type(value).__name__} as a scenario value: {value!r}")
+
+
+def _element(value: Any) -> str:
+    """A value inside an array or table: strings are quoted."""
+    if isinstance(value, str):
+        return json.dumps(value)
+    return _toml(value)
+
+
+def overrides(set: SetArg = None, **keywords: Any) -> List[str]:
+    """The ``key.path=value`` strings of ``set`` and ``keywords``, in order.
+
+    ``set`` is a mapping ``{"controller.gamma1": 200}`` or an iterable of
+    ``"key.path=value"`` strings (exactly the command line's ``--set``
+    arguments); in keyword names ``__`` stands for ``.``.
+    """
+    out: List[str] = []
+    if set is not None:
+        if isinstance(set, Mapping):
+            out.extend(f"{k}={_toml(v)}" for k, v in set.items())
+        elif isinstance(set, str):
+            out.append(set)
+        else:
+            out.extend(str(s) for s in set)
+    out.extend(f"{k.replace('__', '.')}={_toml(v)}" for k, v in keywords.items())
+    return out
+
+
+def _source(scenario: Optional[PathLike]) -> Tuple[Optional[str], Optional[str]]:
+    """(path, text): a path names a file; a string with a newline, or with
+    ``=`` that is not a file's name, is TOML text; None is the defaults."""
+    if scenario is None:
+        return None, None
+    if isinstance(scenario, os.PathLike):
+        return os.fspath(scenario), None
+    if isinstance(scenario, str):
+        if "\n" in scenario or ("=" in scenario and not _ehservo.is_file(scenario)):
+            return None, scenario
+        return scenario, None
+    raise TypeError(
+        f"scenario: expected a path or TOML text, got {type(scenario).__name__}"
+    )
+
+
+def _pandas() -> Any:
+    try:
+        import pandas  # noqa: PLC0415
+
+        return pandas
+    except ImportError:
+        return None
+
+
+def _frame(columns: Dict[str, Any], as_frame: Optional[bool]) -> Any:
+    pd = _pandas() if as_frame is not False else None
+    if as_frame and pd is None:
+        raise ImportError("as_frame=True needs pandas (pip install pandas)")
+    if pd is None:
+        return columns
+    # A list (text, or booleans/integers with gaps) stays as it is: an
+    # object column, not floats with NaN for the gaps.
+    return pd.DataFrame(
+        {k: np.array(v, dtype=object) if isinstance(v, list) else v for k, v in columns.items()},
+        copy=False,
+    )
+
+
+class RunResult(NamedTuple):
+    """What ``run`` returns; unpacks as ``metrics, trace = ehservo.run(...)[:2]``."""
+
+    metrics: Dict[str, Any]
+    """summary.json's ``metrics``: e_max_deg, e_final_deg, ... (None when undefined)."""
+    trace: Any
+    """trace.csv's columns: a pandas DataFrame, or a dict of numpy arrays."""
+    name: str
+    """The scenario's name."""
+    divergence: Optional[Dict[str, Any]]
+    """summary.json's ``divergence``: None, or {t, reason, message}."""
+    faults: Dict[str, int]
+    """summary.json's ``faults`` (the counts of guarded numerical faults)."""
+
+
+def run(
+    scenario: Optional[PathLike] = None,
+    *,
+    set: SetArg = None,
+    raw: bool = False,
+    as_frame: Optional[bool] = None,
+    **keywords: Any,
+) -> RunResult:
+    """Runs a scenario as ``ehservo run`` does, without writing files.
+
+    ``scenario`` is a scenario file, TOML text, or None for the defaults
+    (the paper's Fig. 2 case). Overrides: see the module's documentation.
+    The trace has trace.csv's columns and rows (every ``output.decimate``-th
+    sample); ``raw=True`` adds z (``z0_rad`` ... ``z3_rad_s3``) and the x
+    the controller was given (``x0_ctrl_rad`` ...), in SI units, which
+    ``Controller.step`` replays exactly. ``as_frame``: None gives a
+    DataFrame when pandas is installed, else a dict of numpy arrays.
+
+    Raises ``ScenarioError`` (a ``ValueError``) with the command line's
+    message for a bad file, key or value.
+    """
+    path, text = _source(scenario)
+    name, metrics, names, arrays, info = _ehservo.run(
+        path, text, overrides(set, **keywords), raw
+    )
+    extra = json.loads(info)
+    trace = _frame(dict(zip(names, arrays)), as_frame)
+    return RunResult(metrics, trace, name, extra["divergence"], extra["faults"])
+
+
+def check(scenario: Optional[PathLike] = None, *, set: SetArg = None, **keywords: Any) -> str:
+    """Validates a scenario; returns it with every default filled in, as
+    TOML (what ``ehservo check`` prints). Raises ``ScenarioError``."""
+    path, text = _source(scenario)
+    return _ehservo.check(path, text, overrides(set, **keywords))
+
+
+def sweep(
+    study: PathLike,
+    *,
+    threads: Optional[int] = None,
+    out: Optional[PathLike] = None,
+    as_frame: Optional[bool] = None,
+) -> Any:
+    """Runs a study as ``ehservo sweep`` does; returns results.csv's table.
+
+    Columns: ``run``, the varied keys, ``seed``, the metrics and ``error``,
+    one row per run in run order; an undefined metric is NaN, a run without
+    an error has ``None``. With ``out``, the CLI's output folder is written
+    too (results.csv, study.json, plots). ``threads`` as ``--threads``
+    (default: all cores). A DataFrame with pandas, else a dict of arrays
+    (text columns are lists).
+    """
+    names, cols = _ehservo.sweep(
+        os.fspath(study), threads, None if out is None else os.fspath(out)
+    )
+    return _frame(dict(zip(names, cols)), as_frame)
+
+
+class Signal(NamedTuple):
+    """One named part of a controller's law."""
+
+    key: str
+    """The key in ``Controller.step``'s result (``"sigma"``, ``"p"``)."""
+    column: str
+    """Its trace.csv column ("" when it is not written)."""
+    unit: str
+    doc: str
+
+
+class Controller:
+    """A scenario's controller in its sampled loop, stepped from Python.
+
+    Exactly what the simulator's sampled mode runs at each sample
+    (``SampledController``: the law, the fault policy and valve range of
+    ``[fault]``/``[actuator]``, then forward Euler on the controller's
+    state, with period ``dt`` = ``simulation.step``). The sensors,
+    estimator and actuator of the scenario are not part of it: ``x`` is what
+    the controller measures.
+
+    ``step(t, x, z)`` takes x = (θ, θ̇, θ̈) in rad, rad/s, rad/s² and z =
+    (θd, θ̇d, θ̈d, θ⃛d) (by default the scenario's reference at t) and returns
+    ``{"u": volts, "flags": bits, <part>: value, ...}`` with the kind's named
+    parts (``signals``). ``uncertainty`` (the lumped uncertainty, which needs
+    the true plant) is NaN here.
+    """
+
+    def __init__(
+        self, scenario: Optional[PathLike] = None, *, set: SetArg = None, **keywords: Any
+    ) -> None:
+        path, text = _source(scenario)
+        self._raw = _ehservo.RawController(path, text, overrides(set, **keywords))
+        self.signals: List[Signal] = [Signal(*s) for s in self._raw.signals()]
+
+    @property
+    def kind(self) -> str:
+        """``controller.kind``."""
+        return self._raw.kind
+
+    @property
+    def dt(self) -> float:
+        """The sample period (s): the scenario's ``simulation.step``."""
+        return self._raw.dt
+
+    @property
+    def name(self) -> str:
+        return self._raw.name
+
+    @property
+    def faults(self) -> int:
+        """Steps that returned the safe command (bad measurement or law)."""
+        return self._raw.faults
+
+    def reference(self, t: float) -> Tuple[float, float, float, float]:
+        """z = (θd, θ̇d, θ̈d, θ⃛d) of the scenario's reference at t (rad, s)."""
+        z = self._raw.reference(float(t))
+        return (z[0], z[1], z[2], z[3])
+
+    def step(
+        self, t: float, x: Sequence[float], z: Optional[Sequence[float]] = None
+    ) -> Dict[str, float]:
+        """One sample at time t: the command and the law's parts; the state
+        (∫e, W) advances by dt."""
+        if z is None:
+            z = self._raw.reference(float(t))
+        return self._raw.step(float(t), list(map(float, x)), list(map(float, z)))
+
+    def reset(self) -> None:
+        """Back to the initial state (∫e = 0, W = 0)."""
+        self._raw.reset()
+
+    def weights(self) -> "np.ndarray":
+        """The network weights W now (empty for a law without a network)."""
+        return self._raw.weights()
+
+    def __repr__(self) -> str:
+        return f"ehservo.Controller({self.name!r}, kind={self.kind!r}, dt={self.dt})"

@@ -1,0 +1,40 @@
+"""Type stubs of the native module (src/lib.rs); use the wrappers in ``ehservo``."""
+
+from typing import Any, Dict, List, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class ScenarioError(ValueError):
+    """A bad scenario, study or override, with the command line's message."""
+
+    file: Optional[str]
+    """The file (``<string>`` for TOML text, ``<--set>`` for an override)."""
+    key: Optional[str]
+    """The key path, e.g. ``controller.gamma1`` (None when the file as a whole is at fault)."""
+    line: Optional[int]
+    column: Optional[int]
+    reason: str
+
+def run(
+    path: Optional[str], text: Optional[str], overrides: List[str], raw: bool = False
+) -> Tuple[str, Dict[str, Any], List[str], List[npt.NDArray[np.float64]], str]: ...
+def check(path: Optional[str], text: Optional[str], overrides: List[str]) -> str: ...
+def sweep(
+    path: str, threads: Optional[int] = None, out: Optional[str] = None
+) -> Tuple[List[str], List[Any]]: ...
+def is_file(p: str) -> bool: ...
+
+class RawController:
+    kind: str
+    dt: float
+    name: str
+    faults: int
+    def __init__(self, path: Optional[str], text: Optional[str], overrides: List[str]) -> None: ...
+    def step(self, t: float, x: List[float], z: List[float]) -> Dict[str, float]: ...
+    def reference(self, t: float) -> Tuple[float, float, float, float]: ...
+    def reset(self) -> None: ...
+    def signals(self) -> List[Tuple[str, str, str, str]]: ...
+    def weights(self) -> npt.NDArray[np.float64]: ...

@@ -1,0 +1,592 @@
+//! `ehservo._ehservo`: the Rust half of the Python package `ehservo`.
+//!
+//! Thin on purpose: every number comes from the same functions the command
+//! line calls (`Scenario::load` with `--set` overrides, `run::run_observed`,
+//! `output::TraceLayout`, `study::execute`/`study::sweep`,
+//! `SampledController::step_with`), so the Python results are the CLI's
+//! bits. The Python side (`python/ehservo/__init__.py`) turns the keyword
+//! overrides into `key=value` strings and the columns into a DataFrame.
+//!
+//! Trace columns are filled in Rust as `Vec<f64>` during the run and handed
+//! to numpy without a copy (`PyArray1::from_vec` takes the buffer).
+
+use ehservo::metrics::Metrics;
+use ehservo::output::TraceLayout;
+use ehservo::scenario::{ControllerConfig, Scenario, ScenarioError as RsScenarioError, Visit};
+use ehservo::study::Plan;
+use ehservo_core::control::{Controller, Output, Signal, Signals, Truth};
+use ehservo_core::reference::Reference;
+use ehservo_core::sampled::SampledController;
+use numpy::PyArray1;
+use pyo3::create_exception;
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::{Path, PathBuf};
+
+create_exception!(
+    ehservo,
+    ScenarioError,
+    PyValueError,
+    "A bad scenario, study or override: the message is the command line's \
+     (file, line:column when known, the key and the reason)."
+);
+
+/// The Python exception for a scenario error, with its parts as attributes.
+fn scenario_error(py: Python<'_>, e: &RsScenarioError) -> PyErr {
+    let err = ScenarioError::new_err(e.to_string());
+    let v = err.value(py);
+    let key = (!e.key.is_empty()).then(|| e.key.clone());
+    // Setting attributes on a fresh exception instance cannot fail short of
+    // memory exhaustion; the message above carries everything anyway.
+    let _ = v.setattr("file", e.file.clone());
+    let _ = v.setattr("key", key);
+    let _ = v.setattr("line", e.line_col.map(|(l, _)| l));
+    let _ = v.setattr("column", e.line_col.map(|(_, c)| c));
+    let _ = v.setattr("reason", e.reason.clone());
+    err
+}
+
+/// A study error (one line naming the file and the key) as the Python
+/// exception, with `key` and `line` unknown.
+fn study_error(py: Python<'_>, msg: String) -> PyErr {
+    let err = ScenarioError::new_err(msg.clone());
+    let v = err.value(py);
+    let _ = v.setattr("file", py.None());
+    let _ = v.setattr("key", py.None());
+    let _ = v.setattr("line", py.None());
+    let _ = v.setattr("column", py.None());
+    let _ = v.setattr("reason", msg);
+    err
+}
+
+/// The scenario of a file (`path`) or of TOML text, with the CLI's
+/// `--set key=value` overrides.
+fn load(
+    path: Option<PathBuf>,
+    text: Option<String>,
+    overrides: &[String],
+) -> Result<Scenario, RsScenarioError> {
+    match (path, text) {
+        (Some(p), _) => Scenario::load(&p, overrides),
+        (None, Some(t)) => {
+            let mut s = Scenario::parse_with(&t, "<string>", overrides)?;
+            if s.name.is_empty() {
+                s.name = "scenario".into();
+            }
+            Ok(s)
+        }
+        (None, None) => {
+            // The defaults: the paper's Fig. 2 case, overrides applied.
+            let mut s = Scenario::parse_with("", "<defaults>", overrides)?;
+            if s.name.is_empty() {
+                s.name = "defaults".into();
+            }
+            Ok(s)
+        }
+    }
+}
+
+/// The metrics as summary.json writes them: `None` for an undefined one,
+/// `diverged` a bool, `samples` an int.
+fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for name in Metrics::NAMES {
+        match name {
+            "diverged" => d.set_item(name, m.diverged)?,
+            "samples" => d.set_item(name, m.samples)?,
+            _ => d.set_item(name, m.get(name))?,
+        }
+    }
+    Ok(d)
+}
+
+/// Runs a scenario: (name, metrics, column names, columns, outcome JSON).
+///
+/// The columns are trace.csv's (every `output.decimate`-th sample, as the
+/// CLI writes them); with `raw`, seven more in SI units: z (θd and its
+/// three derivatives) and the x the controller was given, which a Python
+/// loop can replay through `Controller.step` exactly.
+#[pyfunction]
+#[pyo3(signature = (path, text, overrides, raw=false))]
+#[allow(clippy::type_complexity)]
+fn run<'py>(
+    py: Python<'py>,
+    path: Option<PathBuf>,
+    text: Option<String>,
+    overrides: Vec<String>,
+    raw: bool,
+) -> PyResult<(
+    String,
+    Bound<'py, PyDict>,
+    Vec<String>,
+    Vec<Bound<'py, PyArray1<f64>>>,
+    String,
+)> {
+    let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
+    let result = py.detach(|| -> Result<_, RsScenarioError> {
+        let layout = TraceLayout::of(&s);
+        let mut names: Vec<String> = layout.columns.iter().map(|c| c.to_string()).collect();
+        if raw {
+            names.extend(RAW_COLUMNS.iter().map(|c| c.to_string()));
+        }
+        let decimate = s.output.decimate.max(1) as u64;
+        let rows = (s.sim_config().steps / decimate + 1) as usize;
+        let mut cols: Vec<Vec<f64>> = (0..names.len()).map(|_| Vec::with_capacity(rows)).collect();
+        let mut row = Vec::with_capacity(names.len());
+        let (outcome, metrics) = ehservo::run::run_observed(&s, &mut |smp| {
+            if smp.k % decimate != 0 {
+                return;
+            }
+            layout.row(smp, &mut row);
+            if raw {
+                row.extend(smp.z);
+                row.extend(smp.x_ctrl);
+            }
+            for (c, v) in cols.iter_mut().zip(&row) {
+                c.push(*v);
+            }
+        })?;
+        let info = serde_json::json!({
+            "divergence": outcome.diverged.map(ehservo::output::DivergenceInfo::from),
+            "faults": ehservo::output::Faults {
+                valve_root_clamped_samples: outcome.valve_root_clamped,
+                zero_error_norm_samples: outcome.zero_error_norm,
+                saturated_samples: outcome.saturated,
+                measurement_fault_samples: outcome.measurement_faults,
+            },
+        });
+        Ok((names, cols, metrics, info.to_string()))
+    });
+    let (names, cols, metrics, info) = result.map_err(|e| scenario_error(py, &e))?;
+    let arrays = cols
+        .into_iter()
+        .map(|c| PyArray1::from_vec(py, c))
+        .collect();
+    Ok((
+        s.name.clone(),
+        metrics_dict(py, &metrics)?,
+        names,
+        arrays,
+        info,
+    ))
+}
+
+/// The extra columns of `run(..., raw=True)`.
+const RAW_COLUMNS: [&str; 7] = [
+    "z0_rad",
+    "z1_rad_s",
+    "z2_rad_s2",
+    "z3_rad_s3",
+    "x0_ctrl_rad",
+    "x1_ctrl_rad_s",
+    "x2_ctrl_rad_s2",
+];
+
+/// Checks the scenario and returns it with every default filled in, as
+/// TOML (what `ehservo check` prints).
+#[pyfunction]
+#[pyo3(signature = (path, text, overrides))]
+fn check(
+    py: Python<'_>,
+    path: Option<PathBuf>,
+    text: Option<String>,
+    overrides: Vec<String>,
+) -> PyResult<String> {
+    let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
+    s.setup().map_err(|e| scenario_error(py, &e))?;
+    Ok(s.to_toml())
+}
+
+/// A column of results.csv as Python data.
+enum Column {
+    Int(Vec<i64>),
+    UInt(Vec<u64>),
+    Float(Vec<f64>),
+    Bool(Vec<bool>),
+    Text(Vec<Option<String>>),
+    /// Booleans or integers with gaps (`None`): an object column.
+    Sparse(Vec<Option<Py<PyAny>>>),
+}
+
+impl Column {
+    fn into_py(self, py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+        Ok(match self {
+            Column::Int(v) => PyArray1::from_vec(py, v).into_any(),
+            Column::UInt(v) => PyArray1::from_vec(py, v).into_any(),
+            Column::Float(v) => PyArray1::from_vec(py, v).into_any(),
+            Column::Bool(v) => PyArray1::from_vec(py, v).into_any(),
+            Column::Text(v) => PyList::new(py, v)?.into_any(),
+            Column::Sparse(v) => PyList::new(py, v)?.into_any(),
+        })
+    }
+}
+
+fn pybool(py: Python<'_>, b: bool) -> Py<PyAny> {
+    pyo3::types::PyBool::new(py, b)
+        .to_owned()
+        .into_any()
+        .unbind()
+}
+
+fn pyint(py: Python<'_>, n: u64) -> PyResult<Py<PyAny>> {
+    Ok(n.into_pyobject(py)?.into_any().unbind())
+}
+
+/// A varied column: integers if every value is one, numbers (float64) if
+/// every value is a number, booleans if every value is one, else text as
+/// results.csv writes it.
+fn varied_column(values: Vec<&toml::Value>) -> Column {
+    use toml::Value as V;
+    if values.iter().all(|v| matches!(v, V::Integer(_))) {
+        return Column::Int(
+            values
+                .iter()
+                .map(|v| v.as_integer().unwrap_or_default())
+                .collect(),
+        );
+    }
+    if values
+        .iter()
+        .all(|v| matches!(v, V::Integer(_) | V::Float(_)))
+    {
+        return Column::Float(
+            values
+                .iter()
+                .map(|v| ehservo::study::as_f64(v).unwrap_or(f64::NAN))
+                .collect(),
+        );
+    }
+    if values.iter().all(|v| matches!(v, V::Boolean(_))) {
+        return Column::Bool(
+            values
+                .iter()
+                .map(|v| v.as_bool().unwrap_or_default())
+                .collect(),
+        );
+    }
+    Column::Text(
+        values
+            .iter()
+            .map(|v| {
+                Some(match v {
+                    V::String(s) => s.clone(),
+                    other => other.to_string(),
+                })
+            })
+            .collect(),
+    )
+}
+
+/// Runs a study: (column names, columns) of results.csv, in run order. With
+/// `out`, also writes the CLI's output folder (results.csv, study.json,
+/// plots).
+#[pyfunction]
+#[pyo3(signature = (path, threads=None, out=None))]
+fn sweep<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
+    if let Some(t) = threads {
+        if !(1..=1024).contains(&t) {
+            return Err(PyValueError::new_err(format!(
+                "threads={t}: must be between 1 and 1024"
+            )));
+        }
+    }
+    let plan = Plan::load(&path).map_err(|e| study_error(py, e.0))?;
+    let rows = py.detach(|| -> anyhow::Result<Vec<ehservo::study::RunRow>> {
+        match &out {
+            Some(dir) => {
+                ehservo::output::probe_destination(dir)?;
+                let opts = ehservo::study::SweepOptions {
+                    out: dir.clone(),
+                    shard: None,
+                    threads,
+                    progress: false,
+                    plots: true,
+                };
+                ehservo::study::sweep(&plan, &opts)
+            }
+            None => ehservo::study::execute(
+                &plan,
+                0..plan.runs,
+                threads,
+                &indicatif::ProgressBar::hidden(),
+            ),
+        }
+    });
+    let rows = rows.map_err(|e| PyOSError::new_err(format!("{e:#}")))?;
+
+    let mut names: Vec<String> = vec!["run".into()];
+    let varied = plan.columns();
+    names.extend(varied.iter().cloned());
+    names.push("seed".into());
+    names.extend(Metrics::NAMES.iter().map(|s| s.to_string()));
+    names.push("error".into());
+
+    let mut cols: Vec<Column> = vec![Column::Int(rows.iter().map(|r| r.index as i64).collect())];
+    for j in 0..varied.len() {
+        cols.push(varied_column(rows.iter().map(|r| &r.values[j]).collect()));
+    }
+    cols.push(Column::UInt(rows.iter().map(|r| r.seed).collect()));
+    for name in Metrics::NAMES {
+        cols.push(match name {
+            // An invalid run has no metrics: diverged is then missing too,
+            // which results.csv writes as an empty cell.
+            "diverged" if rows.iter().all(|r| r.metrics.is_some()) => Column::Bool(
+                rows.iter()
+                    .map(|r| r.metrics.is_some_and(|m| m.diverged))
+                    .collect(),
+            ),
+            "samples" if rows.iter().all(|r| r.metrics.is_some()) => Column::UInt(
+                rows.iter()
+                    .map(|r| r.metrics.map(|m| m.samples).unwrap_or_default())
+                    .collect(),
+            ),
+            "diverged" => Column::Sparse(
+                rows.iter()
+                    .map(|r| r.metrics.map(|m| pybool(py, m.diverged)))
+                    .collect(),
+            ),
+            "samples" => Column::Sparse(
+                rows.iter()
+                    .map(|r| r.metrics.map(|m| pyint(py, m.samples)).transpose())
+                    .collect::<PyResult<_>>()?,
+            ),
+            _ => Column::Float(
+                rows.iter()
+                    .map(|r| r.metrics.and_then(|m| m.get(name)).unwrap_or(f64::NAN))
+                    .collect(),
+            ),
+        });
+    }
+    cols.push(Column::Text(rows.iter().map(|r| r.error.clone()).collect()));
+    let cols = cols
+        .into_iter()
+        .map(|c| c.into_py(py))
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok((names, cols))
+}
+
+/// The simulator's knowledge of the true plant, which a controller stepped
+/// from Python does not have: the lumped-uncertainty diagnostic is NaN.
+struct NoTruth;
+
+impl Truth for NoTruth {
+    fn lumped_uncertainty(&self, _u: f64, _u_eq: f64, _b_bar: f64) -> f64 {
+        f64::NAN
+    }
+}
+
+/// A scenario's controller in its sampled loop, whatever its kind.
+trait DynController {
+    fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4], out: &mut [f64]) -> (f64, u8);
+    fn signals(&self) -> &'static [Signal];
+    fn reset(&mut self);
+    fn faults(&self) -> u64;
+    fn weights(&self) -> Vec<f64>;
+}
+
+struct Sampled<C: Controller>(SampledController<C>);
+
+fn write_parts<C: Controller>(o: &Output<C::Parts>, out: &mut [f64]) -> (f64, u8) {
+    o.parts.write(out);
+    (o.u, o.flags)
+}
+
+impl<C: Controller> DynController for Sampled<C> {
+    fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4], out: &mut [f64]) -> (f64, u8) {
+        // As the simulator's sampled loop: the diagnostics are filled with
+        // the state the law saw, before the state advances.
+        let o = self
+            .0
+            .step_with(t, x, z, |c, s, o| c.annotate(s, o, &NoTruth));
+        write_parts::<C>(&o, out)
+    }
+
+    fn signals(&self) -> &'static [Signal] {
+        <C::Parts as Signals>::SIGNALS
+    }
+
+    fn reset(&mut self) {
+        self.0.reset();
+    }
+
+    fn faults(&self) -> u64 {
+        self.0.fault_count()
+    }
+
+    fn weights(&self) -> Vec<f64> {
+        self.0.controller().weights(self.0.state()).to_vec()
+    }
+}
+
+/// Builds the sampled controller of a built scenario.
+struct Build<'a>(&'a ehservo::scenario::Setup);
+
+impl Visit for Build<'_> {
+    type Out = Result<Box<dyn DynController>, String>;
+    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
+        let ctrl = cfg.build(&self.0.design).map_err(|e| e.to_string())?;
+        let sc = SampledController::with_policy(ctrl, self.0.sim.step, self.0.stages.policy)
+            .map_err(|e| e.to_string())?;
+        Ok(Box::new(Sampled(sc)))
+    }
+}
+
+/// A scenario's controller as a sampled-data system (the Rust half of
+/// `ehservo.Controller`). Unsendable: the controller types are plain data,
+/// but the kind-generic box does not say so; a controller object stays on
+/// the thread that made it (as a control loop does).
+#[pyclass(module = "ehservo._ehservo", unsendable)]
+struct RawController {
+    ctrl: Box<dyn DynController>,
+    reference: ehservo::scenario::AnyReference,
+    kind: &'static str,
+    dt: f64,
+    name: String,
+    buf: Vec<f64>,
+}
+
+fn as3(v: &[f64], what: &str) -> PyResult<[f64; 3]> {
+    v.try_into().map_err(|_| {
+        PyValueError::new_err(format!(
+            "{what}: expected 3 values (θ, θ̇, θ̈ in rad, rad/s, rad/s²), got {}",
+            v.len()
+        ))
+    })
+}
+
+fn as4(v: &[f64], what: &str) -> PyResult<[f64; 4]> {
+    v.try_into().map_err(|_| {
+        PyValueError::new_err(format!(
+            "{what}: expected 4 values (θd, θ̇d, θ̈d, θ⃛d in rad, rad/s, rad/s², rad/s³), got {}",
+            v.len()
+        ))
+    })
+}
+
+impl RawController {
+    fn output<'py>(&self, py: Python<'py>, u: f64, flags: u8) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("u", u)?;
+        d.set_item("flags", flags)?;
+        for (s, v) in self.ctrl.signals().iter().zip(&self.buf) {
+            d.set_item(s.key, *v)?;
+        }
+        Ok(d)
+    }
+}
+
+#[pymethods]
+impl RawController {
+    #[new]
+    #[pyo3(signature = (path, text, overrides))]
+    fn new(
+        py: Python<'_>,
+        path: Option<PathBuf>,
+        text: Option<String>,
+        overrides: Vec<String>,
+    ) -> PyResult<Self> {
+        let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
+        let setup = s.setup().map_err(|e| scenario_error(py, &e))?;
+        let ctrl = setup.controller.visit(Build(&setup)).map_err(|reason| {
+            scenario_error(
+                py,
+                &RsScenarioError {
+                    file: s.name.clone(),
+                    key: "controller".into(),
+                    line_col: None,
+                    reason,
+                },
+            )
+        })?;
+        let n = ctrl.signals().len();
+        Ok(Self {
+            ctrl,
+            reference: setup.reference.clone(),
+            kind: setup.controller.kind(),
+            dt: setup.sim.step,
+            name: s.name.clone(),
+            buf: vec![0.0; n],
+        })
+    }
+
+    /// One sample: the command and the law's parts; the state advances.
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        x: Vec<f64>,
+        z: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (x, z) = (as3(&x, "x")?, as4(&z, "z")?);
+        let (u, flags) = self.ctrl.step(t, x, z, &mut self.buf);
+        self.output(py, u, flags)
+    }
+
+    /// z = (θd, θ̇d, θ̈d, θ⃛d) of the scenario's reference at `t`.
+    fn reference(&self, t: f64) -> [f64; 4] {
+        self.reference.z(t)
+    }
+
+    /// Back to the initial state.
+    fn reset(&mut self) {
+        self.ctrl.reset();
+    }
+
+    /// (key, trace.csv column or "", unit, description) of each part.
+    fn signals(&self) -> Vec<(&'static str, &'static str, &'static str, &'static str)> {
+        self.ctrl
+            .signals()
+            .iter()
+            .map(|s| (s.key, s.column, s.unit, s.doc))
+            .collect()
+    }
+
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.kind
+    }
+
+    #[getter]
+    fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    #[getter]
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    #[getter]
+    fn faults(&self) -> u64 {
+        self.ctrl.faults()
+    }
+
+    /// The network weights W of the current state (empty without a network).
+    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.ctrl.weights())
+    }
+}
+
+/// Whether `p` is a regular file (the Python side's path/text choice).
+#[pyfunction]
+fn is_file(p: PathBuf) -> bool {
+    Path::new(&p).is_file()
+}
+
+#[pymodule]
+fn _ehservo(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("ScenarioError", m.py().get_type::<ScenarioError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(is_file, m)?)?;
+    m.add_class::<RawController>()?;
+    Ok(())
+}
