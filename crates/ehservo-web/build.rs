@@ -17,6 +17,10 @@ fn main() {
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.extension().is_some_and(|x| x == "toml"))
             .filter(|p| p.file_stem().is_some_and(|s| s != "manifest"))
+            .filter(|p| {
+                let text = std::fs::read_to_string(p).unwrap_or_default();
+                !text.lines().any(|l| l.trim() == "[[axis]]")
+            })
             .collect();
         files.sort();
         for path in files {

@@ -196,6 +196,16 @@ function loadScenario(id, kind, given) {
 }
 
 // ---------- running ----------
+// The trace's numbers come as one Float64Array, series after series.
+function unpack(run, flat) {
+  const n = run.points;
+  const at = (i) => flat.subarray(i * n, (i + 1) * n);
+  const idx = (k) => run.series.indexOf(k);
+  run.trace = { t: at(0), theta_d: at(1), theta: at(2), e: at(3), u: at(4),
+    signals: run.trace.signals.map((s) => ({ ...s, values: at(idx(s.key)) })) };
+  return run;
+}
+
 function schedule() {
   if (state.pending) return;
   state.pending = true;
@@ -226,6 +236,7 @@ function rerun() {
   const ov = JSON.stringify(overrides());
   const t0 = performance.now();
   const r = call(wasm.simulate, state.scenario, ov);
+  if (r.ok) unpack(r.value, wasm.last_trace());
   const t1 = performance.now();
   if (!r.ok) {
     const general = showErrors(r.errors);
@@ -289,9 +300,10 @@ function chartSpecs(run) {
   return specs;
 }
 
+// The width of a grid cell of #charts, less the figure's padding.
 function chartWidth() {
-  const w = $('charts').clientWidth;
-  return w > 900 ? Math.floor((w - 16) / 2) : w;
+  const cell = document.querySelector('#charts .chart');
+  return Math.max(300, (cell ? cell.clientWidth : $('charts').clientWidth) - 10);
 }
 
 function draw(run, force) {
@@ -308,11 +320,15 @@ function draw(run, force) {
   state.layoutKey = key;
   const box = $('charts');
   box.replaceChildren();
-  const width = chartWidth();
-  for (const s of specs) {
+  const cells = specs.map(() => {
     const cell = document.createElement('figure');
     cell.className = 'chart';
     box.append(cell);
+    return cell;
+  });
+  const width = chartWidth();
+  for (const [i, s] of specs.entries()) {
+    const cell = cells[i];
     const opts = {
       title: s.title,
       width,
@@ -364,6 +380,7 @@ function benchmark(n = 50) {
   for (let i = 0; i < n; i++) {
     const t0 = performance.now();
     const r = call(wasm.simulate, 'paper/fig2', ov);
+    if (r.ok) unpack(r.value, wasm.last_trace());
     times.push(performance.now() - t0);
     if (!r.ok) throw new Error('fig2 failed: ' + JSON.stringify(r.errors));
   }

@@ -57,11 +57,65 @@ pub fn catalog() -> String {
     json(&playground::catalog())
 }
 
+thread_local! {
+    static TRACE: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// A run as the page receives it: everything but the trace's numbers,
+/// which [`last_trace`] hands over as one `Float64Array` (formatting
+/// thousands of floats as JSON text would cost more than the run).
+#[derive(Serialize)]
+struct RunReply {
+    #[serde(flatten)]
+    run: playground::RunOut,
+    /// Samples per series in [`last_trace`].
+    points: usize,
+    /// The series of [`last_trace`], in order: `t`, `theta_d`, `theta`,
+    /// `e`, `u`, then the signals' keys.
+    series: Vec<&'static str>,
+}
+
 /// Runs scenario `id` with `overrides_json` (`[["controller.gamma1","200"],…]`):
-/// `{ok: true, value: RunOut}` or `{ok: false, errors: [{key, reason}]}`.
+/// `{ok: true, value: {name, kind, steps, metrics, divergence, trace: {signals}, points, series}}`
+/// or `{ok: false, errors: [{key, reason}]}`. The trace's numbers are then
+/// in [`last_trace`].
 #[wasm_bindgen]
 pub fn simulate(id: &str, overrides_json: &str) -> String {
-    reply(overrides(overrides_json).and_then(|o| playground::simulate(id, &o)))
+    reply(
+        overrides(overrides_json)
+            .and_then(|o| playground::simulate(id, &o))
+            .map(|mut run| {
+                let t = std::mem::take(&mut run.trace);
+                let points = t.t.len();
+                let mut series = vec!["t", "theta_d", "theta", "e", "u"];
+                let mut flat = Vec::with_capacity(points * (5 + t.signals.len()));
+                for v in [t.t, t.theta_d, t.theta, t.e, t.u] {
+                    flat.extend(v);
+                }
+                run.trace.signals = t
+                    .signals
+                    .into_iter()
+                    .map(|mut s| {
+                        series.push(s.info.key);
+                        flat.extend(std::mem::take(&mut s.values));
+                        s
+                    })
+                    .collect();
+                TRACE.with(|c| *c.borrow_mut() = flat);
+                RunReply {
+                    run,
+                    points,
+                    series,
+                }
+            }),
+    )
+}
+
+/// The trace of the last successful [`simulate`]: its series one after the
+/// other, `points` values each.
+#[wasm_bindgen]
+pub fn last_trace() -> Vec<f64> {
+    TRACE.with(|c| c.borrow().clone())
 }
 
 /// The set-up as a scenario file: `{ok: true, value: "…toml…"}` or the

@@ -29,7 +29,7 @@ pub struct BaseScenario {
 }
 
 /// Every scenario of `scenarios/paper` (but the manifest) and
-/// `scenarios/realistic`, embedded at build time (see `build.rs`).
+/// `scenarios/realistic` (but the study files), embedded at build time (see `build.rs`).
 pub static SCENARIOS: &[BaseScenario] = include!(concat!(env!("OUT_DIR"), "/scenarios.rs"));
 
 /// The uncertainty keys the page offers, with their slider ranges. (A
@@ -319,6 +319,7 @@ pub struct SignalTrace {
     #[serde(flatten)]
     pub info: SignalInfo,
     /// Its values at the kept samples.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub values: Vec<f64>,
 }
 
@@ -326,14 +327,19 @@ pub struct SignalTrace {
 #[derive(Debug, Clone, Serialize, Default)]
 pub struct Trace {
     /// t (s).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub t: Vec<f64>,
     /// θd (deg).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub theta_d: Vec<f64>,
     /// θ (deg).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub theta: Vec<f64>,
     /// e = θd − θ (deg).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub e: Vec<f64>,
     /// u (V).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub u: Vec<f64>,
     /// The controller's signals.
     pub signals: Vec<SignalTrace>,
@@ -556,7 +562,11 @@ mod tests {
             for e in std::fs::read_dir(repo(&format!("scenarios/{group}"))).unwrap() {
                 let p = e.unwrap().path();
                 let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
-                if p.extension().is_some_and(|x| x == "toml") && stem != "manifest" {
+                // Study files sit beside the scenarios: they do not load as one.
+                if p.extension().is_some_and(|x| x == "toml")
+                    && stem != "manifest"
+                    && Scenario::load(&p, &[]).is_ok()
+                {
                     on_disk.push(format!("{group}/{stem}"));
                 }
             }
