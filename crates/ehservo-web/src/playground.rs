@@ -247,7 +247,11 @@ pub fn resolve(
             "scenario",
             format!(
                 "unknown scenario `{id}` (known: {})",
-                SCENARIOS.iter().map(|b| b.id).collect::<Vec<_>>().join(", ")
+                SCENARIOS
+                    .iter()
+                    .map(|b| b.id)
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         )]
     })?;
@@ -259,7 +263,10 @@ pub fn resolve(
         .find(|(k, _)| k.trim() == "controller.kind")
         .map(|(_, v)| v.trim().to_string())
         .unwrap_or_else(|| base.controller.kind().to_string());
-    let kind_value = ("controller.kind".to_string(), toml::Value::String(kind.clone()));
+    let kind_value = (
+        "controller.kind".to_string(),
+        toml::Value::String(kind.clone()),
+    );
     base.with_values(std::slice::from_ref(&kind_value))
         .map_err(|e| vec![e.into()])?;
     let mut errors = Vec::new();
@@ -445,7 +452,9 @@ pub fn scenario_toml(id: &str, overrides: &[(String, String)]) -> Result<String,
     if scenario.controller.kind() != base_kind {
         flags.push(format!("controller.kind={}", scenario.controller.kind()));
     }
-    if scenario.controller.kind() != base_kind && keys(base_kind) == keys(scenario.controller.kind()) {
+    if scenario.controller.kind() != base_kind
+        && keys(base_kind) == keys(scenario.controller.kind())
+    {
         // nnvsc, vsc and vsc-sat share one table: the base's values carry over.
         set_path(
             &mut table,
@@ -542,7 +551,9 @@ mod tests {
     }
 
     fn repo(path: &str) -> std::path::PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../..")
+            .join(path)
     }
 
     /// The CLI's own path: the file loaded with `--set` flags, run by
@@ -636,7 +647,10 @@ mod tests {
         assert_eq!(e[1].key, "controller.eta");
         assert!(e[1].reason.contains("empty"), "{e:?}");
         let e = errs(&[("controller.gamma1", "1e9")]);
-        assert!(e[0].reason.contains("outside") && e[0].reason.contains("10000"), "{e:?}");
+        assert!(
+            e[0].reason.contains("outside") && e[0].reason.contains("10000"),
+            "{e:?}"
+        );
         // Fine alone, not together: the scenario's validator (Assumption A1).
         let e = errs(&[("uncertainty.b_bias", "-1"), ("uncertainty.b_random", "1")]);
         assert_eq!(e[0].key, "uncertainty.b_bias");
@@ -649,9 +663,18 @@ mod tests {
     fn the_downloaded_file_runs_to_the_same_result() {
         for (id, pairs) in [
             ("paper/fig2", vec![]),
-            ("paper/fig2", vec![("controller.gamma1", "200"), ("uncertainty.a_bias", "0.4")]),
-            ("paper/gamma1-200", vec![("controller.kind", "vsc-sat"), ("controller.mu", "2")]),
-            ("realistic/base", vec![("controller.kind", "pid"), ("controller.kp", "30")]),
+            (
+                "paper/fig2",
+                vec![("controller.gamma1", "200"), ("uncertainty.a_bias", "0.4")],
+            ),
+            (
+                "paper/gamma1-200",
+                vec![("controller.kind", "vsc-sat"), ("controller.mu", "2")],
+            ),
+            (
+                "realistic/base",
+                vec![("controller.kind", "pid"), ("controller.kp", "30")],
+            ),
         ] {
             let o = set(&pairs);
             let text = scenario_toml(id, &o).unwrap();
@@ -665,7 +688,8 @@ mod tests {
             }
         }
         // vsc-sat shares nnvsc's table: gamma1-200's γ1 carries over.
-        let text = scenario_toml("paper/gamma1-200", &set(&[("controller.kind", "vsc-sat")])).unwrap();
+        let text =
+            scenario_toml("paper/gamma1-200", &set(&[("controller.kind", "vsc-sat")])).unwrap();
         assert!(text.contains("gamma1 = 200"), "{text}");
         assert!(scenario_toml("paper/fig2", &set(&[("controller.gamma1", "x")])).is_err());
     }
