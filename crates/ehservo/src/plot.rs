@@ -10,10 +10,12 @@ use plotters::coord::ranged1d::{BoldPoints, Ranged};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+#[cfg(not(target_arch = "wasm32"))]
 use plotters::style::FontStyle;
 use std::path::Path;
 use std::sync::Once;
 
+#[cfg(not(target_arch = "wasm32"))]
 const FONT: &[u8] = include_bytes!("../../../assets/DejaVuSans.ttf");
 const FAMILY: &str = "sans-serif";
 
@@ -21,8 +23,25 @@ fn ensure_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The font is part of the source tree: failure here is a build defect.
+        // (plotters registers fonts only off wasm32, where nothing is drawn.)
+        #[cfg(not(target_arch = "wasm32"))]
         let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
     });
+}
+
+/// A PNG file's backend. plotters writes bitmap files only off wasm32 (the
+/// browser playground, crates/ehservo-web, draws with uPlot instead).
+#[cfg(not(target_arch = "wasm32"))]
+fn bitmap(path: &Path, size: (u32, u32)) -> Result<BitMapBackend<'_>> {
+    Ok(BitMapBackend::new(path, size))
+}
+
+#[cfg(target_arch = "wasm32")]
+fn bitmap(path: &Path, _size: (u32, u32)) -> Result<BitMapBackend<'_>> {
+    Err(anyhow!(
+        "{}: PNG files are not written on wasm32 (plotters has no bitmap file backend there)",
+        path.display()
+    ))
 }
 
 /// How a series is drawn.
@@ -708,7 +727,7 @@ where
 impl Figure {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = BitMapBackend::new(path, self.size).into_drawing_area();
+        let root = bitmap(path, self.size)?.into_drawing_area();
         draw_figure(root, self, true).with_context(|| format!("rendering {}", path.display()))
     }
 
@@ -892,7 +911,7 @@ where
 impl HeatMap {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = BitMapBackend::new(path, self.size).into_drawing_area();
+        let root = bitmap(path, self.size)?.into_drawing_area();
         draw_heatmap(root, self).with_context(|| format!("rendering {}", path.display()))
     }
 
@@ -1058,7 +1077,7 @@ where
 impl Histogram {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = BitMapBackend::new(path, self.size).into_drawing_area();
+        let root = bitmap(path, self.size)?.into_drawing_area();
         draw_histogram(root, self).with_context(|| format!("rendering {}", path.display()))
     }
 

@@ -19,6 +19,7 @@ pub const EXIT_CODE: i32 = 130;
 
 /// A live staging directory and the folders made for it, deepest first.
 #[derive(Debug)]
+#[cfg_attr(not(feature = "cli"), allow(dead_code))] // read by the handler
 struct Entry {
     id: u64,
     tmp: PathBuf,
@@ -62,6 +63,7 @@ impl Registry {
     }
 
     /// Removes every listed directory from the disk and empties the list.
+    #[cfg_attr(not(feature = "cli"), allow(dead_code))]
     fn clean_all(&mut self) {
         for e in self.live.drain(..) {
             remove_tree(&e.tmp);
@@ -94,6 +96,7 @@ pub(crate) fn remove_created(created: &[PathBuf]) {
 
 /// Installs the handler for `SIGINT`, `SIGTERM` and `SIGHUP`: remove every
 /// live staging directory, then exit with [`EXIT_CODE`]. Call once, early.
+#[cfg(feature = "cli")]
 pub fn install() -> Result<(), ctrlc::Error> {
     ctrlc::set_handler(|| {
         // Waits for a commit in progress; never released: the process ends.
