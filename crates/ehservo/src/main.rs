@@ -264,6 +264,26 @@ fn closed_stdout(e: &anyhow::Error) -> bool {
 
 /// The scenario's name as the folder of its default output, `out/<name>`:
 /// one plain name, never a path that leads elsewhere.
+/// `--threads`, when given, within 1..=MAX_THREADS.
+fn check_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(t) = threads {
+        if !(1..=MAX_THREADS).contains(&t) {
+            ehservo::bad_input!("--threads {t}: must be between 1 and {MAX_THREADS}");
+        }
+    }
+    Ok(())
+}
+
+/// A progress bar of `n` steps on a terminal, unless quiet; hidden otherwise.
+fn progress_bar(n: u64, quiet: bool) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !quiet && std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(n)
+    } else {
+        indicatif::ProgressBar::hidden()
+    }
+}
+
 fn default_out(name: &str) -> Result<PathBuf> {
     if name.is_empty() || name == "." || name.contains("..") || name.contains(['/', '\\', '\0']) {
         ehservo::bad_input!(
@@ -421,11 +441,7 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             resume,
         } => {
             use std::io::IsTerminal;
-            if let Some(t) = threads {
-                if !(1..=MAX_THREADS).contains(&t) {
-                    ehservo::bad_input!("--threads {t}: must be between 1 and {MAX_THREADS}");
-                }
-            }
+            check_threads(threads)?;
             let plan = ehservo::study::Plan::load(&study)?;
             let shard = match shard {
                 Some(s) => Some(
@@ -501,19 +517,10 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             quiet,
             no_plot,
         } => {
-            use std::io::IsTerminal;
-            if let Some(t) = threads {
-                if !(1..=MAX_THREADS).contains(&t) {
-                    ehservo::bad_input!("--threads {t}: must be between 1 and {MAX_THREADS}");
-                }
-            }
+            check_threads(threads)?;
             let tune = ehservo::tune::Tune::load(&file)?;
             output::probe_destination(&out)?;
-            let pb = if !quiet && std::io::stderr().is_terminal() {
-                indicatif::ProgressBar::new(tune.file.budget)
-            } else {
-                indicatif::ProgressBar::hidden()
-            };
+            let pb = progress_bar(tune.file.budget, quiet);
             let start = Instant::now();
             let r = ehservo::tune::tune_to_dir(&tune, &out, threads, &pb, !no_plot)?;
             pb.finish_and_clear();
@@ -549,19 +556,10 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             quiet,
             no_plot,
         } => {
-            use std::io::IsTerminal;
-            if let Some(t) = threads {
-                if !(1..=MAX_THREADS).contains(&t) {
-                    ehservo::bad_input!("--threads {t}: must be between 1 and {MAX_THREADS}");
-                }
-            }
+            check_threads(threads)?;
             let league = ehservo::league::League::load(&file)?;
             output::probe_destination(&out)?;
-            let pb = if !quiet && std::io::stderr().is_terminal() {
-                indicatif::ProgressBar::new(league.work())
-            } else {
-                indicatif::ProgressBar::hidden()
-            };
+            let pb = progress_bar(league.work(), quiet);
             let start = Instant::now();
             let r = ehservo::league::league_to_dir(&league, &out, threads, &pb, !no_plot)?;
             pb.finish_and_clear();
