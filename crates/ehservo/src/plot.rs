@@ -1193,7 +1193,7 @@ where
 impl Bars {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = BitMapBackend::new(path, self.size).into_drawing_area();
+        let root = bitmap(path, self.size)?.into_drawing_area();
         draw_bars(root, self).with_context(|| format!("rendering {}", path.display()))
     }
 
