@@ -315,10 +315,152 @@ fn setup_lines(l: &League) -> Vec<String> {
     v
 }
 
-/// league.md.
-pub fn markdown(l: &League, r: &LeagueResult, rows: &[Row], figures: bool) -> String {
+/// A table of the report, rendered to Markdown or HTML alike.
+struct Table {
+    head: Vec<String>,
+    /// Cells: text and an HTML attribute (e.g. ` class="best"`; Markdown
+    /// has none).
+    rows: Vec<Vec<(String, &'static str)>>,
+}
+
+impl Table {
+    fn markdown(&self) -> String {
+        let mut s = String::from("|");
+        for h in &self.head {
+            let _ = write!(s, " {h} |");
+        }
+        s.push_str("\n|");
+        s.push_str(&"---|".repeat(self.head.len()));
+        s.push('\n');
+        for row in &self.rows {
+            s.push('|');
+            for (c, _) in row {
+                let _ = write!(s, " {c} |");
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    fn html(&self) -> String {
+        let mut s = String::from("<table><tr>");
+        for h in &self.head {
+            let _ = write!(s, "<th>{}</th>", esc(h));
+        }
+        s.push_str("</tr>\n");
+        for row in &self.rows {
+            s.push_str("<tr>");
+            for (c, attr) in row {
+                let _ = write!(s, "<td{attr}>{}</td>", esc(c));
+            }
+            s.push_str("</tr>\n");
+        }
+        s.push_str("</table>\n");
+        s
+    }
+}
+
+/// Worst e_max per scenario, the mean rank and the margin, best first; the
+/// best of each scenario and the unbounded marked (for HTML).
+fn standings_table(l: &League, r: &LeagueResult, rows: &[Row]) -> Table {
     let ns = l.cases.len();
     let rk = ranks(l, rows);
+    let mut head: Vec<String> = ["controller", "kind", "parameters"]
+        .map(String::from)
+        .to_vec();
+    head.extend(l.cases.iter().map(|c| c.name.clone()));
+    head.push("mean rank".into());
+    if l.margin.is_some() {
+        head.push("margin".into());
+    }
+    let rows = order(l, rows)
+        .into_iter()
+        .map(|ci| {
+            let st = &r.standings[ci];
+            let mut cells = vec![
+                (st.name.clone(), ""),
+                (st.kind.to_string(), ""),
+                (st.parameters.clone(), ""),
+            ];
+            for si in 0..ns {
+                let row = &rows[ci * ns + si];
+                let attr = if row.e_max_worst_deg.is_none() {
+                    " class=\"bad\""
+                } else if rk[ci].0[si] == 1 {
+                    " class=\"best\""
+                } else {
+                    ""
+                };
+                cells.push((worst(row), attr));
+            }
+            cells.push((format!("{:.2}", rk[ci].1), ""));
+            if l.margin.is_some() {
+                cells.push((rows[ci * ns].margin.clone(), ""));
+            }
+            cells
+        })
+        .collect();
+    Table { head, rows }
+}
+
+/// Each controller's parameters, best first.
+fn params_table(l: &League, r: &LeagueResult, rows: &[Row]) -> Table {
+    Table {
+        head: vec!["controller".into(), "parameters".into()],
+        rows: order(l, rows)
+            .into_iter()
+            .map(|ci| {
+                vec![
+                    (r.standings[ci].name.clone(), ""),
+                    (params_text(l, r, ci), " style=\"text-align:left\""),
+                ]
+            })
+            .collect(),
+    }
+}
+
+/// Every metric of every controller on scenario `si`, best first.
+fn scenario_table(l: &League, r: &LeagueResult, rows: &[Row], si: usize) -> Table {
+    let ns = l.cases.len();
+    let rk = ranks(l, rows);
+    let mut idx: Vec<usize> = (0..r.standings.len()).collect();
+    idx.sort_by_key(|&ci| rk[ci].0[si]);
+    Table {
+        head: [
+            "controller",
+            "e_max worst (°)",
+            "e_max mean (°)",
+            "e_rms mean (°)",
+            "chattering",
+            "energy (V²·s)",
+            "u_max worst (V)",
+            "unbounded",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: idx
+            .into_iter()
+            .map(|ci| {
+                let row = &rows[ci * ns + si];
+                [
+                    row.controller.clone(),
+                    worst(row),
+                    num(row.e_max_mean_deg),
+                    num(row.e_rms_mean_deg),
+                    num(row.chattering_mean),
+                    num(row.energy_mean_v2s),
+                    num(row.u_max_worst_v),
+                    format!("{}/{}", row.unbounded + row.refused, row.draws),
+                ]
+                .map(|c| (c, ""))
+                .to_vec()
+            })
+            .collect(),
+    }
+}
+
+/// league.md.
+pub fn markdown(l: &League, r: &LeagueResult, rows: &[Row], figures: bool) -> String {
     let mut s = format!("# League `{}`\n\n", l.file.name);
     if !l.file.description.is_empty() {
         let _ = writeln!(s, "{}\n", l.file.description);
@@ -333,64 +475,13 @@ pub fn markdown(l: &League, r: &LeagueResult, rows: &[Row], figures: bool) -> St
     for line in setup_lines(l) {
         let _ = writeln!(s, "- {line}");
     }
-    s.push_str("\n## Standings\n\nWorst e_max after the transient (°) on each scenario, over its draws; controllers ordered by their mean rank over the scenarios (1 = best; unbounded ranks last).\n\n| controller | kind | parameters |");
-    for c in &l.cases {
-        let _ = write!(s, " {} |", c.name);
-    }
-    s.push_str(" mean rank |");
-    if l.margin.is_some() {
-        s.push_str(" margin |");
-    }
-    s.push_str("\n|---|---|---|");
-    for _ in 0..ns + 1 + usize::from(l.margin.is_some()) {
-        s.push_str("---|");
-    }
-    s.push('\n');
-    for ci in order(l, rows) {
-        let st = &r.standings[ci];
-        let _ = write!(s, "| {} | {} | {} |", st.name, st.kind, st.parameters);
-        for si in 0..ns {
-            let _ = write!(s, " {} |", worst(&rows[ci * ns + si]));
-        }
-        let _ = write!(s, " {:.2} |", rk[ci].1);
-        if l.margin.is_some() {
-            let _ = write!(s, " {} |", rows[ci * ns].margin);
-        }
-        s.push('\n');
-    }
-    s.push_str("\n## Parameters\n\n| controller | parameters |\n|---|---|\n");
-    for ci in order(l, rows) {
-        let _ = writeln!(
-            s,
-            "| {} | {} |",
-            r.standings[ci].name,
-            params_text(l, r, ci)
-        );
-    }
+    s.push_str("\n## Standings\n\nWorst e_max after the transient (°) on each scenario, over its draws; controllers ordered by their mean rank over the scenarios (1 = best; unbounded ranks last).\n\n");
+    s.push_str(&standings_table(l, r, rows).markdown());
+    s.push_str("\n## Parameters\n\n");
+    s.push_str(&params_table(l, r, rows).markdown());
     for (si, c) in l.cases.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "\n## Scenario `{}`\n\n| controller | e_max worst (°) | e_max mean (°) | e_rms mean (°) | chattering | energy (V²·s) | u_max worst (V) | unbounded |\n|---|---|---|---|---|---|---|---|",
-            c.name
-        );
-        let mut idx: Vec<usize> = (0..r.standings.len()).collect();
-        idx.sort_by_key(|&ci| rk[ci].0[si]);
-        for ci in idx {
-            let row = &rows[ci * ns + si];
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {} | {} | {} | {}/{} |",
-                row.controller,
-                worst(row),
-                num(row.e_max_mean_deg),
-                num(row.e_rms_mean_deg),
-                num(row.chattering_mean),
-                num(row.energy_mean_v2s),
-                num(row.u_max_worst_v),
-                row.unbounded + row.refused,
-                row.draws
-            );
-        }
+        let _ = write!(s, "\n## Scenario `{}`\n\n", c.name);
+        s.push_str(&scenario_table(l, r, rows, si).markdown());
     }
     if figures {
         s.push_str("\n## Figures\n\n![accuracy against chattering](pareto.svg)\n\n![worst e_max per scenario](bars.svg)\n");
@@ -407,8 +498,6 @@ fn esc(s: &str) -> String {
 
 /// league.html: the same tables, and the figures inline (one file to send).
 pub fn html(l: &League, r: &LeagueResult, rows: &[Row], svgs: Option<(String, String)>) -> String {
-    let ns = l.cases.len();
-    let rk = ranks(l, rows);
     let mut s = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>League {}</title>\n<style>body{{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}}table{{border-collapse:collapse;margin:1em 0}}th,td{{border:1px solid #ccc;padding:4px 8px;text-align:right}}th{{background:#f0f0f0}}td:first-child,th:first-child{{text-align:left}}td.best{{font-weight:bold;background:#e8f4e8}}td.bad{{color:#b00}}svg{{max-width:100%;height:auto}}</style></head><body>\n<h1>League <code>{}</code></h1>\n",
         esc(&l.file.name),
@@ -426,53 +515,10 @@ pub fn html(l: &League, r: &LeagueResult, rows: &[Row], svgs: Option<(String, St
     for line in setup_lines(l) {
         let _ = writeln!(s, "<li>{}</li>", esc(&line));
     }
-    s.push_str("</ul>\n<h2>Standings</h2><p>Worst e_max after the transient (°) on each scenario, over its draws; ordered by mean rank (1 = best; unbounded last). The best of each column is marked.</p>\n<table><tr><th>controller</th><th>kind</th><th>parameters</th>");
-    for c in &l.cases {
-        let _ = write!(s, "<th>{}</th>", esc(&c.name));
-    }
-    s.push_str("<th>mean rank</th>");
-    if l.margin.is_some() {
-        s.push_str("<th>margin</th>");
-    }
-    s.push_str("</tr>\n");
-    for ci in order(l, rows) {
-        let st = &r.standings[ci];
-        let _ = write!(
-            s,
-            "<tr><td>{}</td><td>{}</td><td>{}</td>",
-            esc(&st.name),
-            st.kind,
-            esc(&st.parameters)
-        );
-        for si in 0..ns {
-            let row = &rows[ci * ns + si];
-            let class = if row.e_max_worst_deg.is_none() {
-                " class=\"bad\""
-            } else if rk[ci].0[si] == 1 {
-                " class=\"best\""
-            } else {
-                ""
-            };
-            let _ = write!(s, "<td{class}>{}</td>", esc(&worst(row)));
-        }
-        let _ = write!(s, "<td>{:.2}</td>", rk[ci].1);
-        if l.margin.is_some() {
-            let _ = write!(s, "<td>{}</td>", esc(&rows[ci * ns].margin));
-        }
-        s.push_str("</tr>\n");
-    }
-    s.push_str(
-        "</table>\n<h2>Parameters</h2><table><tr><th>controller</th><th>parameters</th></tr>\n",
-    );
-    for ci in order(l, rows) {
-        let _ = writeln!(
-            s,
-            "<tr><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
-            esc(&r.standings[ci].name),
-            esc(&params_text(l, r, ci))
-        );
-    }
-    s.push_str("</table>\n");
+    s.push_str("</ul>\n<h2>Standings</h2><p>Worst e_max after the transient (°) on each scenario, over its draws; ordered by mean rank (1 = best; unbounded last). The best of each column is marked.</p>\n");
+    s.push_str(&standings_table(l, r, rows).html());
+    s.push_str("<h2>Parameters</h2>");
+    s.push_str(&params_table(l, r, rows).html());
     if let Some((pareto, bars)) = &svgs {
         let _ = writeln!(
             s,
@@ -482,30 +528,8 @@ pub fn html(l: &League, r: &LeagueResult, rows: &[Row], svgs: Option<(String, St
         );
     }
     for (si, c) in l.cases.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "<h2>Scenario <code>{}</code></h2><table><tr><th>controller</th><th>e_max worst (°)</th><th>e_max mean (°)</th><th>e_rms mean (°)</th><th>chattering</th><th>energy (V²·s)</th><th>u_max worst (V)</th><th>unbounded</th></tr>",
-            esc(&c.name)
-        );
-        let mut idx: Vec<usize> = (0..r.standings.len()).collect();
-        idx.sort_by_key(|&ci| rk[ci].0[si]);
-        for ci in idx {
-            let row = &rows[ci * ns + si];
-            let _ = writeln!(
-                s,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}/{}</td></tr>",
-                esc(&row.controller),
-                esc(&worst(row)),
-                num(row.e_max_mean_deg),
-                num(row.e_rms_mean_deg),
-                num(row.chattering_mean),
-                num(row.energy_mean_v2s),
-                num(row.u_max_worst_v),
-                row.unbounded + row.refused,
-                row.draws
-            );
-        }
-        s.push_str("</table>\n");
+        let _ = write!(s, "<h2>Scenario <code>{}</code></h2>", esc(&c.name));
+        s.push_str(&scenario_table(l, r, rows, si).html());
     }
     s.push_str("</body></html>\n");
     s
