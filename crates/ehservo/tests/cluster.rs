@@ -213,18 +213,20 @@ fn sigterm_in_mid_sweep_leaves_no_output_and_no_staging_folder() {
     let tmp = tempfile::tempdir().unwrap();
     // Three whole shards beside it, which the signal must leave alone.
     shards(tmp.path());
-    // A shard long enough to be still running when the signal comes: runs
-    // of 20 s at 0.1 ms, on one thread.
+    // A shard that cannot end on its own within the test: 1000 runs of 20 s
+    // at 0.1 ms on one thread (a machine's speed must not decide whether
+    // the signal comes mid-sweep; a fixed sleep once did).
     let long = tmp.path().join("long.toml");
     std::fs::write(
         &long,
         format!(
-            "name = \"c\"\nbase = \"{}\"\nseed = 3\nset = [\"simulation.horizon=20\", \"simulation.step=0.0001\"]\n[monte_carlo]\nruns = 6\n",
+            "name = \"c\"\nbase = \"{}\"\nseed = 3\nset = [\"simulation.horizon=20\", \"simulation.step=0.0001\"]\n[monte_carlo]\nruns = 3000\n",
             fig8()
         ),
     )
     .unwrap();
-    let out = tmp.path().join("shards/long");
+    let shards_dir = tmp.path().join("shards");
+    let out = shards_dir.join("long");
     let mut child = ehservo()
         .arg("sweep")
         .arg(&long)
@@ -235,6 +237,17 @@ fn sigterm_in_mid_sweep_leaves_no_output_and_no_staging_folder() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
+    // The signal handler is installed first thing in main; half a second
+    // in, the shard is running its first runs (its outputs are staged only
+    // once they are all done, so nothing may be on disk yet).
+    let entries = || -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(&shards_dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
     std::thread::sleep(Duration::from_millis(500));
     assert!(
         child.try_wait().unwrap().is_none(),
@@ -247,13 +260,19 @@ fn sigterm_in_mid_sweep_leaves_no_output_and_no_staging_folder() {
         .status()
         .unwrap();
     assert!(k.success());
-    assert_eq!(child.wait().unwrap().code(), Some(130));
-    assert!(start.elapsed() < Duration::from_secs(10));
+    // Wait at most 10 s for it to stop; past that, kill it and fail.
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(10) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("the shard was still running 10 s after SIGTERM");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(status.code(), Some(130));
     // No output, no staging folder beside the shards.
-    let mut left: Vec<String> = std::fs::read_dir(tmp.path().join("shards"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    left.sort();
-    assert_eq!(left, ["0", "1", "2"]);
+    assert_eq!(entries(), ["0", "1", "2"]);
 }

@@ -153,12 +153,13 @@ fn a_full_stdout_is_one_line_and_exit_1() {
     assert_no_leftovers(tmp.path());
 }
 
-/// A scenario that runs for many seconds (2 million steps).
+/// A scenario that runs for many seconds even on a fast machine (20 million
+/// steps; it is always interrupted long before).
 fn long_scenario(dir: &Path) -> PathBuf {
     write(
         dir,
         "long.toml",
-        "name = \"long\"\n[simulation]\nhorizon = 200.0\nstep = 0.0001\n[output]\ndecimate = 100\nplot = false\n",
+        "name = \"long\"\n[simulation]\nhorizon = 2000.0\nstep = 0.0001\n[output]\ndecimate = 100\nplot = false\n",
     )
 }
 
