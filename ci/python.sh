@@ -54,6 +54,9 @@ timeout 600 "$vpy" -m pip install -q --disable-pip-version-check \
 # The example's test needs matplotlib; without it that test skips.
 timeout 300 "$vpy" -m pip install -q --disable-pip-version-check matplotlib \
   || echo "note: pip could not install matplotlib: the example's test will skip"
+# Controller.nlsys's tests and example need python-control.
+timeout 300 "$vpy" -m pip install -q --disable-pip-version-check control \
+  || echo "note: pip could not install control (python-control): the nlsys tests will skip"
 
 echo "== maturin build --profile dev"
 start=$(date +%s)

@@ -3,7 +3,7 @@
 //! Thin on purpose: every number comes from the same functions the command
 //! line calls (`Scenario::load` with `--set` overrides, `run::run_observed`,
 //! `output::TraceLayout`, `study::execute`/`study::sweep`,
-//! `SampledController::step_with`), so the Python results are the CLI's
+//! `stepper::ControllerStepper`, as the C ABI and the FMU), so the Python results are the CLI's
 //! bits. The Python side (`python/ehservo/__init__.py`) turns the keyword
 //! overrides into `key=value` strings and the columns into a DataFrame.
 //!
@@ -12,11 +12,9 @@
 
 use ehservo::metrics::Metrics;
 use ehservo::output::TraceLayout;
-use ehservo::scenario::{ControllerConfig, Scenario, ScenarioError as RsScenarioError, Visit};
+use ehservo::scenario::{Scenario, ScenarioError as RsScenarioError};
+use ehservo::stepper::ControllerStepper;
 use ehservo::study::Plan;
-use ehservo_core::control::{Controller, Output, Signal, Signals, Truth};
-use ehservo_core::reference::Reference;
-use ehservo_core::sampled::SampledController;
 use numpy::PyArray1;
 use pyo3::create_exception;
 use pyo3::exceptions::{PyOSError, PyValueError};
@@ -371,82 +369,15 @@ fn sweep<'py>(
     Ok((names, cols))
 }
 
-/// The simulator's knowledge of the true plant, which a controller stepped
-/// from Python does not have: the lumped-uncertainty diagnostic is NaN.
-struct NoTruth;
-
-impl Truth for NoTruth {
-    fn lumped_uncertainty(&self, _u: f64, _u_eq: f64, _b_bar: f64) -> f64 {
-        f64::NAN
-    }
-}
-
-/// A scenario's controller in its sampled loop, whatever its kind.
-trait DynController {
-    fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4], out: &mut [f64]) -> (f64, u8);
-    fn signals(&self) -> &'static [Signal];
-    fn reset(&mut self);
-    fn faults(&self) -> u64;
-    fn weights(&self) -> Vec<f64>;
-}
-
-struct Sampled<C: Controller>(SampledController<C>);
-
-fn write_parts<C: Controller>(o: &Output<C::Parts>, out: &mut [f64]) -> (f64, u8) {
-    o.parts.write(out);
-    (o.u, o.flags)
-}
-
-impl<C: Controller> DynController for Sampled<C> {
-    fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4], out: &mut [f64]) -> (f64, u8) {
-        // As the simulator's sampled loop: the diagnostics are filled with
-        // the state the law saw, before the state advances.
-        let o = self
-            .0
-            .step_with(t, x, z, |c, s, o| c.annotate(s, o, &NoTruth));
-        write_parts::<C>(&o, out)
-    }
-
-    fn signals(&self) -> &'static [Signal] {
-        <C::Parts as Signals>::SIGNALS
-    }
-
-    fn reset(&mut self) {
-        self.0.reset();
-    }
-
-    fn faults(&self) -> u64 {
-        self.0.fault_count()
-    }
-
-    fn weights(&self) -> Vec<f64> {
-        self.0.controller().weights(self.0.state()).to_vec()
-    }
-}
-
-/// Builds the sampled controller of a built scenario.
-struct Build<'a>(&'a ehservo::scenario::Setup);
-
-impl Visit for Build<'_> {
-    type Out = Result<Box<dyn DynController>, String>;
-    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
-        let ctrl = cfg.build(&self.0.design).map_err(|e| e.to_string())?;
-        let sc = SampledController::with_policy(ctrl, self.0.sim.step, self.0.stages.policy)
-            .map_err(|e| e.to_string())?;
-        Ok(Box::new(Sampled(sc)))
-    }
-}
-
 /// A scenario's controller as a sampled-data system (the Rust half of
-/// `ehservo.Controller`). Unsendable: the controller types are plain data,
-/// but the kind-generic box does not say so; a controller object stays on
-/// the thread that made it (as a control loop does).
+/// `ehservo.Controller`): `ehservo::stepper::ControllerStepper`, which the
+/// C ABI and the FMU hold too. Unsendable: the controller types are plain
+/// data, but the kind-generic box does not say so; a controller object
+/// stays on the thread that made it (as a control loop does).
 #[pyclass(module = "ehservo._ehservo", unsendable)]
 struct RawController {
-    ctrl: Box<dyn DynController>,
-    reference: ehservo::scenario::AnyReference,
+    ctrl: ControllerStepper,
     kind: &'static str,
-    dt: f64,
     name: String,
     buf: Vec<f64>,
 }
@@ -492,24 +423,16 @@ impl RawController {
         overrides: Vec<String>,
     ) -> PyResult<Self> {
         let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
-        let setup = s.setup().map_err(|e| scenario_error(py, &e))?;
-        let ctrl = setup.controller.visit(Build(&setup)).map_err(|reason| {
-            scenario_error(
-                py,
-                &RsScenarioError {
-                    file: s.name.clone(),
-                    key: "controller".into(),
-                    line_col: None,
-                    reason,
-                },
-            )
-        })?;
+        let kind = s
+            .setup()
+            .map_err(|e| scenario_error(py, &e))?
+            .controller
+            .kind();
+        let ctrl = ControllerStepper::new(&s).map_err(|e| scenario_error(py, &e))?;
         let n = ctrl.signals().len();
         Ok(Self {
             ctrl,
-            reference: setup.reference.clone(),
-            kind: setup.controller.kind(),
-            dt: setup.sim.step,
+            kind,
             name: s.name.clone(),
             buf: vec![0.0; n],
         })
@@ -524,13 +447,20 @@ impl RawController {
         z: Vec<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (x, z) = (as3(&x, "x")?, as4(&z, "z")?);
-        let (u, flags) = self.ctrl.step(t, x, z, &mut self.buf);
-        self.output(py, u, flags)
+        let o = self.ctrl.step_parts(t, x, z, &mut self.buf);
+        self.output(py, o.u, o.flags)
+    }
+
+    /// The command `step` would return now, without advancing the state.
+    fn peek(&self, t: f64, x: Vec<f64>, z: Vec<f64>) -> PyResult<(f64, u8)> {
+        let (x, z) = (as3(&x, "x")?, as4(&z, "z")?);
+        let o = self.ctrl.peek(t, x, z);
+        Ok((o.u, o.flags))
     }
 
     /// z = (θd, θ̇d, θ̈d, θ⃛d) of the scenario's reference at `t`.
     fn reference(&self, t: f64) -> [f64; 4] {
-        self.reference.z(t)
+        self.ctrl.reference(t)
     }
 
     /// Back to the initial state.
@@ -554,7 +484,7 @@ impl RawController {
 
     #[getter]
     fn dt(&self) -> f64 {
-        self.dt
+        self.ctrl.period()
     }
 
     #[getter]
@@ -569,7 +499,7 @@ impl RawController {
 
     /// The network weights W of the current state (empty without a network).
     fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, self.ctrl.weights())
+        PyArray1::from_slice(py, self.ctrl.weights())
     }
 }
 

@@ -27,3 +27,18 @@ def test_compare_example(cli, repo, tmp_path):
         cli("run", "scenarios/paper/fig2.toml", "--out", out, "--no-plot", "-q", *sets)
         e_max = json.loads((out / "summary.json").read_text())["metrics"]["e_max_deg"]
         assert printed[label] == e_max
+
+
+NLSYS = EXAMPLE.parent / "nlsys_loop.py"
+
+
+def test_nlsys_example(repo, tmp_path):
+    """examples/nlsys_loop.py closes the loop in python-control and prints
+    e_max; it must track (e_max under a tenth of the 5° amplitude, as in
+    test_nlsys.py, whose hand-written loop it equals)."""
+    pytest.importorskip("control")
+    p = subprocess.run(
+        [sys.executable, str(NLSYS)], cwd=tmp_path, capture_output=True, text=True, check=True,
+    )
+    e_max = float(p.stdout.split("e_max = ")[1].split()[0])
+    assert 0 < e_max < 0.5, p.stdout

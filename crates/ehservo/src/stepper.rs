@@ -17,7 +17,7 @@ use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant};
 use crate::scenario::{AnyReference, ControllerConfig, PlantModel, Scenario, ScenarioError};
 use crate::scenario::{Setup, Visit};
 use crate::simulation::{Mode, Sample, Simulation, Stop};
-use ehservo_core::control::{Controller, Signal, Signals};
+use ehservo_core::control::{Controller, Signal, Signals, Truth};
 use ehservo_core::reference::Reference;
 use ehservo_core::rk4::OdeState;
 use ehservo_core::sampled::SampledController;
@@ -172,9 +172,22 @@ pub struct LawOutput {
 
 trait LawStep {
     fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput;
+    fn step_parts(&mut self, t: f64, x: [f64; 3], z: [f64; 4], parts: &mut [f64]) -> LawOutput;
     fn reset(&mut self);
     fn signals(&self) -> &'static [Signal];
+    fn faults(&self) -> u64;
+    fn weights(&self) -> &[f64];
     fn boxed(&self) -> Box<dyn LawStep>;
+}
+
+/// What a controller stepped outside the simulator knows of the true plant:
+/// nothing, so the lumped-uncertainty diagnostic is NaN.
+struct NoTruth;
+
+impl Truth for NoTruth {
+    fn lumped_uncertainty(&self, _u: f64, _u_eq: f64, _b_bar: f64) -> f64 {
+        f64::NAN
+    }
 }
 
 impl<C: Controller + Clone + 'static> LawStep for SampledController<C> {
@@ -185,11 +198,27 @@ impl<C: Controller + Clone + 'static> LawStep for SampledController<C> {
             flags: o.flags,
         }
     }
+    fn step_parts(&mut self, t: f64, x: [f64; 3], z: [f64; 4], parts: &mut [f64]) -> LawOutput {
+        // As the simulator's sampled loop: the diagnostics are filled with
+        // the state the law saw, before the state advances.
+        let o = self.step_with(t, x, z, |c, s, o| c.annotate(s, o, &NoTruth));
+        o.parts.write(parts);
+        LawOutput {
+            u: o.u,
+            flags: o.flags,
+        }
+    }
     fn reset(&mut self) {
         SampledController::reset(self)
     }
     fn signals(&self) -> &'static [Signal] {
         C::Parts::SIGNALS
+    }
+    fn faults(&self) -> u64 {
+        self.fault_count()
+    }
+    fn weights(&self) -> &[f64] {
+        self.controller().weights(self.state())
     }
     fn boxed(&self) -> Box<dyn LawStep> {
         Box::new(self.clone())
@@ -275,6 +304,31 @@ impl ControllerStepper {
         self.reference.z(t)
     }
 
+    /// [`step`](Self::step), also writing the law's parts, one value per
+    /// [`signals`](Self::signals) entry, into `parts` (at least that long).
+    /// Diagnostics that need the true plant (the lumped uncertainty) are
+    /// NaN: a stepped controller has no plant behind it.
+    pub fn step_parts(&mut self, t: f64, x: [f64; 3], z: [f64; 4], parts: &mut [f64]) -> LawOutput {
+        self.inner.step_parts(t, x, z, parts)
+    }
+
+    /// What [`step`](Self::step) would return now, without advancing the
+    /// state (a copy is stepped): the output map of a sampled-data system
+    /// whose state update is `step`.
+    pub fn peek(&self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput {
+        self.inner.boxed().step(t, x, z)
+    }
+
+    /// Samples that returned the safe command (a bad measurement or law).
+    pub fn faults(&self) -> u64 {
+        self.inner.faults()
+    }
+
+    /// The network weights W of the current state (empty without a network).
+    pub fn weights(&self) -> &[f64] {
+        self.inner.weights()
+    }
+
     /// Back to the initial state.
     pub fn reset(&mut self) {
         self.inner.reset()
@@ -348,6 +402,37 @@ mod tests {
                 d.step(1.01, last.x, last.z).u.to_bits()
             );
         }
+    }
+
+    #[test]
+    fn parts_are_the_runs_and_peek_does_not_advance() {
+        let s = fig2("[simulation]\nhorizon = 0.5\n");
+        let r = run(&s, Keep::Every(1)).unwrap();
+        let mut c = ControllerStepper::new(&s).unwrap();
+        let n = c.signals().len();
+        assert!(n > 0 && c.weights().iter().all(|w| *w == 0.0));
+        let mut parts = vec![0.0; n];
+        for smp in &r.trace {
+            let p = c.peek(smp.t, smp.x, smp.z);
+            let o = c.step_parts(smp.t, smp.x, smp.z, &mut parts);
+            assert_eq!((p.u.to_bits(), p.flags), (o.u.to_bits(), o.flags));
+            assert_eq!(o.u.to_bits(), smp.u.to_bits(), "k = {}", smp.k);
+            for (i, sig) in c.signals().iter().enumerate() {
+                if sig.key == "uncertainty" {
+                    // Needs the true plant, which a stepped law has not.
+                    assert!(parts[i].is_nan());
+                } else {
+                    assert_eq!(parts[i].to_bits(), smp.values[i].to_bits(), "{}", sig.key);
+                }
+            }
+        }
+        // The weights moved (the law learned), and no step was a fault.
+        assert!(c.weights().iter().any(|w| *w != 0.0));
+        assert_eq!(c.faults(), 0);
+        // A NaN measurement is a fault with the safe command.
+        let o = c.step_parts(0.51, [f64::NAN, 0.0, 0.0], c.reference(0.51), &mut parts);
+        assert_ne!(o.flags & ehservo_core::control::flags::MEASUREMENT_FAULT, 0);
+        assert_eq!(c.faults(), 1);
     }
 
     #[test]

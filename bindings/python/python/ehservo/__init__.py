@@ -241,6 +241,7 @@ class Controller:
     ) -> None:
         path, text = _source(scenario)
         self._raw = _ehservo.RawController(path, text, overrides(set, **keywords))
+        self._steps = 0
         self.signals: List[Signal] = [Signal(*s) for s in self._raw.signals()]
 
     @property
@@ -274,11 +275,82 @@ class Controller:
         (∫e, W) advances by dt."""
         if z is None:
             z = self._raw.reference(float(t))
-        return self._raw.step(float(t), list(map(float, x)), list(map(float, z)))
+        out = self._raw.step(float(t), list(map(float, x)), list(map(float, z)))
+        self._steps += 1
+        return out
+
+    def peek(self, t: float, x: Sequence[float], z: Optional[Sequence[float]] = None) -> float:
+        """The command ``step(t, x, z)`` would return now, without advancing
+        the state: the output map of the sampled-data system whose state
+        update is ``step``."""
+        if z is None:
+            z = self._raw.reference(float(t))
+        return self._raw.peek(float(t), list(map(float, x)), list(map(float, z)))[0]
 
     def reset(self) -> None:
         """Back to the initial state (∫e = 0, W = 0)."""
         self._raw.reset()
+        self._steps = 0
+
+    #: The inputs of :meth:`nlsys`, in order: x = (θ, θ̇, θ̈), then z.
+    NLSYS_INPUTS = (
+        "theta", "theta_dot", "theta_ddot",
+        "theta_d", "theta_d_dot", "theta_d_ddot", "theta_d_dddot",
+    )
+
+    def nlsys(self, name: Optional[str] = None) -> Any:
+        """This controller as a python-control discrete-time system
+        (``control.nlsys`` with ``dt`` = the sample period), for
+        ``control.interconnect`` and ``control.input_output_response``.
+
+        Inputs: ``NLSYS_INPUTS`` (x, then the reference z); output: ``u``
+        (V). Its python-control state is the sample counter ``k``; the
+        law's own state (∫e, W) lives in this object and advances once per
+        update, as python-control's discrete-time simulation calls it (the
+        output is :meth:`peek`, so evaluating it any number of times
+        changes nothing). A simulation starting again from k = 0 resets the
+        controller; an output or update at any other k than the number of
+        steps taken raises ``RuntimeError`` rather than give a wrong
+        command (so python-control's linearisation, which perturbs the
+        state, is refused).
+        """
+        import control  # python-control; not a dependency of ehservo
+
+        def sync(k: Any, what: str) -> int:
+            # The law's state must be the one after k steps: k = 0 starts
+            # again from the initial state, any other k must be where the
+            # controller is.
+            k0 = int(np.asarray(k).reshape(-1)[0])
+            if k0 == 0 and self._steps != 0:
+                self.reset()
+            elif k0 != self._steps:
+                raise RuntimeError(
+                    f"ehservo.Controller.nlsys: {what} at k = {k0}, but the controller has "
+                    f"taken {self._steps} steps (a discrete-time simulation calls it once per "
+                    "sample, in order; start again from k = 0 to reset it)"
+                )
+            return k0
+
+        def updfcn(t: float, k: Any, v: Any, params: Any) -> List[float]:
+            k0 = sync(k, "update")
+            v = np.asarray(v, dtype=float)
+            self.step(float(t), v[0:3], v[3:7])
+            return [k0 + 1.0]
+
+        def outfcn(t: float, k: Any, v: Any, params: Any) -> List[float]:
+            sync(k, "output")
+            v = np.asarray(v, dtype=float)
+            return [self.peek(float(t), v[0:3], v[3:7])]
+
+        return control.nlsys(
+            updfcn,
+            outfcn,
+            inputs=list(self.NLSYS_INPUTS),
+            outputs=["u"],
+            states=["k"],
+            dt=self.dt,
+            name=name or self.name,
+        )
 
     def weights(self) -> "np.ndarray":
         """The network weights W now (empty for a law without a network)."""
