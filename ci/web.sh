@@ -25,7 +25,9 @@ if ! rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknow
 fi
 
 # wasm-bindgen-cli of the lock file's version: no prebuilt binary can be
-# downloaded here, so cargo install (about 5-8 minutes on two cores, once).
+# downloaded here, so cargo install (about 5-8 minutes on two cores, once);
+# under .ci/run it is already building in the background
+# (ci/wasm-bindgen-bg.sh), and this waits for it.
 version=$(awk '/^name = "wasm-bindgen"$/ { getline; gsub(/version = |"/, ""); print; exit }' Cargo.lock)
 have_bindgen() {
   local b
@@ -43,12 +45,22 @@ if ! have_bindgen; then
     budget=$(( 27 * 60 - ($(date +%s) - CI_STARTED) - 180 ))
     [ "$budget" -gt 900 ] && budget=900
   fi
-  if [ "$budget" -lt 240 ]; then
-    skip "wasm-bindgen-cli $version is not installed and building it (5-8 minutes) would take CI past its 30-minute budget ($(( $(date +%s) - CI_STARTED )) s used)"
+  used() { echo "$(( $(date +%s) - ${CI_STARTED:-$(date +%s)} )) s used"; }
+  if [ "$(ci/wasm-bindgen-bg.sh status)" = running ]; then
+    # .ci/run started it in the background (ci/wasm-bindgen-bg.sh).
+    echo "waiting for the background wasm-bindgen-cli $version build (up to $budget s)"
+    if ! ci/wasm-bindgen-bg.sh wait "$(( budget > 0 ? budget : 0 ))"; then
+      ci/wasm-bindgen-bg.sh stop
+      skip "wasm-bindgen-cli $version was still building in the background when CI's 30-minute budget ran out ($(used)); $(ci/wasm-bindgen-bg.sh status)"
+    fi
+  else
+    if [ "$budget" -lt 240 ]; then
+      skip "wasm-bindgen-cli $version is not installed and building it (5-8 minutes) would take CI past its 30-minute budget ($(used))"
+    fi
+    echo "installing wasm-bindgen-cli $version (cargo install, up to $budget s)"
+    timeout "$budget" cargo install -q wasm-bindgen-cli --version "$version" >/dev/null 2>&1 || true
   fi
-  echo "installing wasm-bindgen-cli $version (cargo install, up to $budget s)"
-  timeout "$budget" cargo install -q wasm-bindgen-cli --version "$version" >/dev/null 2>&1 || true
-  have_bindgen || skip "wasm-bindgen-cli $version is not installed and cargo install could not build it in $budget s"
+  have_bindgen || skip "wasm-bindgen-cli $version is not installed and cargo install could not build it ($(ci/wasm-bindgen-bg.sh status))"
 fi
 
 command -v npm >/dev/null 2>&1 \

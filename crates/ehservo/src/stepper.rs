@@ -1,7 +1,8 @@
 //! A scenario's loop and its controller as values a caller steps one sample
 //! at a time, with the controller kind and the plant model erased behind a
 //! trait object: what the C ABI (`crates/ehservo-ffi`), its FMI 3.0 export
-//! and other bindings hold in a handle.
+//! and the Python package (`bindings/python`: `ehservo.Controller`) hold in
+//! a handle.
 //!
 //! [`LoopStepper`] is the simulation `ehservo run` runs (the same
 //! [`Simulation`], reference and stages, metrics accumulated the same way),
