@@ -5,8 +5,8 @@
 # No prebuilt wasm-bindgen can be downloaded here, so a fresh machine must
 # `cargo install` it: 5-8 minutes of two cores, which would not fit after
 # the other steps in CI's 30 minutes. Started first thing by .ci/run under
-# `nice -n 19`, it takes only the CPU the steps before the browser test leave
-# idle (links, the single-threaded tests, QEMU, Slurm's waits); ci/web.sh
+# `nice -n 19` (its scheduler autogroup niced too), it takes only the CPU the
+# steps before the browser test leave idle (links, the single-threaded tests, QEMU, Slurm's waits); ci/web.sh
 # then waits for it with what is left of the budget.
 #
 #   ci/wasm-bindgen-bg.sh start   # start it if the CLI of Cargo.lock's version is missing
@@ -44,6 +44,11 @@ case "${1:-}" in
     # setsid: its own process group, so `stop` can end cargo and rustc too.
     # shellcheck disable=SC2016 # expanded by the inner bash, from "$@"
     setsid nohup bash -c '
+      # A new session is a new scheduler autogroup, and the kernel shares
+      # the CPU fairly between autogroups whatever the nice values inside
+      # them: the autogroup itself must be niced, or this build takes half
+      # the machine from the steps it should only fill in behind.
+      echo 19 >/proc/self/autogroup 2>/dev/null || true
       rc=0
       { rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknown \
           || timeout 300 rustup target add wasm32-unknown-unknown; } || rc=$?

@@ -4,12 +4,10 @@
 //! tune` with the same budget; and the bisected margin bracketed by runs
 //! made independently.
 
+mod common;
+use common::repo;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn ehservo(args: &[&str]) -> std::process::Output {
     let o = Command::new(env!("CARGO_BIN_EXE_ehservo"))
@@ -37,37 +35,17 @@ fn json(p: &Path) -> serde_json::Value {
 /// nothing written.
 #[test]
 fn every_bad_suite_is_rejected_clearly() {
-    let dir = repo().join("tests/bad-input-league");
     let tmp = tempfile::tempdir().unwrap();
-    let mut files: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 15, "{} files", files.len());
-    for p in files {
-        let text = std::fs::read_to_string(&p).unwrap();
-        let expect = text
-            .lines()
-            .next()
-            .unwrap()
-            .strip_prefix("# expect: ")
-            .unwrap();
-        let out = tmp.path().join(p.file_stem().unwrap());
+    for c in common::corpus("bad-input-league", 15) {
+        let out = tmp.path().join(c.path.file_stem().unwrap());
         let o = ehservo(&[
             "league",
-            p.to_str().unwrap(),
+            c.path.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
         ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        let name = p.file_name().unwrap().to_string_lossy();
-        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
-        assert!(err.contains(expect), "{name}: expected {expect:?} in {err}");
-        assert!(err.contains(&*name), "{name}: {err}");
-        assert_eq!(err.trim().lines().count(), 1, "{name}: {err}");
-        assert!(!out.exists(), "{name}: output written");
+        common::rejected_naming(&c.name, &o, &c.expect);
+        assert!(!out.exists(), "{}: output written", c.name);
     }
 }
 

@@ -1,12 +1,10 @@
 //! `ehservo tune`: bad tune files refused clearly, the same result on any
 //! thread count, and a tuned scenario that `ehservo run` reproduces.
 
+mod common;
+use common::repo;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn ehservo(args: &[&std::ffi::OsStr]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_ehservo"))
@@ -20,37 +18,17 @@ fn ehservo(args: &[&std::ffi::OsStr]) -> std::process::Output {
 /// nothing written.
 #[test]
 fn every_bad_tune_file_is_rejected_clearly() {
-    let dir = repo().join("tests/bad-input-tune");
     let tmp = tempfile::tempdir().unwrap();
-    let mut files: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 10, "{} files", files.len());
-    for p in files {
-        let text = std::fs::read_to_string(&p).unwrap();
-        let expect = text
-            .lines()
-            .next()
-            .unwrap()
-            .strip_prefix("# expect: ")
-            .unwrap();
-        let out = tmp.path().join(p.file_stem().unwrap());
+    for c in common::corpus("bad-input-tune", 10) {
+        let out = tmp.path().join(c.path.file_stem().unwrap());
         let o = ehservo(&[
             "tune".as_ref(),
-            p.as_os_str(),
+            c.path.as_os_str(),
             "--out".as_ref(),
             out.as_os_str(),
         ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        let name = p.file_name().unwrap().to_string_lossy();
-        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
-        assert!(err.contains(expect), "{name}: expected {expect:?} in {err}");
-        assert!(err.contains(&*name), "{name}: {err}");
-        assert_eq!(err.trim().lines().count(), 1, "{name}: {err}");
-        assert!(!out.exists(), "{name}: output written");
+        common::rejected_naming(&c.name, &o, &c.expect);
+        assert!(!out.exists(), "{}: output written", c.name);
     }
 }
 

@@ -574,11 +574,8 @@ fn tune_for(
         penalty: t.penalty,
         param: Vec::new(),
     };
-    // The tune's own messages name its keys; in a suite they sit under
-    // `tuning`.
-    Tune::build(tf, scenarios, file).map_err(|e| {
-        StudyError(e.0.replacen(&format!("{file}: `"), &format!("{file}: `tuning."), 1))
-    })
+    // The tune's keys sit under `tuning` in a suite.
+    Tune::build_under(tf, scenarios, file, "tuning")
 }
 
 /// The scenario of case `c` with `[controller]` = `table`, at draw seed

@@ -203,7 +203,22 @@ impl Tune {
 
     /// Checks a parsed tune file against its loaded scenarios.
     pub fn build(tf: TuneFile, scenarios: Vec<Scenario>, file: &str) -> Result<Tune, StudyError> {
-        let bad = |key: &str, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+        Self::build_under(tf, scenarios, file, "")
+    }
+
+    /// As [`Tune::build`] for a tune file's keys that sit under `section`
+    /// in `file` (a league suite's `[tuning]`: `section = "tuning"`), so an
+    /// error names the key as it is written there (`tuning.budget`).
+    pub fn build_under(
+        tf: TuneFile,
+        scenarios: Vec<Scenario>,
+        file: &str,
+        section: &str,
+    ) -> Result<Tune, StudyError> {
+        let dot = if section.is_empty() { "" } else { "." };
+        let bad = |key: &str, reason: String| {
+            StudyError(format!("{file}: `{section}{dot}{key}`: {reason}"))
+        };
         if scenarios.is_empty() {
             return Err(bad(
                 "scenarios",
