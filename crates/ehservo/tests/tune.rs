@@ -3,7 +3,6 @@
 
 mod common;
 use common::repo;
-use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn ehservo(args: &[&std::ffi::OsStr]) -> std::process::Output {
