@@ -10,7 +10,7 @@ sub-step, 10 s, the paper's gains, a_i bias 100 %, b bias 50 % of beta
    of the two 1001-row traces (difference relative to the column's largest
    magnitude, so zero crossings do not blow up the ratio). The `chattering`
    metric is left out: the two programs define its window differently by one
-   sample (see crates/ehservo/tests/independent.rs).
+   sample (see crates/ehservo/tests/it/independent.rs).
 2. Speed, in one session: the peer's own `wall_s` (its simulation loop, no
    interpreter start-up, no I/O) over `--runs` runs, against criterion's
    median for `fig2/sampled_0.01_run` (`ehservo::run::run` of the same

@@ -41,7 +41,7 @@ use nalgebra::{Complex, Matrix3};
 /// Its rounding error, measured against mpmath (50 digits) on
 /// g(t) = ‖exp((P + 20I)t)‖₂ at nine times from 1e-4 to 10 s, for
 /// (−20, −20 − δ, −40) and (−20, −40, −40 − δ) (the `dump_for_mpmath` test
-/// of tests/k1_closed_form.rs prints both paths), grows like
+/// of tests/it/k1_closed_form.rs prints both paths), grows like
 /// (max|λ|/gap)² — largest relative error, dominant pair / fast pair:
 ///
 /// | δ (gap/scale)  | closed form  | nalgebra's exp |
@@ -399,7 +399,7 @@ mod tests {
 
     /// Sylvester's terms with exact roots: for the paper's poles the first
     /// column of exp(Pt) is (6e^(−20t) − 8e^(−30t) + 3e^(−40t), …) (see
-    /// tests/analysis.rs for the hand derivation).
+    /// tests/it/analysis.rs for the hand derivation).
     #[test]
     fn distinct_real_poles_by_hand() {
         let p = p_matrix([90.0, 2600.0, 24000.0]);

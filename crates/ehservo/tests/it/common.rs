@@ -1,8 +1,6 @@
 //! What the bad-input tests share: the corpora of `tests/bad-input*/` (each
 //! file's first line is `# expect: <fragment of the message>`) and the
-//! check that a refusal is clear. Each test binary that includes this uses
-//! part of it.
-#![allow(dead_code)]
+//! check that a refusal is clear.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;

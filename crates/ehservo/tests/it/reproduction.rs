@@ -2,7 +2,7 @@
 //!
 //! Each band is around a value measured with this code (and, for Fig. 2,
 //! cross-checked to 1e-9 against the independent NumPy implementation in
-//! `tests/independent.rs`). The runs are deterministic, so the bands are
+//! `tests/it/independent.rs`). The runs are deterministic, so the bands are
 //! tight: ±1 % admits floating-point reordering and nothing else — a change
 //! to an equation, a reading or a default moves these figures by far more.
 //! The qualitative tests check the paper's claims as `ehservo reproduce`

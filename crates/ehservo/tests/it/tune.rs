@@ -1,7 +1,7 @@
 //! `ehservo tune`: bad tune files refused clearly, the same result on any
 //! thread count, and a tuned scenario that `ehservo run` reproduces.
 
-mod common;
+use crate::common;
 use common::repo;
 use std::process::Command;
 

@@ -3,7 +3,7 @@
 //! the manifest and containing the fragment of its `# expect:` line, no
 //! panic, and no output folder — before any case is run.
 
-mod common;
+use crate::common;
 use std::process::Command;
 
 #[test]

@@ -28,7 +28,7 @@ fn w_norm_at(r: &RunResult, t: f64) -> f64 {
 
 /// Each league scenario (the Fig. 2 case, one per weight law) runs,
 /// stays bounded and tracks: e_max after the transient below 10 % of the
-/// 5° amplitude (the threshold tests/controllers.rs uses for "tracks").
+/// 5° amplitude (the threshold tests/it/controllers.rs uses for "tracks").
 /// The parts are the NNBVSC's plus `leak`.
 #[test]
 fn league_scenarios_track_the_fig2_case() {

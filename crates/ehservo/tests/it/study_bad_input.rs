@@ -10,7 +10,7 @@
 //! one line on stderr containing the needle and naming the file or shard,
 //! no panic, and nothing written (no output, no staging directory).
 
-mod common;
+use crate::common;
 use common::{corpus, rejected, rejected_naming};
 use std::path::{Path, PathBuf};
 use std::process::Command;

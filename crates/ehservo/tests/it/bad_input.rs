@@ -2,7 +2,7 @@
 //! rejected with exit code 2, a message naming the file and containing the
 //! fragment of its `# expect:` first line, no panic, and no output.
 
-mod common;
+use crate::common;
 use std::process::Command;
 
 #[test]

@@ -4,7 +4,7 @@
 //! tune` with the same budget; and the bisected margin bracketed by runs
 //! made independently.
 
-mod common;
+use crate::common;
 use common::repo;
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -9,7 +9,7 @@
 //! The tolerances are the reference's own accuracy: its Padé approximant
 //! with scaling and squaring loses digits on the large, non-normal
 //! (P + K2 I)t of close poles (≈ 1e-8 at poles 0.5 s⁻¹ apart against the
-//! mpmath values of tests/analysis.rs), while the closed form is within
+//! mpmath values of tests/it/analysis.rs), while the closed form is within
 //! ≈ 1e-12 there.
 #![allow(clippy::float_cmp)] // repeated poles are equal on purpose
 
@@ -227,7 +227,7 @@ fn double_pole_against_the_ode_solution() {
 /// Not a test: prints g(t) by both paths (the closed form down to a gap of
 /// 1e-4 of the scale) for the pole sets of the SEPARATION study, compared
 /// with mpmath at 50 digits in its doc.
-/// `cargo test --release -p ehservo --test k1_closed_form -- --ignored --nocapture`
+/// `cargo test --release -p ehservo --test it k1_closed_form -- --ignored --nocapture`
 #[test]
 #[ignore]
 fn dump_for_mpmath() {

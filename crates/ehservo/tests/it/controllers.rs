@@ -135,7 +135,7 @@ fn readme_simulation_snippet() -> Result<(), Box<dyn std::error::Error>> {
 /// 0.01 s; the parts add up to u (no limit). Gao's plain law runs at 1 ms.
 #[test]
 fn adrc_tracks_the_fig2_case() {
-    let text = include_str!("../../../scenarios/league/adrc-fig2.toml");
+    let text = include_str!("../../../../scenarios/league/adrc-fig2.toml");
     for set in [
         vec![],
         vec!["controller.model_assisted=false", "simulation.step=0.001"],
@@ -161,7 +161,7 @@ fn adrc_tracks_the_fig2_case() {
 /// amplitude, its parts adding up to u and its σ the paper's (10).
 #[test]
 fn sta_tracks_the_fig2_case() {
-    let text = include_str!("../../../scenarios/league/sta-fig2.toml");
+    let text = include_str!("../../../../scenarios/league/sta-fig2.toml");
     for set in [vec![], vec!["simulation.step=0.001"]] {
         let s = scenario(text, &set).unwrap();
         let r = run(&s, Keep::Every(1)).unwrap();

@@ -86,7 +86,7 @@ proptest! {
 }
 
 /// The same scenario and seed give the same summary, bit for bit, run
-/// after run (the thread-count and shard cases are in tests/study.rs; the
+/// after run (the thread-count and shard cases are in tests/it/study.rs; the
 /// release-vs-debug case is in .ci/run).
 #[test]
 fn summaries_are_deterministic() {

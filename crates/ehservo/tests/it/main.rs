@@ -1,0 +1,34 @@
+//! The command line's integration tests, as one test binary: each file here
+//! was once its own binary under `tests/`, and linking 25 of them (each with
+//! the whole library) was most of CI's test step. Run one group with its
+//! module name as the filter, e.g. `cargo test -p ehservo --test it league::`.
+//! `tests/no_alloc.rs` stays a binary of its own: it installs a counting
+//! global allocator, which would count every other test's allocations.
+
+mod common;
+
+mod analysis;
+mod bad_input;
+mod breaking_scan;
+mod cli;
+mod cluster;
+mod controllers;
+mod cylinder;
+mod faults;
+mod golden;
+mod independent;
+mod k1_closed_form;
+mod league;
+mod models;
+mod nn_robust;
+mod outputs;
+mod properties;
+mod realistic;
+mod reproduce_bad_input;
+mod reproduction;
+mod sampled_loop;
+mod stages;
+mod stochastic;
+mod study;
+mod study_bad_input;
+mod tune;
