@@ -423,12 +423,8 @@ impl RawController {
         overrides: Vec<String>,
     ) -> PyResult<Self> {
         let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
-        let kind = s
-            .setup()
-            .map_err(|e| scenario_error(py, &e))?
-            .controller
-            .kind();
         let ctrl = ControllerStepper::new(&s).map_err(|e| scenario_error(py, &e))?;
+        let kind = ctrl.kind();
         let n = ctrl.signals().len();
         Ok(Self {
             ctrl,

@@ -245,6 +245,7 @@ impl Visit for BuildLaw<'_> {
 /// A scenario's controller in the sampled loop, stepped by the caller.
 pub struct ControllerStepper {
     inner: Box<dyn LawStep>,
+    kind: &'static str,
     reference: AnyReference,
     step: f64,
     steps: u64,
@@ -254,6 +255,7 @@ impl Clone for ControllerStepper {
     fn clone(&self) -> Self {
         Self {
             inner: self.inner.boxed(),
+            kind: self.kind,
             reference: self.reference.clone(),
             step: self.step,
             steps: self.steps,
@@ -287,6 +289,7 @@ impl ControllerStepper {
         }
         Ok(Self {
             inner: setup.controller.visit(BuildLaw(&setup)),
+            kind: setup.controller.kind(),
             reference: setup.reference.clone(),
             step: setup.sim.step,
             steps: setup.sim.steps,
@@ -298,6 +301,11 @@ impl ControllerStepper {
     /// the safe command with `flags::MEASUREMENT_FAULT` and leaves the state.
     pub fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput {
         self.inner.step(t, x, z)
+    }
+
+    /// The controller's kind, as `[controller] kind` names it.
+    pub fn kind(&self) -> &'static str {
+        self.kind
     }
 
     /// The scenario's reference z = (θd, θ̇d, θ̈d, θ⃛d) at t (rad, rad/s, …).
@@ -410,6 +418,7 @@ mod tests {
         let s = fig2("[simulation]\nhorizon = 0.5\n");
         let r = run(&s, Keep::Every(1)).unwrap();
         let mut c = ControllerStepper::new(&s).unwrap();
+        assert_eq!(c.kind(), "nnvsc");
         let n = c.signals().len();
         assert!(n > 0 && c.weights().iter().all(|w| *w == 0.0));
         let mut parts = vec![0.0; n];
