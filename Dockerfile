@@ -1,7 +1,8 @@
 # The image of deploy/k8s/sweep-job.yaml: the `ehservo` command line, built
 # in release, on a slim Debian with the shipped scenarios and studies.
 #   docker build -t your-registry/ehservo:0.1.0 .
-# Checked in CI by hadolint (ci/deploy.sh); not built there (no Docker daemon).
+# Linted by hadolint in CI (ci/deploy.sh). ci/image.sh builds it (Docker, or
+# Podman without a daemon) and runs the manifest's command in it.
 
 FROM rust:1.95-slim-bookworm AS build
 WORKDIR /src
