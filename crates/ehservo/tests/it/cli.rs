@@ -1,15 +1,7 @@
 //! The command line as a user meets it: outputs, exit codes, bad input.
 
+use crate::common::{ehservo, repo};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn ehservo() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ehservo"))
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);

@@ -5,13 +5,10 @@
 //! skips a shard that is already whole and redoes one that is not. The
 //! same on a real Slurm: ci/slurm.sh.
 
+use crate::common::ehservo;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn ehservo() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ehservo"))
-}
 
 fn fig8() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

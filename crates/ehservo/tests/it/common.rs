@@ -1,6 +1,7 @@
-//! What the bad-input tests share: the corpora of `tests/bad-input*/` (each
-//! file's first line is `# expect: <fragment of the message>`) and the
-//! check that a refusal is clear.
+//! What the test modules share: the repository root, the `ehservo` command
+//! built with them, the corpora of `tests/bad-input*/` (each file's first
+//! line is `# expect: <fragment of the message>`) and the check that a
+//! refusal is clear.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -18,6 +19,11 @@ pub struct Case {
 /// The repository's root.
 pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The `ehservo` command line built with these tests.
+pub fn ehservo() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_ehservo"))
 }
 
 /// The `.toml` files of `tests/<dir>`, sorted, with their `# expect:` line;

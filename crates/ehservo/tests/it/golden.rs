@@ -14,14 +14,11 @@
 //! refactoring): `cargo run --release -- run FILE --out DIR --no-plot`, then
 //! gzip DIR/trace.csv and copy the three keys of DIR/summary.json.
 
+use crate::common::repo;
 use flate2::read::GzDecoder;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn golden() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden")

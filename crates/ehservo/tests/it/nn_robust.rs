@@ -4,11 +4,8 @@
 
 use ehservo::run::{run, Keep, RunResult};
 use ehservo::scenario::Scenario;
-use std::path::{Path, PathBuf};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use crate::common::repo;
 
 fn run_file(rel: &str, set: &[&str]) -> RunResult {
     let text = std::fs::read_to_string(repo().join(rel)).unwrap();

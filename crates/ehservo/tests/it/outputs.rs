@@ -3,17 +3,10 @@
 //! something else, names that lead out of `out/`, absurd flags. Every case
 //! ends with a clear exit code and leaves no half-written output.
 
+use crate::common::{ehservo, repo};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn ehservo() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ehservo"))
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn fig2() -> PathBuf {
     repo().join("scenarios/paper/fig2.toml")

@@ -149,7 +149,7 @@ fn delays_of_whole_samples() {
 /// commands on that page.
 #[test]
 fn the_shipped_estimator_studies_reproduce() {
-    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let repo = crate::common::repo();
     let tmp = tempfile::tempdir().unwrap();
     for study in ["estimators", "estimator-bias"] {
         let out = tmp.path().join(study);

@@ -2,12 +2,8 @@
 //! thread count or the shard split; merge refuses what does not belong
 //! together.
 
+use crate::common::ehservo;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn ehservo() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ehservo"))
-}
 
 fn paper(file: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -11,13 +11,8 @@
 //! no panic, and nothing written (no output, no staging directory).
 
 use crate::common;
-use common::{corpus, rejected, rejected_naming};
+use common::{corpus, ehservo, rejected, rejected_naming};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn ehservo() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ehservo"))
-}
 
 #[test]
 fn every_bad_study_is_rejected_clearly() {
