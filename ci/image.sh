@@ -94,21 +94,15 @@ trap '"${sudo[@]}" rm -rf "$work"' EXIT
 mapfile -t bases < <(sed -n 's/^FROM \([^ ]*\).*/\1/p' Dockerfile)
 have() { "${engine[@]}" image inspect "$1" >/dev/null 2>&1; }
 full() { case $1 in */*) echo "$1" ;; *) echo "docker.io/library/$1" ;; esac; }
-debian_made=""
 make_debian() { # the minbase root file system, imported as $1
-  if [ -z "$debian_made" ]; then
-    command -v debootstrap >/dev/null 2>&1 || apt_install debootstrap || true
-    command -v debootstrap >/dev/null 2>&1 \
-      || skip "no registry answers for the base images and debootstrap could not be installed"
-    echo "making a stand-in for $1 with debootstrap (minbase bookworm)"
-    "${sudo[@]}" debootstrap --variant=minbase bookworm "$work/rootfs" http://deb.debian.org/debian \
-      >"$work/debootstrap.log" 2>&1 || { tail -n 20 "$work/debootstrap.log"; exit 1; }
-    "${sudo[@]}" tar -C "$work/rootfs" -c . | "${engine[@]}" import - "$1" >/dev/null 2>"$work/import.log" \
-      || { cat "$work/import.log"; exit 1; }
-    debian_made=$1
-  elif [ "$debian_made" != "$1" ]; then
-    "${engine[@]}" tag "$debian_made" "$1"
-  fi
+  command -v debootstrap >/dev/null 2>&1 || apt_install debootstrap || true
+  command -v debootstrap >/dev/null 2>&1 \
+    || skip "no registry answers for the base images and debootstrap could not be installed"
+  echo "making a stand-in for $1 with debootstrap (minbase bookworm)"
+  "${sudo[@]}" debootstrap --variant=minbase bookworm "$work/rootfs" http://deb.debian.org/debian \
+    >"$work/debootstrap.log" 2>&1 || { tail -n 20 "$work/debootstrap.log"; exit 1; }
+  "${sudo[@]}" tar -C "$work/rootfs" -c . | "${engine[@]}" import - "$1" >/dev/null 2>"$work/import.log" \
+    || { cat "$work/import.log"; exit 1; }
 }
 make_rust() { # $1 = the rust image's name; needs the machine's toolchain
   local sysroot ver ctx
