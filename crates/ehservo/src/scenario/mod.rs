@@ -302,6 +302,22 @@ impl Scenario {
         self.with_values_built_on(self.table()?, values)
     }
 
+    /// This scenario with `uncertainty.seed = seed`, and its set-up: what
+    /// [`Scenario::with_values_built`] gives for that one value when this
+    /// scenario survives its TOML round trip (a study checks that once),
+    /// without the round trip (a Monte Carlo run over the seed alone).
+    pub fn with_seed_built(&self, seed: u64) -> Result<(Scenario, Setup), ScenarioError> {
+        let mut s = self.clone();
+        s.uncertainty.seed = seed;
+        let setup = Setup::new(&s).map_err(|(key, reason)| ScenarioError {
+            file: self.name.clone(),
+            key,
+            line_col: None,
+            reason,
+        })?;
+        Ok((s, setup))
+    }
+
     /// This scenario as a TOML table: what [`Scenario::with_values_built_on`]
     /// starts from.
     pub fn table(&self) -> Result<toml::Table, ScenarioError> {

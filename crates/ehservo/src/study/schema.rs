@@ -586,9 +586,16 @@ impl Plan {
                     })?;
             }
         }
+        let base_table = base.table().ok();
+        // The typed seed-only path must give what the round trip gives.
+        let seed_only_typed = base_table.as_ref().is_some_and(|t| {
+            base.with_values_built_on(t.clone(), &[])
+                .is_ok_and(|(s, _)| s == base)
+        });
         Ok(Plan {
             study,
-            base_table: base.table().ok(),
+            base_table,
+            seed_only_typed,
             base,
             axes,
             replicates,
