@@ -55,7 +55,7 @@ pub trait OdeState<T: Real = f64>: Copy {
 /// `d[i] ← b[i] + a·d[i]` for every i, returning whether every result is
 /// finite: one pass (the sum of 0·v in eight lanes is NaN exactly when
 /// some v is ±∞ or NaN; see [`axpy_results_finite`]).
-#[inline]
+#[inline(always)]
 pub fn euler_results_finite<T: Real>(d: &mut [T], b: &[T], a: T) -> bool {
     let mut lane = [T::ZERO; 8];
     let n = d.len().min(b.len());

@@ -224,7 +224,7 @@ impl<T: Real> OdeState<T> for NnState<T> {
             false
         }
     }
-    #[inline]
+    #[inline(always)]
     fn euler_from(&mut self, base: &Self, a: T) -> bool {
         self.int_e = base.int_e + a * self.int_e;
         let w_ok = crate::rk4::euler_results_finite(&mut self.w, &base.w, a);
@@ -320,6 +320,146 @@ impl<T: Real> NnVsc<T> {
         };
         let out = self.law_and_euler(m, s, &mut sink);
         (out, sink.finite())
+    }
+
+    /// The law's passes, then the vectorised Euler pass (an out-of-order
+    /// host; see [`Controller::law_euler`]).
+    #[inline(always)]
+    fn law_then_euler(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        next: &mut NnState<T>,
+        dt: T,
+    ) -> (Output<SlidingParts<T>, T>, bool) {
+        // The law writes every component of ξ̇: no zeroing first.
+        let out = self.law_body(m, s, next);
+        let finite = next.euler_from(s, dt);
+        (out, finite)
+    }
+
+    /// [`NnVsc::law_then_euler`] compiled for AVX2: the rows, WᵀΦ's sums
+    /// and the Euler pass in 4-wide vectors instead of SSE2's 2-wide. The
+    /// same operations in the same order (Rust never fuses a·b + c, and
+    /// no sum is reassociated), so the same bits.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(all(any(test, feature = "std"), target_arch = "x86_64"))]
+    #[allow(unsafe_code)]
+    #[target_feature(enable = "avx2")]
+    unsafe fn law_then_euler_avx2(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        next: &mut NnState<T>,
+        dt: T,
+    ) -> (Output<SlidingParts<T>, T>, bool) {
+        self.law_then_euler(m, s, next, dt)
+    }
+
+    /// [`Controller::law`]'s body, inlined into it and into the AVX2
+    /// copy of [`Controller::law_euler`].
+    #[inline(always)]
+    fn law_body(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        ds: &mut NnState<T>,
+    ) -> Output<SlidingParts<T>, T> {
+        let p = &self.params;
+        let Prelude {
+            g,
+            gains,
+            n,
+            st,
+            phi_norm,
+            gamma2,
+            mut fl,
+            sd,
+            mu,
+            xi,
+            sw_num,
+            sw_v,
+        } = self.prelude(m, s);
+        // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
+        // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
+        // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
+        // WᵀΦ first, in a pass of its own: v, b̄ and u wait for it. Nothing
+        // waits for Ẇ, so its pass comes last (in one fused pass its
+        // products delayed WᵀΦ's chain). Each result is computed by the
+        // same operations in the same order as in the fused pass.
+        let w = &s.w;
+        let g3 = &g[2];
+        let mut wphi_k = T::ZERO;
+        for (i1, &g1) in g[0].iter().enumerate() {
+            let t = |i2: usize| {
+                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                let wr = &w[j..j + N_LEVELS];
+                ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3])) + wr[4] * g3[4]
+            };
+            // u = Σ g2·t from its first term rather than from 0 + first term:
+            // they differ only when every term is −0 (u = −0 against +0), and
+            // u only enters wphi_k += g1·u, where wphi_k (from 0 + …) is never
+            // −0, so wphi_k + g1·(±0) is the same.
+            let mut u = g[1][0] * t(0);
+            for (i2, &g2) in g[1].iter().enumerate().skip(1) {
+                u += g2 * t(i2);
+            }
+            wphi_k += g1 * u;
+        }
+        let mut wphi = w[0] + wphi_k;
+        for (i, &zi) in m.z.iter().enumerate() {
+            wphi += w[1 + N_KERNELS + i] * zi;
+        }
+
+        let v = n + wphi + sw_v;
+        let (b_bar, clamped) = gains.pick(&self.model, v);
+        if clamped {
+            fl |= flags::VALVE_ROOT_CLAMPED;
+        }
+        let u_eq = (n + wphi) / b_bar;
+        let u_sw = sw_num / (b_bar * self.one_minus_bb);
+
+        let a = sd * self.inv_h;
+        let bw = p.eta * sd.abs() * self.inv_h;
+        let dw = &mut ds.w;
+        for (i1, &g1) in g[0].iter().enumerate() {
+            for (i2, &g2) in g[1].iter().enumerate() {
+                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
+                let ag = a * (g1 * g2);
+                for ((d, &wi), &gi) in dr.iter_mut().zip(wr).zip(g3) {
+                    *d = ag * gi - bw * wi;
+                }
+            }
+        }
+        dw[0] = a - bw * w[0]; // Φ_0 = 1
+        for (i, &zi) in m.z.iter().enumerate() {
+            let k = 1 + N_KERNELS + i;
+            dw[k] = a * zi - bw * w[k];
+        }
+        ds.int_e = st.e; // ∫e' = e
+
+        Output {
+            u: u_eq + u_sw,
+            flags: fl,
+            parts: SlidingParts {
+                u_eq,
+                u_sw,
+                e: st.e,
+                sigma: st.sigma,
+                sigma_delta: sd,
+                wphi,
+                phi_norm,
+                xi,
+                b_bar,
+                gain: gamma2,
+                mu,
+                norm_e: st.norm_e,
+                ..SlidingParts::default()
+            },
+        }
     }
 
     /// What [`Controller::law`] and [`NnVsc::law_euler`] compute before the
@@ -576,106 +716,16 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         NnState::zero()
     }
 
-    #[inline]
+    // (Not inlined: the body is large, and a caller's loop compiled worse
+    // around it, +300 instructions a law in `step_count`.)
+    #[inline(never)]
     fn law(
         &self,
         m: &Measurement<T>,
         s: &NnState<T>,
         ds: &mut NnState<T>,
     ) -> Output<SlidingParts<T>, T> {
-        let p = &self.params;
-        let Prelude {
-            g,
-            gains,
-            n,
-            st,
-            phi_norm,
-            gamma2,
-            mut fl,
-            sd,
-            mu,
-            xi,
-            sw_num,
-            sw_v,
-        } = self.prelude(m, s);
-        // WᵀΦ and Ẇ = H⁻¹(σΔΦ − η|σΔ|W) (26) without forming Φ: kernel
-        // (i1, i2, i3) is g1·g2·g3, so by rows of five (fixed i1, i2)
-        // WᵀΦ = Σ_i1 g1 Σ_i2 g2 (w_row · g3) and Ẇ_row = (σΔ·g1g2/h)·g3 − η|σΔ|/h·w_row.
-        // WᵀΦ first, in a pass of its own: v, b̄ and u wait for it. Nothing
-        // waits for Ẇ, so its pass comes last (in one fused pass its
-        // products delayed WᵀΦ's chain). Each result is computed by the
-        // same operations in the same order as in the fused pass.
-        let w = &s.w;
-        let g3 = &g[2];
-        let mut wphi_k = T::ZERO;
-        for (i1, &g1) in g[0].iter().enumerate() {
-            let t = |i2: usize| {
-                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
-                let wr = &w[j..j + N_LEVELS];
-                ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3])) + wr[4] * g3[4]
-            };
-            // u = Σ g2·t from its first term rather than from 0 + first term:
-            // they differ only when every term is −0 (u = −0 against +0), and
-            // u only enters wphi_k += g1·u, where wphi_k (from 0 + …) is never
-            // −0, so wphi_k + g1·(±0) is the same.
-            let mut u = g[1][0] * t(0);
-            for (i2, &g2) in g[1].iter().enumerate().skip(1) {
-                u += g2 * t(i2);
-            }
-            wphi_k += g1 * u;
-        }
-        let mut wphi = w[0] + wphi_k;
-        for (i, &zi) in m.z.iter().enumerate() {
-            wphi += w[1 + N_KERNELS + i] * zi;
-        }
-
-        let v = n + wphi + sw_v;
-        let (b_bar, clamped) = gains.pick(&self.model, v);
-        if clamped {
-            fl |= flags::VALVE_ROOT_CLAMPED;
-        }
-        let u_eq = (n + wphi) / b_bar;
-        let u_sw = sw_num / (b_bar * self.one_minus_bb);
-
-        let a = sd * self.inv_h;
-        let bw = p.eta * sd.abs() * self.inv_h;
-        let dw = &mut ds.w;
-        for (i1, &g1) in g[0].iter().enumerate() {
-            for (i2, &g2) in g[1].iter().enumerate() {
-                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
-                let (wr, dr) = (&w[j..j + N_LEVELS], &mut dw[j..j + N_LEVELS]);
-                let ag = a * (g1 * g2);
-                for ((d, &wi), &gi) in dr.iter_mut().zip(wr).zip(g3) {
-                    *d = ag * gi - bw * wi;
-                }
-            }
-        }
-        dw[0] = a - bw * w[0]; // Φ_0 = 1
-        for (i, &zi) in m.z.iter().enumerate() {
-            let k = 1 + N_KERNELS + i;
-            dw[k] = a * zi - bw * w[k];
-        }
-        ds.int_e = st.e; // ∫e' = e
-
-        Output {
-            u: u_eq + u_sw,
-            flags: fl,
-            parts: SlidingParts {
-                u_eq,
-                u_sw,
-                e: st.e,
-                sigma: st.sigma,
-                sigma_delta: sd,
-                wphi,
-                phi_norm,
-                xi,
-                b_bar,
-                gain: gamma2,
-                mu,
-                norm_e: st.norm_e,
-                ..SlidingParts::default()
-            },
-        }
+        self.law_body(m, s, ds)
     }
 
     /// The law and the Euler step, with no zeroed ξ̇ buffer (the law writes
@@ -683,8 +733,10 @@ impl<T: Real> Controller<T> for NnVsc<T> {
     /// pass: ξ + dt·ξ̇ is written as ξ̇'s components are formed, each
     /// weight loaded once (−320 instructions a step on a Cortex-M4F).
     /// Elsewhere the law's passes and a vectorised Euler pass (the one
-    /// pass, scalar, cost an x86-64 host 7 % more instructions). Both give
-    /// the same bits.
+    /// pass, scalar, cost an x86-64 host 7 % more instructions); on an
+    /// x86-64 with AVX2 (detected at run time, with `std`) that code
+    /// compiled for AVX2, since the default x86-64 target has only SSE2
+    /// (−30 % instructions a sampled step). All give the same bits.
     #[inline]
     fn law_euler(
         &self,
@@ -696,10 +748,13 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         if cfg!(target_arch = "arm") {
             self.law_euler_one_pass(m, s, next, dt)
         } else {
-            // The law writes every component of ξ̇: no zeroing first.
-            let out = self.law(m, s, next);
-            let finite = next.euler_from(s, dt);
-            (out, finite)
+            #[cfg(all(any(test, feature = "std"), target_arch = "x86_64"))]
+            if std::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 (detected just above).
+                #[allow(unsafe_code)]
+                return unsafe { self.law_then_euler_avx2(m, s, next, dt) };
+            }
+            self.law_then_euler(m, s, next, dt)
         }
     }
 
@@ -928,15 +983,21 @@ mod tests {
             let o = c.law(m, s, &mut ds);
             let ok = ds.euler_from(s, dt);
             let bits = |o: &Output<SlidingParts<T>, T>| {
-                [o.u, o.wphi, o.sigma_delta, o.b_bar].map(|v| v.to_f64().to_bits())
+                let p = &o.parts;
+                [o.u, p.u_eq, p.u_sw, p.wphi, p.sigma_delta, p.b_bar]
+                    .into_iter()
+                    .chain([p.phi_norm, p.mu, p.xi, p.gain, p.norm_e])
+                    .map(|v| v.to_f64().to_bits())
+                    .collect::<Vec<_>>()
             };
-            // The one pass (a Cortex-M's) and law_euler on this target.
-            for one_pass in [true, false] {
+            // The one pass (a Cortex-M's), law_euler on this target (on an
+            // x86-64 with AVX2: the AVX2 copy) and the plain two passes.
+            for variant in 0..3 {
                 let mut next = NnState::zero();
-                let (o2, ok2) = if one_pass {
-                    c.law_euler_one_pass(m, s, &mut next, dt)
-                } else {
-                    c.law_euler(m, s, &mut next, dt)
+                let (o2, ok2) = match variant {
+                    0 => c.law_euler_one_pass(m, s, &mut next, dt),
+                    1 => c.law_euler(m, s, &mut next, dt),
+                    _ => c.law_then_euler(m, s, &mut next, dt),
                 };
                 assert_eq!((bits(&o), o.flags), (bits(&o2), o2.flags));
                 assert_eq!(ok, ok2);
