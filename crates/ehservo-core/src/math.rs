@@ -166,7 +166,19 @@ impl Real for f64 {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        libm::sqrt(self)
+        // With std, the compiler's own square root (one instruction, encoded
+        // for the function's target features); `libm::sqrt` on x86-64 is an
+        // inline-asm SSE `sqrtsd`, whose legacy encoding inside AVX code
+        // (the NNBVSC's AVX2 step) stalls on the AVX/SSE transition. Both
+        // round correctly (IEEE 754), so they agree to the bit.
+        #[cfg(feature = "std")]
+        {
+            f64::sqrt(self)
+        }
+        #[cfg(not(feature = "std"))]
+        {
+            libm::sqrt(self)
+        }
     }
     #[inline(always)]
     fn cbrt(self) -> Self {
@@ -271,7 +283,11 @@ fn sqrt_f32(v: f32) -> f32 {
         }
         f32::from_bits(bits)
     }
-    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    #[cfg(all(not(all(target_arch = "arm", target_abi = "eabihf")), feature = "std"))]
+    {
+        f32::sqrt(v) // (as for f64: the compiler's instruction)
+    }
+    #[cfg(not(any(all(target_arch = "arm", target_abi = "eabihf"), feature = "std")))]
     {
         libm::sqrtf(v)
     }
