@@ -588,7 +588,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 };
                 let out = self
                     .ctrl
-                    .step_with(t, xm, z, |c, s, o| c.annotate(s, o, &truth));
+                    .step_with(t, xm, z, |c, s, o| c.annotate_stepped(s, o, &truth));
                 // k1 of the step below, if the law's diagnostics evaluated
                 // it for the command the plant now gets (checked below).
                 let k1 = truth.stage.and_then(|st| st.k1.get());

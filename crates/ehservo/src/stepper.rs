@@ -202,7 +202,7 @@ impl<C: Controller + Clone + 'static> LawStep for SampledController<C> {
     fn step_parts(&mut self, t: f64, x: [f64; 3], z: [f64; 4], parts: &mut [f64]) -> LawOutput {
         // As the simulator's sampled loop: the diagnostics are filled with
         // the state the law saw, before the state advances.
-        let o = self.step_with(t, x, z, |c, s, o| c.annotate(s, o, &NoTruth));
+        let o = self.step_with(t, x, z, |c, s, o| c.annotate_stepped(s, o, &NoTruth));
         o.parts.write(parts);
         LawOutput {
             u: o.u,

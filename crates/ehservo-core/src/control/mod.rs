@@ -274,6 +274,21 @@ pub trait Controller<T: Real = f64> {
     /// with the state the law saw and what the simulator knows of the true
     /// plant. The default does nothing.
     fn annotate(&self, _s: &Self::State, _out: &mut Output<Self::Parts, T>, _truth: &dyn Truth) {}
+
+    /// [`Controller::annotate`] for an output of [`Controller::law_euler`]
+    /// (the sampled loop, [`crate::sampled::SampledController::step_with`]):
+    /// a diagnostic that `law_euler` already filled is kept (the NNBVSC's
+    /// ‖W‖, summed in its Euler pass on hosts). The same values as
+    /// `annotate`; the default calls it.
+    #[inline]
+    fn annotate_stepped(
+        &self,
+        s: &Self::State,
+        out: &mut Output<Self::Parts, T>,
+        truth: &dyn Truth,
+    ) {
+        self.annotate(s, out, truth);
+    }
 }
 
 /// What a controller is designed from besides its own parameters.

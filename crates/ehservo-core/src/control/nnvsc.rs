@@ -332,8 +332,13 @@ impl<T: Real> NnVsc<T> {
         next: &mut NnState<T>,
         dt: T,
     ) -> (Output<SlidingParts<T>, T>, bool) {
-        // The law writes every component of ξ̇: no zeroing first.
-        let out = self.law_body(m, s, next);
+        // The law writes every component of ξ̇: no zeroing first. ‖W‖ of
+        // the state the law saw (a logged diagnostic, see
+        // `annotate_stepped`) here, beside the Euler pass it does not
+        // depend on (its chain of additions overlaps that pass), and in
+        // AVX2 when the step is.
+        let mut out = self.law_body(m, s, next);
+        out.parts.w_norm = crate::math::norm(&s.w);
         let finite = next.euler_from(s, dt);
         (out, finite)
     }
@@ -765,6 +770,22 @@ impl<T: Real> Controller<T> for NnVsc<T> {
     fn annotate(&self, s: &NnState<T>, out: &mut Output<SlidingParts<T>, T>, truth: &dyn Truth) {
         SlidingParts::annotate(out, &s.w, truth);
     }
+
+    /// ‖W‖ was summed by `law_euler`'s Euler pass except in the one-pass
+    /// form (Arm), where it is computed here as `annotate` does.
+    #[inline]
+    fn annotate_stepped(
+        &self,
+        s: &NnState<T>,
+        out: &mut Output<SlidingParts<T>, T>,
+        truth: &dyn Truth,
+    ) {
+        if cfg!(target_arch = "arm") {
+            SlidingParts::annotate(out, &s.w, truth);
+        } else {
+            SlidingParts::annotate_but_norm(out, &s.w, truth);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -1000,6 +1021,11 @@ mod tests {
                     _ => c.law_then_euler(m, s, &mut next, dt),
                 };
                 assert_eq!((bits(&o), o.flags), (bits(&o2), o2.flags));
+                if variant > 0 {
+                    // ‖W‖ from the Euler pass is `annotate`'s to the bit.
+                    let n = crate::math::norm(&s.w);
+                    assert_eq!(o2.parts.w_norm.to_f64().to_bits(), n.to_f64().to_bits());
+                }
                 assert_eq!(ok, ok2);
                 assert_eq!(next.int_e.to_f64().to_bits(), ds.int_e.to_f64().to_bits());
                 for (a, b) in next.w.iter().zip(&ds.w) {

@@ -129,10 +129,16 @@ impl<T: Real> SlidingParts<T> {
     /// of (19) (less ξ) and the weight statistics of `w` (empty for the VSC).
     #[inline]
     pub fn annotate(out: &mut Output<SlidingParts<T>, T>, w: &[T], truth: &dyn Truth) {
+        Self::annotate_but_norm(out, w, truth);
+        out.parts.w_norm = crate::math::norm(w);
+    }
+
+    /// [`SlidingParts::annotate`] without ‖W‖ (`w_norm` is left as it is).
+    #[inline]
+    pub fn annotate_but_norm(out: &mut Output<SlidingParts<T>, T>, w: &[T], truth: &dyn Truth) {
         let p = &mut out.parts;
         let lumped = truth.lumped_uncertainty(out.u.to_f64(), p.u_eq.to_f64(), p.b_bar.to_f64());
         p.uncertainty = T::of(lumped) - p.xi;
-        p.w_norm = crate::math::norm(w);
         p.w_1 = w.get(1).copied().unwrap_or(T::ZERO);
         p.w_128 = w.get(128).copied().unwrap_or(T::ZERO);
     }
