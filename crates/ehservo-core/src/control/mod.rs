@@ -278,7 +278,7 @@ pub trait Controller<T: Real = f64> {
     /// [`Controller::annotate`] for an output of [`Controller::law_euler`]
     /// (the sampled loop, [`crate::sampled::SampledController::step_with`]):
     /// a diagnostic that `law_euler` already filled is kept (the NNBVSC's
-    /// ‖W‖, summed in its Euler pass on hosts). The same values as
+    /// ‖W‖, computed beside its Euler pass on hosts). The same values as
     /// `annotate`; the default calls it.
     #[inline]
     fn annotate_stepped(

@@ -636,6 +636,11 @@ impl<T: Real> NnVsc<T> {
     }
 }
 
+/// Whether [`Controller::law_euler`] takes the one-pass form (Arm: in
+/// order, no SIMD), which leaves ‖W‖ to `annotate`; elsewhere the law's
+/// passes, a vectorised Euler pass and ‖W‖ beside it.
+const ONE_PASS: bool = cfg!(target_arch = "arm");
+
 /// The five weights `j..j + 5`.
 #[inline(always)]
 fn row_of<T>(w: &[T; N_PHI], j: usize) -> &[T; N_LEVELS] {
@@ -750,7 +755,7 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         next: &mut NnState<T>,
         dt: T,
     ) -> (Output<SlidingParts<T>, T>, bool) {
-        if cfg!(target_arch = "arm") {
+        if ONE_PASS {
             self.law_euler_one_pass(m, s, next, dt)
         } else {
             #[cfg(all(any(test, feature = "std"), target_arch = "x86_64"))]
@@ -771,8 +776,9 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         SlidingParts::annotate(out, &s.w, truth);
     }
 
-    /// ‖W‖ was summed by `law_euler`'s Euler pass except in the one-pass
-    /// form (Arm), where it is computed here as `annotate` does.
+    /// ‖W‖ was computed by `law_euler` beside its Euler pass, except in
+    /// the one-pass form ([`ONE_PASS`]), where it is computed here as
+    /// `annotate` does.
     #[inline]
     fn annotate_stepped(
         &self,
@@ -780,7 +786,7 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         out: &mut Output<SlidingParts<T>, T>,
         truth: &dyn Truth,
     ) {
-        if cfg!(target_arch = "arm") {
+        if ONE_PASS {
             SlidingParts::annotate(out, &s.w, truth);
         } else {
             SlidingParts::annotate_but_norm(out, &s.w, truth);
@@ -1022,7 +1028,7 @@ mod tests {
                 };
                 assert_eq!((bits(&o), o.flags), (bits(&o2), o2.flags));
                 if variant > 0 {
-                    // ‖W‖ from the Euler pass is `annotate`'s to the bit.
+                    // law_euler's ‖W‖ is `annotate`'s to the bit.
                     let n = crate::math::norm(&s.w);
                     assert_eq!(o2.parts.w_norm.to_f64().to_bits(), n.to_f64().to_bits());
                 }
