@@ -206,12 +206,17 @@ function unpack(run, flat) {
   return run;
 }
 
+// One run per frame, however many input events came in it. body's
+// data-pending is "true" from the first event until that run is shown, so a
+// test (or a script) can wait for the page to settle on its inputs.
 function schedule() {
   if (state.pending) return;
   state.pending = true;
+  document.body.dataset.pending = 'true';
   requestAnimationFrame(() => {
     state.pending = false;
     rerun();
+    document.body.dataset.pending = 'false';
   });
 }
 

@@ -85,7 +85,11 @@ try {
   const slider = page.locator('input[aria-label="controller.gamma1 slider"]');
   await slider.focus();
   for (let i = 0; i < 3; i++) await page.keyboard.press('PageDown');
-  await page.waitForFunction((old) => document.querySelector('[data-metric="e_max_deg"]').dataset.value !== old, e0);
+  // Each press schedules a run for the next frame: wait for the last of them
+  // to be shown, not for the first change of e_max (the γ1 read below is the
+  // third press's).
+  await page.waitForFunction((old) => document.body.dataset.pending !== 'true'
+    && document.querySelector('[data-metric="e_max_deg"]').dataset.value !== old, e0);
   const e1 = await eMax(page);
   const g1 = await page.inputValue('input[aria-label="controller.gamma1"]');
   check('moving the γ1 slider changes e_max', e1 !== e0, `γ1 = ${g1}: e_max ${e0} → ${e1}`);
