@@ -363,8 +363,25 @@ impl<T: Real> NnVsc<T> {
         self.law_then_euler(m, s, next, dt)
     }
 
+    /// [`NnVsc::law_body`] compiled for AVX2, as
+    /// [`NnVsc::law_then_euler_avx2`] is: the same bits.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(all(any(test, feature = "std"), target_arch = "x86_64"))]
+    #[allow(unsafe_code)]
+    #[target_feature(enable = "avx2")]
+    unsafe fn law_avx2(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        ds: &mut NnState<T>,
+    ) -> Output<SlidingParts<T>, T> {
+        self.law_body(m, s, ds)
+    }
+
     /// [`Controller::law`]'s body, inlined into it and into the AVX2
-    /// copy of [`Controller::law_euler`].
+    /// copies of it and of [`Controller::law_euler`].
     #[inline(always)]
     fn law_body(
         &self,
@@ -735,6 +752,13 @@ impl<T: Real> Controller<T> for NnVsc<T> {
         s: &NnState<T>,
         ds: &mut NnState<T>,
     ) -> Output<SlidingParts<T>, T> {
+        // On an x86-64 with AVX2, the body compiled for it (see `law_euler`).
+        #[cfg(all(any(test, feature = "std"), target_arch = "x86_64"))]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (detected just above).
+            #[allow(unsafe_code)]
+            return unsafe { self.law_avx2(m, s, ds) };
+        }
         self.law_body(m, s, ds)
     }
 
@@ -1008,6 +1032,7 @@ mod tests {
         fn check<T: Real>(c: &NnVsc<T>, dt: T, s: &NnState<T>, m: &Measurement<T>) -> bool {
             let mut ds = NnState::zero();
             let o = c.law(m, s, &mut ds);
+            let ds_law = ds.clone();
             let ok = ds.euler_from(s, dt);
             let bits = |o: &Output<SlidingParts<T>, T>| {
                 let p = &o.parts;
@@ -1017,6 +1042,18 @@ mod tests {
                     .map(|v| v.to_f64().to_bits())
                     .collect::<Vec<_>>()
             };
+            // `law` on this target (on an x86-64 with AVX2: the AVX2 copy)
+            // is the plain body to the bit.
+            let mut ds_plain = NnState::zero();
+            let o_plain = c.law_body(m, s, &mut ds_plain);
+            assert_eq!((bits(&o), o.flags), (bits(&o_plain), o_plain.flags));
+            assert_eq!(
+                ds_law.int_e.to_f64().to_bits(),
+                ds_plain.int_e.to_f64().to_bits()
+            );
+            for (a, b) in ds_law.w.iter().zip(&ds_plain.w) {
+                assert_eq!(a.to_f64().to_bits(), b.to_f64().to_bits());
+            }
             // The one pass (a Cortex-M's), law_euler on this target (on an
             // x86-64 with AVX2: the AVX2 copy) and the plain two passes.
             for variant in 0..3 {
