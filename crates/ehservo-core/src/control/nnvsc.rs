@@ -1032,7 +1032,7 @@ mod tests {
         fn check<T: Real>(c: &NnVsc<T>, dt: T, s: &NnState<T>, m: &Measurement<T>) -> bool {
             let mut ds = NnState::zero();
             let o = c.law(m, s, &mut ds);
-            let ds_law = ds.clone();
+            let ds_law = ds;
             let ok = ds.euler_from(s, dt);
             let bits = |o: &Output<SlidingParts<T>, T>| {
                 let p = &o.parts;
