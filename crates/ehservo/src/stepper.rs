@@ -174,6 +174,8 @@ pub struct LawOutput {
 trait LawStep {
     fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput;
     fn step_parts(&mut self, t: f64, x: [f64; 3], z: [f64; 4], parts: &mut [f64]) -> LawOutput;
+    /// `step` on a copy (on the stack, not boxed).
+    fn peek(&self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput;
     fn reset(&mut self);
     fn signals(&self) -> &'static [Signal];
     fn faults(&self) -> u64;
@@ -208,6 +210,9 @@ impl<C: Controller + Clone + 'static> LawStep for SampledController<C> {
             u: o.u,
             flags: o.flags,
         }
+    }
+    fn peek(&self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput {
+        LawStep::step(&mut self.clone(), t, x, z)
     }
     fn reset(&mut self) {
         SampledController::reset(self)
@@ -325,7 +330,7 @@ impl ControllerStepper {
     /// state (a copy is stepped): the output map of a sampled-data system
     /// whose state update is `step`.
     pub fn peek(&self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput {
-        self.inner.boxed().step(t, x, z)
+        self.inner.peek(t, x, z)
     }
 
     /// Samples that returned the safe command (a bad measurement or law).

@@ -118,3 +118,26 @@ fn control_and_simulation_steps_do_not_allocate() {
         assert_eq!(n, 0, "{mode:?}: {n} allocations in 2000 simulation steps");
     }
 }
+
+/// The stepper the Python binding and the C ABI drive: `step`, `step_parts`
+/// and `peek` (which steps a copy) allocate nothing once it is built.
+#[test]
+fn a_stepped_controller_does_not_allocate() {
+    use ehservo::scenario::Scenario;
+    use ehservo::stepper::ControllerStepper;
+    let s = Scenario::parse("name = \"fig2\"\n").unwrap();
+    let mut c = ControllerStepper::new(&s).unwrap();
+    let mut parts = vec![0.0; c.signals().len()];
+    let before = allocs();
+    let mut acc = 0.0;
+    for k in 0..500 {
+        let t = k as f64 * c.period();
+        let (x, z) = ([0.01 * t, 0.0, 0.0], c.reference(t));
+        acc += c.peek(t, x, z).u;
+        acc += c.step_parts(t, x, z, &mut parts).u;
+        acc += c.step(t + c.period(), x, z).u;
+    }
+    let n = allocs() - before;
+    assert!(acc.is_finite());
+    assert_eq!(n, 0, "{n} allocations in 500 stepped samples");
+}
