@@ -150,7 +150,7 @@ try {
   // The screenshot: a tuned set-up (γ1 = 136.6, about what `ehservo
   // league` tunes for this kind, docs/league.md), σ and ‖W‖ shown.
   await field.fill('136.6');
-  await page.waitForFunction(() => document.body.dataset.state === 'ok');
+  await page.waitForFunction(() => document.body.dataset.pending !== 'true' && document.body.dataset.state === 'ok');
   await page.waitForTimeout(300);
   const shot = join(out, 'screenshot.png');
   await page.screenshot({ path: shot, fullPage: true });
