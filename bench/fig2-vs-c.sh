@@ -45,8 +45,8 @@ latest() {
 }
 cargo bench -q -p ehservo --bench sweep_run --no-run
 rust=$(latest "${CARGO_TARGET_DIR:-$root/target}")
-# The ratio depends on the CPU (1.08 on an Intel Xeon VM, 1.27 on an AMD
-# EPYC one, BENCHMARKS.md): say which one this is.
+# The ratio depends on the CPU and on its neighbours' load (BENCHMARKS.md
+# gives it for an Intel Xeon and an AMD EPYC VM): say which one this is.
 cpu_model=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo 2>/dev/null | head -n 1)
 echo "machine: ${cpu_model:-unknown CPU}, $(nproc 2>/dev/null || echo '?') cores, load average $(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo '?')"
 echo "C:    $tmp/nnvsc bench $n fast 1   ($src)"

@@ -215,8 +215,11 @@ function schedule() {
   document.body.dataset.pending = 'true';
   requestAnimationFrame(() => {
     state.pending = false;
-    rerun();
-    document.body.dataset.pending = 'false';
+    try {
+      rerun();
+    } finally {
+      document.body.dataset.pending = 'false';
+    }
   });
 }
 
