@@ -29,17 +29,45 @@ fn ensure_font() {
     });
 }
 
-/// A PNG file's backend. plotters writes bitmap files only off wasm32 (the
-/// browser playground, crates/ehservo-web, draws with uPlot instead).
+/// Draws into an RGB buffer and writes it to `path` as a PNG.
+///
+/// One fixed filter (Paeth) rather than plotters' default encoding (the
+/// `image` crate's adaptive choice among the five filters, row by row):
+/// the same pixels, a file of about the same size (575 kB against 557 kB
+/// for Fig. 2's 1400×1500 trace.png), and 17 % fewer instructions for the
+/// whole `ehservo run` (154 M against 185 M, callgrind).
 #[cfg(not(target_arch = "wasm32"))]
-fn bitmap(path: &Path, size: (u32, u32)) -> Result<BitMapBackend<'_>> {
-    Ok(BitMapBackend::new(path, size))
+fn png_file<F>(path: &Path, size: (u32, u32), draw: F) -> Result<()>
+where
+    F: FnOnce(DrawingArea<BitMapBackend<'_>, Shift>) -> Result<()>,
+{
+    let (w, h) = size;
+    let mut buf = vec![0u8; w as usize * h as usize * 3];
+    draw(BitMapBackend::with_buffer(&mut buf, size).into_drawing_area())?;
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_compression(png::Compression::Fast);
+    enc.set_filter(png::FilterType::Paeth);
+    let mut out = enc
+        .write_header()
+        .with_context(|| format!("writing {}", path.display()))?;
+    out.write_image_data(&buf)
+        .and_then(|()| out.finish())
+        .with_context(|| format!("writing {}", path.display()))
 }
 
+/// PNG files are not written on wasm32 (the browser playground,
+/// crates/ehservo-web, draws with uPlot instead).
 #[cfg(target_arch = "wasm32")]
-fn bitmap(path: &Path, _size: (u32, u32)) -> Result<BitMapBackend<'_>> {
+fn png_file<F>(path: &Path, _size: (u32, u32), _draw: F) -> Result<()>
+where
+    F: FnOnce(DrawingArea<BitMapBackend<'_>, Shift>) -> Result<()>,
+{
     Err(anyhow!(
-        "{}: PNG files are not written on wasm32 (plotters has no bitmap file backend there)",
+        "{}: PNG files are not written on wasm32",
         path.display()
     ))
 }
@@ -727,8 +755,8 @@ where
 impl Figure {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = bitmap(path, self.size)?.into_drawing_area();
-        draw_figure(root, self, true).with_context(|| format!("rendering {}", path.display()))
+        png_file(path, self.size, |root| draw_figure(root, self, true))
+            .with_context(|| format!("rendering {}", path.display()))
     }
 
     /// Renders to an SVG file.
@@ -911,8 +939,8 @@ where
 impl HeatMap {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = bitmap(path, self.size)?.into_drawing_area();
-        draw_heatmap(root, self).with_context(|| format!("rendering {}", path.display()))
+        png_file(path, self.size, |root| draw_heatmap(root, self))
+            .with_context(|| format!("rendering {}", path.display()))
     }
 
     /// Renders to an SVG file.
@@ -1077,8 +1105,8 @@ where
 impl Histogram {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = bitmap(path, self.size)?.into_drawing_area();
-        draw_histogram(root, self).with_context(|| format!("rendering {}", path.display()))
+        png_file(path, self.size, |root| draw_histogram(root, self))
+            .with_context(|| format!("rendering {}", path.display()))
     }
 
     /// Renders to an SVG file.
@@ -1193,8 +1221,8 @@ where
 impl Bars {
     /// Renders to a PNG file.
     pub fn png(&self, path: &Path) -> Result<()> {
-        let root = bitmap(path, self.size)?.into_drawing_area();
-        draw_bars(root, self).with_context(|| format!("rendering {}", path.display()))
+        png_file(path, self.size, |root| draw_bars(root, self))
+            .with_context(|| format!("rendering {}", path.display()))
     }
 
     /// Renders to an SVG file.
