@@ -262,15 +262,20 @@ impl Scenario {
         Ok(scenario)
     }
 
-    /// The scenario's sections built and checked together: the one place
-    /// that turns a scenario into what a simulation is made of.
-    pub fn setup(&self) -> Result<Setup, ScenarioError> {
-        Setup::new(self).map_err(|(key, reason)| ScenarioError {
+    /// An error in this scenario (no file position: it was already parsed).
+    fn error(&self, key: String, reason: String) -> ScenarioError {
+        ScenarioError {
             file: self.name.clone(),
             key,
             line_col: None,
             reason,
-        })
+        }
+    }
+
+    /// The scenario's sections built and checked together: the one place
+    /// that turns a scenario into what a simulation is made of.
+    pub fn setup(&self) -> Result<Setup, ScenarioError> {
+        Setup::new(self).map_err(|(key, reason)| self.error(key, reason))
     }
 
     /// Every check that serde's types cannot express. Returns the key path
@@ -309,24 +314,14 @@ impl Scenario {
     pub fn with_seed_built(&self, seed: u64) -> Result<(Scenario, Setup), ScenarioError> {
         let mut s = self.clone();
         s.uncertainty.seed = seed;
-        let setup = Setup::new(&s).map_err(|(key, reason)| ScenarioError {
-            file: self.name.clone(),
-            key,
-            line_col: None,
-            reason,
-        })?;
+        let setup = s.setup()?; // s.name is self.name
         Ok((s, setup))
     }
 
     /// This scenario as a TOML table: what [`Scenario::with_values_built_on`]
     /// starts from.
     pub fn table(&self) -> Result<toml::Table, ScenarioError> {
-        toml::Table::try_from(self).map_err(|e| ScenarioError {
-            file: self.name.clone(),
-            key: String::new(),
-            line_col: None,
-            reason: e.to_string(),
-        })
+        toml::Table::try_from(self).map_err(|e| self.error(String::new(), e.to_string()))
     }
 
     /// As [`Scenario::with_values_built`], from `table`, which must be this
@@ -337,12 +332,7 @@ impl Scenario {
         mut table: toml::Table,
         values: &[(String, toml::Value)],
     ) -> Result<(Scenario, Setup), ScenarioError> {
-        let fail = |key: String, reason: String| ScenarioError {
-            file: self.name.clone(),
-            key,
-            line_col: None,
-            reason,
-        };
+        let fail = |key: String, reason: String| self.error(key, reason);
         // A study may switch `controller.kind`. Between kinds with the same
         // keys (nnvsc, vsc, vsc-sat) the base's values carry over; to a kind
         // with other keys the table starts from that kind's defaults (the
