@@ -2,11 +2,12 @@
 //!
 //! Exit codes:
 //! - 0: done;
-//! - 1: the machine failed: a file that cannot be read or written, a full
+//! - 1: the machine failed: an output that cannot be written, a full
 //!   disk, standard output that cannot be written (`> /dev/full`: one line,
 //!   `error: writing to stdout: …`) or that was closed by its reader
 //!   (`| head -1`, `| true`: no message at all, the reader has gone);
-//! - 2: bad input (a scenario, a flag, an output folder that is not ours);
+//! - 2: bad input (a scenario, a flag, an output folder that is not ours,
+//!   an input file that is missing, unreadable, not a file or too large);
 //! - 130: interrupted by `SIGINT`, `SIGTERM` or `SIGHUP`; the staging
 //!   folders of the outputs being written are removed, the previous outputs
 //!   stay as they were ([`ehservo::signals`]).

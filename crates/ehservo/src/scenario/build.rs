@@ -85,9 +85,14 @@ impl Setup {
         }
         let n = sim.horizon / sim.step;
         if n > MAX_STEPS as f64 {
+            // Either key may be the one to change: the message names both.
             return bad(
-                "simulation.step",
-                format!("horizon/step = {n:.3e} steps exceeds the limit of {MAX_STEPS}"),
+                "simulation.horizon",
+                format!(
+                    "horizon/step = {} s / {} s = {n:.3e} steps exceeds the limit of \
+                     {MAX_STEPS}: shorten the horizon or lengthen the step",
+                    sim.horizon, sim.step
+                ),
             );
         }
         if (n - n.round()).abs() > 1e-6 * n.max(1.0) || n.round() < 1.0 {
