@@ -22,5 +22,6 @@ pub mod metrics;
 pub mod plant;
 pub mod sensor;
 pub mod simulation;
+pub mod triple;
 
 pub use ehservo_core as core;

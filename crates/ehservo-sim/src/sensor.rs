@@ -114,9 +114,11 @@ impl<'de> Deserialize<'de> for Channels {
 #[serde(deny_unknown_fields, default)]
 pub struct SensorConfig {
     /// Constant offset added to (θ, θ̇, θ̈) (rad, rad/s, rad/s²). Default 0.
+    #[serde(with = "crate::triple")]
     pub bias: [f64; 3],
     /// Quantisation step of each channel (0: exact). An encoder of N counts
     /// per revolution has a θ step of 2π/N rad. Default 0.
+    #[serde(with = "crate::triple")]
     pub resolution: [f64; 3],
     /// Which channels the controller gets from the sensors (default all);
     /// the rest come from the estimator.
@@ -124,7 +126,7 @@ pub struct SensorConfig {
     pub measured: Channels,
     /// Standard deviation of white Gaussian noise per channel (rad, rad/s,
     /// rad/s²), drawn once per sample. Default 0.
-    #[serde(skip_serializing_if = "is_zero3")]
+    #[serde(skip_serializing_if = "is_zero3", with = "crate::triple")]
     pub noise: [f64; 3],
     /// Seed of the noise (channel i draws from its own stream, seed + i).
     #[serde(skip_serializing_if = "is_zero_u64")]

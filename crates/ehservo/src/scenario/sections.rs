@@ -47,6 +47,7 @@ pub struct SimulationCfg {
     /// |θ| beyond which a run counts as diverged (rad). Default 1.
     pub theta_limit: f64,
     /// x(0) = (θ, θ̇, θ̈). Default 0.
+    #[serde(with = "ehservo_sim::triple")]
     pub x0: [f64; 3],
     /// Sampled mode: apply each command one sample after the measurement
     /// it was computed from (a controller that takes a period to compute).
@@ -101,8 +102,10 @@ impl Default for PlantCfg {
 #[serde(deny_unknown_fields, default)]
 pub struct SurfaceCfg {
     /// Poles of the sliding dynamics (default −20, −30, −40).
+    #[serde(default, with = "ehservo_sim::triple::option")]
     pub poles: Option<[f64; 3]>,
     /// Coefficients (p1, p2, p3) of (10).
+    #[serde(default, with = "ehservo_sim::triple::option")]
     pub p: Option<[f64; 3]>,
 }
 
@@ -116,7 +119,11 @@ pub struct FaultCfg {
     /// `"hold-last"` (default: the last good command) or `"zero"`.
     pub safe_command: SafeCommandCfg,
     /// |θ|, |θ̇|, |θ̈| beyond these are sensor faults (rad, rad/s, rad/s²).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        with = "ehservo_sim::triple::option"
+    )]
     pub measurement_limit: Option<[f64; 3]>,
 }
 
