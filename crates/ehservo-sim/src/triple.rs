@@ -2,7 +2,9 @@
 //! bias, …) that names the length a key takes: for a longer array, toml's
 //! own message is "invalid length 4, expected fewer elements in array".
 //! Use as `#[serde(with = "triple")]`, or `triple::option` on an
-//! `Option<[f64; 3]>` (with `default`).
+//! `Option<[f64; 3]>`: a missing key is then not `None` by itself, so the
+//! struct needs `#[serde(default)]` (as every scenario section has) or the
+//! field its own `default`.
 
 use serde::{de::Error, Deserialize, Deserializer, Serialize, Serializer};
 

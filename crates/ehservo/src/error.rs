@@ -4,8 +4,9 @@
 //! [`StudyError`](crate::study::StudyError) and [`InputError`] for any other
 //! input the user can fix (a manifest, a shard, a flag, an input file that
 //! is missing or unreadable) — and everything else is a failure of the
-//! machine (an output that cannot be written, a full disk). The command line's exit code follows the kind found in the
-//! error's chain, never the place it was raised: bad input 2, anything else 1.
+//! machine (an output that cannot be written, a full disk). The command
+//! line's exit code follows the kind found in the error's chain, never the
+//! place it was raised: bad input 2, anything else 1.
 
 use std::fmt;
 

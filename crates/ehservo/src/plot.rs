@@ -46,17 +46,17 @@ where
     draw(BitMapBackend::with_buffer(&mut buf, size).into_drawing_area())?;
     let file =
         std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.set_compression(png::Compression::Fast);
-    enc.set_filter(png::FilterType::Paeth);
-    let mut out = enc
-        .write_header()
-        .with_context(|| format!("writing {}", path.display()))?;
-    out.write_image_data(&buf)
-        .and_then(|()| out.finish())
-        .with_context(|| format!("writing {}", path.display()))
+    let encode = || {
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
+        enc.set_filter(png::FilterType::Paeth);
+        let mut out = enc.write_header()?;
+        out.write_image_data(&buf)?;
+        out.finish()
+    };
+    encode().with_context(|| format!("writing {}", path.display()))
 }
 
 /// PNG files are not written on wasm32 (the browser playground,

@@ -102,10 +102,10 @@ impl Default for PlantCfg {
 #[serde(deny_unknown_fields, default)]
 pub struct SurfaceCfg {
     /// Poles of the sliding dynamics (default −20, −30, −40).
-    #[serde(default, with = "ehservo_sim::triple::option")]
+    #[serde(with = "ehservo_sim::triple::option")]
     pub poles: Option<[f64; 3]>,
     /// Coefficients (p1, p2, p3) of (10).
-    #[serde(default, with = "ehservo_sim::triple::option")]
+    #[serde(with = "ehservo_sim::triple::option")]
     pub p: Option<[f64; 3]>,
 }
 
@@ -120,7 +120,6 @@ pub struct FaultCfg {
     pub safe_command: SafeCommandCfg,
     /// |θ|, |θ̇|, |θ̈| beyond these are sensor faults (rad, rad/s, rad/s²).
     #[serde(
-        default,
         skip_serializing_if = "Option::is_none",
         with = "ehservo_sim::triple::option"
     )]
