@@ -3,8 +3,9 @@
 //!
 //! **f64** is the simulator's type: its results are the reference, and the
 //! `std` feature gives it the platform's `exp` (glibc's on Linux, faster;
-//! on an x86-64 Linux host with FMA and AVX2, [`Real::exp4`] computes four
-//! of them at once in AVX2 lanes, to glibc's bit).
+//! on an x86-64 host with FMA and AVX2 and glibc ≥ 2.28, [`Real::exp4`]
+//! computes four of them at once in AVX2 lanes, to glibc's bit, after a
+//! self-test on first use).
 //! **f32** is a Cortex-M4F's: its single-precision FPU does `+ − × ÷ √` in
 //! hardware (f64 would be emulated in software, tens of times slower). For
 //! f32 the same portable code runs with or without `std`, so a host build
@@ -109,8 +110,11 @@ pub trait Real:
     /// eᵛ.
     fn exp(self) -> Self;
     /// `[e^v0, e^v1, e^v2, e^v3]`: the same bits as four [`Real::exp`]s.
-    /// For f64 on an x86-64 Linux host with FMA and AVX2, glibc's `exp`
-    /// in four AVX2 lanes (`math/exp4.rs`); otherwise four calls.
+    /// For f64 with `std` on an x86-64 host with FMA and AVX2 and glibc
+    /// ≥ 2.28, glibc's `exp` in four AVX2 lanes when every argument is in
+    /// its fast path (2⁻⁵⁴ ≤ |v| < 512) and a self-test on first use finds
+    /// the platform's `exp` giving its bits (`math/exp4.rs`); otherwise
+    /// four calls.
     #[inline(always)]
     fn exp4(v: [Self; 4]) -> [Self; 4] {
         v.map(Self::exp)

@@ -261,7 +261,8 @@ impl<T: Real> Rbf<T> {
             return Some(g);
         }
         // The four exponentials together: independent, so they overlap
-        // (and on an x86-64 host with AVX2, in one vector: `Real::exp4`).
+        // (and for f64 on an x86-64 Linux host with AVX2 and FMA, in one
+        // vector with glibc's bits: `Real::exp4`).
         let [big_g, q0, q1, q2] =
             T::exp4([-dist2 * self.inv_width_sq, arg_q[0], arg_q[1], arg_q[2]]);
         let q = [q0, q1, q2];

@@ -1053,14 +1053,16 @@ mod tests {
                     .map(|v| v.to_f64().to_bits())
                     .collect::<Vec<_>>()
             };
-            // `law` on this target (on an x86-64 with AVX2: the AVX2 copy)
-            // is the plain body to the bit.
+            // `law` on this target (on an x86-64 with AVX2 and FMA: that
+            // copy) is the plain body to the bit. (Both take Φ's
+            // exponentials from `Real::exp4`; that it gives `exp`'s bits is
+            // exp4's own test, and the golden runs' in `crates/ehservo`.)
             let mut ds_plain = NnState::zero();
             let o_plain = c.law_body(m, s, &mut ds_plain);
             assert_eq!((bits(&o), o.flags), (bits(&o_plain), o_plain.flags));
             assert_eq!(state_bits(&ds_law), state_bits(&ds_plain));
             // The one pass (a Cortex-M's), law_euler on this target (on an
-            // x86-64 with AVX2: the AVX2 copy) and the plain two passes.
+            // x86-64 with AVX2 and FMA: that copy) and the plain two passes.
             for variant in 0..3 {
                 let mut next = NnState::zero();
                 let (o2, ok2) = match variant {
