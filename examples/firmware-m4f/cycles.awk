@@ -73,13 +73,20 @@ function classify(mn, ops,   base, k) {
 
 BEGIN { FS = "\t"; entry = norm(entry); ret = norm(ret); if (mixcall == "") mixcall = 1 }
 
-# Pass 1: the disassembly.
+# Pass 1: the disassembly, GNU objdump's or llvm-objdump's:
+#   GNU   "    d50:\tb5f0      \tpush\t{r4, r5, r6, r7, lr}"
+#   LLVM  "     d50: f0 b5        \tpush\t{r4, r5, r6, r7, lr}"
 FNR == NR {
-    if ($1 !~ /^ *[0-9a-f]+:$/ || NF < 3) next
-    a = $1; gsub(/[ :]/, "", a); a = norm(a)
-    raw = $2; gsub(/ /, "", raw)
+    if ($1 ~ /^ *[0-9a-f]+:$/ && NF >= 3) {
+        a = $1; raw = $2; m = $3; o = (NF >= 4) ? $4 : ""
+    } else if ($1 ~ /^ *[0-9a-f]+:( [0-9a-f][0-9a-f])+ *$/ && NF >= 2) {
+        a = $1; sub(/:.*/, "", a); raw = $1; sub(/^[^:]*:/, "", raw)
+        m = $2; o = (NF >= 3) ? $3 : ""
+    } else next
+    gsub(/[ :]/, "", a); a = norm(a)
+    gsub(/ /, "", raw)
     size[a] = length(raw) / 2
-    mnem[a] = $3; opnd[a] = (NF >= 4) ? $4 : ""
+    mnem[a] = m; opnd[a] = o
     next
 }
 
@@ -127,4 +134,11 @@ function trace(line,   s, f, pc) {
 
 function hex(h,   i, c, v) { v = 0; h = tolower(h); for (i = 1; i <= length(h); i++) { c = index("0123456789abcdef", substr(h, i, 1)) - 1; v = v * 16 + c }; return v }
 
-END { if (unknown) printf "warning: %d traced PCs not in the disassembly\n", unknown > "/dev/stderr" }
+# A traced instruction of a call that the disassembly does not have would
+# be costed as one cycle: the cycle figures would be wrong, so fail.
+END {
+    if (unknown) {
+        printf "error: %d traced instructions of control() are not in the disassembly (an objdump whose format this script does not read?)\n", unknown > "/dev/stderr"
+        exit 1
+    }
+}

@@ -23,7 +23,8 @@
 # Environment: STEPS (default 100000), FLOATS (default "f32 f64"),
 # OPT_LEVEL (overrides the release profile's opt-level), TRACE_STEPS
 # (default 5; 0 skips the trace), WORST_STEPS (default 100, f32 only),
-# OUT (default target/firmware-m4f).
+# OUT (default target/firmware-m4f), OBJDUMP (default arm-none-eabi-objdump,
+# else llvm-objdump: the cycle model reads either one's disassembly).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -58,7 +59,8 @@ fi
 
 pick() { for t in "$@"; do if command -v "$t" >/dev/null 2>&1; then echo "$t"; return; fi; done; }
 SIZE="$(pick arm-none-eabi-size llvm-size size)"
-OBJDUMP="$(pick arm-none-eabi-objdump llvm-objdump)"
+OBJDUMP="${OBJDUMP:-$(pick arm-none-eabi-objdump llvm-objdump)}"
+[ -n "$OBJDUMP" ] || { echo "measure.sh: no objdump for Arm: install binutils-arm-none-eabi (or LLVM's llvm-objdump)" >&2; exit 1; }
 NM="$(pick arm-none-eabi-nm llvm-nm nm)"
 CXXFILT="$(pick arm-none-eabi-c++filt c++filt llvm-cxxfilt cat)"
 
@@ -67,7 +69,7 @@ report="$OUT/measure-opt${opt}.txt"
 say() { echo "$@" | tee -a "$report"; }
 
 say "== firmware-m4f measurements ($(date -u +%Y-%m-%d), $(qemu-system-arm --version | head -1), $(rustc --version))"
-say "opt-level=$opt steps=$STEPS trace_steps=$TRACE_STEPS size_tool=$SIZE"
+say "opt-level=$opt steps=$STEPS trace_steps=$TRACE_STEPS size_tool=$SIZE objdump=$OBJDUMP"
 
 for fl in $FLOATS; do
   feat=()
