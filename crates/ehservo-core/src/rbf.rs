@@ -211,12 +211,14 @@ impl<T: Real> Rbf<T> {
     /// factors are `G·h1[i]`, `h2[i]`, `h3[i]` with `h[m + j] = C_|j|·q^j`,
     /// the ratio of each level's factor to the nearest one's (≤ 1).
     ///
-    /// With [`Real::RBF_AXIS_FALLBACK`] (f32) only the axes outside the
-    /// range take the five direct exponentials: `G` is then the nearest
-    /// kernel over the axes in range and multiplies the first of them (one
-    /// axis out of range costs 8 exponentials, not 15); `None` only
-    /// when no axis is in range. Without it (f64) one axis out of range
-    /// gives `None`, and every factor is direct.
+    /// With [`Real::RBF_AXIS_FALLBACK`] (f32) an axis farther than √S·δ
+    /// from its nearest level makes every kernel smaller than e^−S, and
+    /// every factor is flushed to zero (no exponential); otherwise only the
+    /// axes outside the range take the five direct exponentials: `G` is
+    /// then the nearest kernel over the axes in range and multiplies the
+    /// first of them (one axis out of range costs 8 exponentials, not 15);
+    /// `None` only when no axis is in range. Without it (f64) one axis out
+    /// of range gives `None`, and every factor is direct.
     #[cfg_attr(target_arch = "x86_64", inline(always))]
     #[cfg_attr(not(target_arch = "x86_64"), inline)]
     fn gaussians_spaced(&self, sp: &Spacing<T>, xt: &[T; 3]) -> Option<[[T; N_LEVELS]; 3]> {
@@ -246,22 +248,7 @@ impl<T: Real> Rbf<T> {
             dist2 += d * d;
         }
         if T::RBF_AXIS_FALLBACK && direct != [false; 3] {
-            let first = direct.iter().position(|&dk| !dk)?;
-            let big_g = exp(-dist2 * self.inv_width_sq);
-            let mut g = [0, 1, 2].map(|k| {
-                if direct[k] {
-                    self.levels.map(|l| {
-                        let d = xt[k] - l;
-                        exp(-d * d * self.inv_width_sq)
-                    })
-                } else {
-                    Self::ratios(sp, m[k], exp(arg_q[k]))
-                }
-            });
-            for gf in g[first].iter_mut() {
-                *gf *= big_g;
-            }
-            return Some(g);
+            return self.axis_fallback(sp, xt, &m, &arg_q, dist2, &direct);
         }
         // The four exponentials together: independent, so they overlap
         // (and for f64 on an x86-64 Linux host with AVX2 and FMA, in one
@@ -274,6 +261,51 @@ impl<T: Real> Rbf<T> {
             Self::ratios(sp, m[1], q[1]),
             Self::ratios(sp, m[2], q[2]),
         ])
+    }
+
+    /// [`Self::gaussians_spaced`] when an axis is out of range, with
+    /// [`Real::RBF_AXIS_FALLBACK`] (f32). Out of line and cold: the
+    /// start-up transient's steps take it, and inlined it cost every
+    /// other step of the Cortex-M4F 24 instructions of register traffic.
+    #[cold]
+    #[inline(never)]
+    fn axis_fallback(
+        &self,
+        sp: &Spacing<T>,
+        xt: &[T; 3],
+        m: &[usize; 3],
+        arg_q: &[T; 3],
+        dist2: T,
+        direct: &[bool; 3],
+    ) -> Option<[[T; N_LEVELS]; 3]> {
+        // An axis whose nearest level is more than √S·δ away has every
+        // factor below e^−S (f32: 1.8e-35), and so has every kernel:
+        // flushed to zero, as an FPU's flush-to-zero mode would, with
+        // no exponential. (Not for NaN, which stays NaN; an infinite
+        // coordinate gives the zeros exp(−∞) gave.)
+        let far = |k: usize| {
+            let d = xt[k] - self.levels[m[k]];
+            direct[k] && d * d * self.inv_width_sq > spaced_max()
+        };
+        if (far(0) || far(1) || far(2)) && !xt.iter().any(|v| v.is_nan()) {
+            return Some([[T::ZERO; N_LEVELS]; 3]);
+        }
+        let first = direct.iter().position(|&dk| !dk)?;
+        let big_g = exp(-dist2 * self.inv_width_sq);
+        let mut g = [0, 1, 2].map(|k| {
+            if direct[k] {
+                self.levels.map(|l| {
+                    let d = xt[k] - l;
+                    exp(-d * d * self.inv_width_sq)
+                })
+            } else {
+                Self::ratios(sp, m[k], exp(arg_q[k]))
+            }
+        });
+        for gf in g[first].iter_mut() {
+            *gf *= big_g;
+        }
+        Some(g)
     }
 
     /// `h[i] = C_|i−m|·q^(i−m)`, i = 0..5: an axis's factors relative to

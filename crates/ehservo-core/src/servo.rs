@@ -447,14 +447,23 @@ impl<T: Real> NominalModel<T> {
     /// sine), the division and root of each direction need only `x`, so a
     /// law can start them first and let them run while it computes `v`;
     /// [`DirectionalGains::pick`] then returns what `gain_for(x, v, floor)`
-    /// returns, to the bit.
+    /// returns, to the bit. On an in-order core (Arm), where nothing runs
+    /// ahead, only the picked direction is computed, in `pick`.
     #[inline]
     pub fn directional_gains(&self, pl: T, floor: T) -> DirectionalGains<T> {
+        let (up, down) = if EAGER_GAINS {
+            (
+                self.floored_gain(pl, T::ONE, floor),
+                self.floored_gain(pl, -T::ONE, floor),
+            )
+        } else {
+            ((T::ZERO, false), (T::ZERO, false))
+        };
         DirectionalGains {
             pl,
             floor,
-            up: self.floored_gain(pl, T::ONE, floor),
-            down: self.floored_gain(pl, -T::ONE, floor),
+            up,
+            down,
         }
     }
 
@@ -506,6 +515,14 @@ impl<T: Real> NominalModel<T> {
     }
 }
 
+/// Whether [`NominalModel::directional_gains`] computes both directions
+/// ahead of `v` (an out-of-order host overlaps their divisions and roots
+/// with the rest of the law) or leaves the one picked to
+/// [`DirectionalGains::pick`] (Arm: an in-order Cortex-M would spend a
+/// division and a root, about 35 cycles, on the other direction). The same
+/// bits either way: `pick` computes what the eager form stores.
+const EAGER_GAINS: bool = !cfg!(target_arch = "arm");
+
 /// The floored nominal gain for each valve direction at one state
 /// ([`NominalModel::directional_gains`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -521,9 +538,9 @@ impl<T: Real> DirectionalGains<T> {
     /// it was floored. `v = 0` (or NaN), rare, is computed here.
     #[inline]
     pub fn pick(&self, model: &NominalModel<T>, v: T) -> (T, bool) {
-        if v > T::ZERO {
+        if EAGER_GAINS && v > T::ZERO {
             self.up
-        } else if v < T::ZERO {
+        } else if EAGER_GAINS && v < T::ZERO {
             self.down
         } else {
             model.floored_gain(self.pl, sgn(v), self.floor)

@@ -255,3 +255,79 @@ fn f32_rbf_axis_fallback_agrees_with_f64_direct() {
     r32.phi(&[0.0, f32::NAN, 0.0], &z.map(|v| v as f32), &mut p32);
     assert!(p32[1..=N_KERNELS].iter().all(|p| p.is_nan()));
 }
+
+/// f32's flush of a far axis: an axis more than √80·δ = 4.472·0.5 from its
+/// nearest level (here x̃₃ − 1 = 4.6: 4.6²/0.25 = 84.6 > 80) makes every
+/// kernel exactly 0 (the largest, e^−84.6 ≈ 1.8e-37, is below the span f32
+/// keeps), so Φ is the bias and z only and ‖Φ‖ = √(1 + ‖z‖²). Just inside
+/// (x̃₃ − 1 = 4.4: 77.4) the direct factors are kept: the kernel nearest x
+/// is e^−(0.1² + 0.2² + 4.4²)/0.25 = e^−77.64 ≈ 1.9e-34, nonzero, and
+/// f64's to 1e-4: x̃₃ in f32 carries ≈ 3e-7 of rounding, which the
+/// exponent's slope 2·4.4/0.25 = 35 turns into ≈ 1e-5 of the kernel.
+#[test]
+fn f32_rbf_far_axis_is_flushed() {
+    let r64 = Rbf::paper();
+    let r32 = r64.cast::<f32>().unwrap();
+    let s = r64.scale();
+    let z = [0.01, -0.2, 3.0, -40.0];
+    let z32 = z.map(|v| v as f32);
+    let mut p32 = [0.0f32; N_PHI];
+    let mut p64 = [0.0f64; N_PHI];
+    let at = |xt: [f64; 3]| [xt[0] * s[0], xt[1] * s[1], xt[2] * s[2]];
+    // Flushed.
+    let x = at([0.1, -0.2, 5.6]);
+    let norm = r32.phi(&x.map(|v| v as f32), &z32, &mut p32);
+    assert!(p32[1..=N_KERNELS].iter().all(|&p| p == 0.0));
+    let expect = (1.0 + z.iter().map(|v| v * v).sum::<f64>()).sqrt();
+    assert!((f64::from(norm) - expect).abs() <= 1e-6 * expect);
+    // Kept: the kernel at the centre nearest x (levels 0, 0, 1: index
+    // 25·2 + 5·2 + 4 = 64, the first Φ entry being the bias).
+    let x = at([0.1, -0.2, 5.4]);
+    r32.phi(&x.map(|v| v as f32), &z32, &mut p32);
+    r64.phi_direct(&x, &z, &mut p64);
+    let by_hand = (-(0.01 + 0.04 + 4.4f64 * 4.4) / 0.25).exp();
+    assert!(
+        (p64[1 + 64] / by_hand - 1.0).abs() < 1e-9,
+        "{}",
+        p64[1 + 64]
+    );
+    assert!(p32[1 + 64] > 0.0);
+    let rel = (f64::from(p32[1 + 64]) / p64[1 + 64] - 1.0).abs();
+    assert!(rel < 1e-4, "{rel:e}");
+}
+
+/// The weights over the Fig. 2 run at 10 kHz (10⁵ steps, 130 weights):
+/// how many forward-Euler updates left a weight unchanged (an increment
+/// below half an ulp of w, or the dead zone's exact zero), and ‖W(10 s)‖
+/// in f32 against f64. Printed for docs/float-types.md; asserted: ‖W‖
+/// within 1e-4 relative (f32's rounding accumulated over 10⁵ steps), and
+/// f32 not losing more than 10 % more updates than f64 does.
+#[test]
+fn f32_weights_track_f64() {
+    fn run<T: Real>() -> (u64, f64) {
+        let mut lp = Fig2Loop::<T>::paper(10_000).unwrap();
+        let mut unchanged = 0;
+        for _ in 0..100_000 {
+            let before = lp.controller().state().w;
+            lp.step();
+            let after = &lp.controller().state().w;
+            unchanged += before.iter().zip(after).filter(|(a, b)| a == b).count() as u64;
+        }
+        let w = &lp.controller().state().w;
+        (
+            unchanged,
+            w.iter()
+                .map(|v| v.to_f64() * v.to_f64())
+                .sum::<f64>()
+                .sqrt(),
+        )
+    }
+    let (u32_, n32) = run::<f32>();
+    let (u64_, n64) = run::<f64>();
+    println!(
+        "Fig. 2, 10 kHz: unchanged weight updates f32 {u32_}, f64 {u64_} of {}; ‖W(10 s)‖ f32 {n32:.5}, f64 {n64:.5}",
+        100_000u64 * N_PHI as u64
+    );
+    assert!((n32 / n64 - 1.0).abs() < 1e-4, "{n32} vs {n64}");
+    assert!((u32_ as f64) < 1.1 * u64_ as f64, "{u32_} vs {u64_}");
+}
