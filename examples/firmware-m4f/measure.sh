@@ -16,13 +16,15 @@
 # instruction per translation block (`-d exec,nochain` with single-stepping)
 # to count each call's instructions exactly and compare.
 #
-# The worst steps of the Fig. 2 run come early (the start-up transient,
-# k < 100): the f32 build is also traced over its first WORST_STEPS steps
-# (default 100; 0 skips it) for the step with the most estimated cycles.
+# The f32 build is also traced over its first WORST_STEPS steps for the
+# step with the most estimated cycles: by default the first 100 (the
+# start-up transient) or, if later, up to and including the step with the
+# most SysTick ticks of the full run; WORST_STEPS=100000 traces the whole
+# run (about 15 minutes); 0 skips it.
 #
 # Environment: STEPS (default 100000), FLOATS (default "f32 f64"),
 # OPT_LEVEL (overrides the release profile's opt-level), TRACE_STEPS
-# (default 5; 0 skips the trace), WORST_STEPS (default 100, f32 only),
+# (default 5; 0 skips the trace), WORST_STEPS (default: see above; f32 only),
 # OUT (default target/firmware-m4f), OBJDUMP (default arm-none-eabi-objdump,
 # else llvm-objdump: the cycle model reads either one's disassembly).
 set -euo pipefail
@@ -33,7 +35,7 @@ cd "$here"
 STEPS="${STEPS:-100000}"
 FLOATS="${FLOATS:-f32 f64}"
 TRACE_STEPS="${TRACE_STEPS:-5}"
-WORST_STEPS="${WORST_STEPS:-100}"
+WORST_STEPS="${WORST_STEPS:-auto}"
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
 OUT="${OUT:-$CARGO_TARGET_DIR/firmware-m4f}"
 mkdir -p "$OUT"
@@ -157,15 +159,20 @@ for fl in $FLOATS; do
 
   # The costliest of the first WORST_STEPS steps by the cycle model (f32
   # only: an f64 step is 150 000 instructions to trace).
-  if [ "$fl" = f32 ] && [ "$WORST_STEPS" -gt 0 ]; then
+  worst_steps="$WORST_STEPS"
+  if [ "$worst_steps" = auto ]; then
+    worst_k=$(sed -n 's/^timing: control().* max_at_k=\([0-9]*\).*/\1/p' "$log")
+    worst_steps=$(( ${worst_k:-0} + 1 > 100 ? ${worst_k:-0} + 1 : 100 ))
+  fi
+  if [ "$fl" = f32 ] && [ "$worst_steps" -gt 0 ]; then
     tmp=$(mktemp -d)
     mkfifo "$tmp/trace"
     awk -v entry="$entry" -v ret="$ret" -f "$here/cycles.awk" "$dis" "$tmp/trace" >"$tmp/exact" &
     apid=$!
     "${QEMU[@]}" "${ICOUNT[@]}" "${ONE_INSN[@]}" -d exec,nochain -D "$tmp/trace" \
-      -kernel "$elf" -append "$WORST_STEPS" >/dev/null
+      -kernel "$elf" -append "$worst_steps" >/dev/null
     wait "$apid"
-    grep '^exact:' "$tmp/exact" | sort -k5,5n -k3,3n | tail -1 | awk -v n="$WORST_STEPS" '
+    grep '^exact:' "$tmp/exact" | sort -k5,5n -k3,3n | tail -1 | awk -v n="$worst_steps" '
       { printf "worst of the first %d steps by the cycle model (traced): k=%d exact=%d cycles=%d..%d CPI=%.2f..%.2f\n",
           n, $2, $3, $4, $5, $4 / $3, $5 / $3 }' | tee -a "$report"
     rm -rf "$tmp"
