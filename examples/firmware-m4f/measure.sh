@@ -36,6 +36,10 @@ STEPS="${STEPS:-100000}"
 FLOATS="${FLOATS:-f32 f64}"
 TRACE_STEPS="${TRACE_STEPS:-5}"
 WORST_STEPS="${WORST_STEPS:-auto}"
+if ! [[ "$WORST_STEPS" =~ ^(auto|[0-9]+)$ ]]; then
+  echo "measure.sh: WORST_STEPS must be 'auto' or a number of steps, not '$WORST_STEPS'" >&2
+  exit 2
+fi
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
 OUT="${OUT:-$CARGO_TARGET_DIR/firmware-m4f}"
 mkdir -p "$OUT"
@@ -165,6 +169,7 @@ for fl in $FLOATS; do
     worst_steps=$(( ${worst_k:-0} + 1 > 100 ? ${worst_k:-0} + 1 : 100 ))
   fi
   if [ "$fl" = f32 ] && [ "$worst_steps" -gt 0 ]; then
+    say "tracing the first $worst_steps f32 steps for the one with the most cycles (about 1 s per 100 steps)"
     tmp=$(mktemp -d)
     mkfifo "$tmp/trace"
     awk -v entry="$entry" -v ret="$ret" -f "$here/cycles.awk" "$dis" "$tmp/trace" >"$tmp/exact" &

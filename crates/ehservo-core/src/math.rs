@@ -74,17 +74,19 @@ pub trait Real:
     /// f64, 80 for f32 (whose `exp` overflows past 88.7).
     const EXP_SPAN: Self;
     /// Whether the RBF's factorised Gaussians, when one axis is outside
-    /// [`Real::EXP_SPAN`], fall back to direct exponentials for that axis
-    /// only (f32: one axis out of range costs 8 exponentials, not 15) or for
-    /// all three (f64: its results stay those of the reference, bit for
-    /// bit).
+    /// [`Real::EXP_SPAN`], handle that axis alone (f32: zeros when it is
+    /// so far that every kernel is below e^−S, else its five direct
+    /// exponentials, 8 in all instead of 15) or fall back to direct
+    /// exponentials for all three (f64: its results stay those of the
+    /// reference, bit for bit).
     const RBF_AXIS_FALLBACK: bool;
     /// Whether the NNBVSC's Euler step keeps the reference's operations,
     /// `w + dt·(a·g − bw·w)` (f64: its results are the independently
     /// checked reference's, bit for bit), or folds dt into the step's
     /// factors, `(w − (dt·bw)·w) + (dt·a)·g`: four operations a weight
-    /// instead of five (f32: −125 a step on a Cortex-M4F; its results are
-    /// held to f64's by the measured tolerance of docs/float-types.md).
+    /// instead of five (f32: −117 instructions a step on average on a
+    /// Cortex-M4F; its results are held to f64's by the measured tolerance
+    /// of docs/float-types.md).
     const FOLDED_EULER: bool;
     /// The type's name (`"f64"`, `"f32"`).
     const NAME: &'static str;
@@ -314,7 +316,9 @@ fn sqrt_f32(v: f32) -> f32 {
         // root with vpush/vpop cost about 6 cycles a root).
         let bits: u32;
         // SAFETY: register moves and one VSQRT.F32, which touch no memory
-        // and no state but s15, declared clobbered.
+        // and no register but s15, declared clobbered; VSQRT may set
+        // FPSCR's sticky exception flags (inexact, invalid), which is why
+        // `preserves_flags` is not claimed.
         #[allow(unsafe_code)]
         unsafe {
             core::arch::asm!(
@@ -323,7 +327,7 @@ fn sqrt_f32(v: f32) -> f32 {
                 "vmov {x}, s15",
                 x = inout(reg) v.to_bits() => bits,
                 out("s15") _,
-                options(pure, nomem, nostack, preserves_flags)
+                options(pure, nomem, nostack)
             );
         }
         f32::from_bits(bits)

@@ -213,7 +213,8 @@ impl<T: Real> Rbf<T> {
     ///
     /// With [`Real::RBF_AXIS_FALLBACK`] (f32) an axis farther than √S·δ
     /// from its nearest level makes every kernel smaller than e^−S, and
-    /// every factor is flushed to zero (no exponential); otherwise only the
+    /// every factor is taken as zero (no exponential); otherwise (a grid
+    /// spaced wider than δ, where q leaves the range first) only the
     /// axes outside the range take the five direct exponentials: `G` is
     /// then the nearest kernel over the axes in range and multiplies the
     /// first of them (one axis out of range costs 8 exponentials, not 15);
@@ -280,9 +281,11 @@ impl<T: Real> Rbf<T> {
     ) -> Option<[[T; N_LEVELS]; 3]> {
         // An axis whose nearest level is more than √S·δ away has every
         // factor below e^−S (f32: 1.8e-35), and so has every kernel:
-        // flushed to zero, as an FPU's flush-to-zero mode would, with
-        // no exponential. (Not for NaN, which stays NaN; an infinite
-        // coordinate gives the zeros exp(−∞) gave.)
+        // all are taken as zero, with no exponential. (Not for NaN, which
+        // stays NaN; an infinite coordinate gives the zeros exp(−∞)
+        // gave.) For the paper's grid (Δ = δ) every axis out of range is
+        // that far; the direct exponentials below serve grids spaced
+        // wider than δ, where q leaves the range first.
         let far = |k: usize| {
             let d = xt[k] - self.levels[m[k]];
             direct[k] && d * d * self.inv_width_sq > spaced_max()

@@ -518,9 +518,10 @@ impl<T: Real> NominalModel<T> {
 /// Whether [`NominalModel::directional_gains`] computes both directions
 /// ahead of `v` (an out-of-order host overlaps their divisions and roots
 /// with the rest of the law) or leaves the one picked to
-/// [`DirectionalGains::pick`] (Arm: an in-order Cortex-M would spend a
-/// division and a root, about 35 cycles, on the other direction). The same
-/// bits either way: `pick` computes what the eager form stores.
+/// [`DirectionalGains::pick`] (32-bit Arm, the Cortex-M this core is
+/// built for: in order, it would spend a division and a root, about 35
+/// cycles, on the other direction). The same bits either way: `pick`
+/// computes what the eager form stores.
 const EAGER_GAINS: bool = !cfg!(target_arch = "arm");
 
 /// The floored nominal gain for each valve direction at one state
@@ -612,7 +613,8 @@ mod tests {
 
     /// The gains computed ahead of v are `gain_for`'s to the bit: both
     /// directions, v = ±0 and NaN (direction 0), a load pressure beyond the
-    /// supply (the root clamped, b̄ floored) and a floor above b.
+    /// supply (the root clamped, b̄ floored) and a floor above b; and so is
+    /// what the lazy `pick` (Arm, `EAGER_GAINS` false) computes for every v.
     #[test]
     fn directional_gains_pick_what_gain_for_computes() {
         let m = NominalModel::new(ServoParams::paper(), Load::paper());
@@ -631,6 +633,8 @@ mod tests {
                     let (a, fa) = m.gain_for(&x, v, floor);
                     let (b, fb) = d.pick(&m, v);
                     assert_eq!((a.to_bits(), fa), (b.to_bits(), fb), "{x:?} {v}");
+                    let (c, fc) = m.floored_gain(m.load_pressure(&x), sgn(v), floor);
+                    assert_eq!((a.to_bits(), fa), (c.to_bits(), fc), "lazy: {x:?} {v}");
                 }
             }
         }

@@ -245,11 +245,13 @@ pub trait Controller<T: Real = f64> {
 
     /// The law followed by a forward-Euler step of the state: writes
     /// `s + dt·ξ̇` into `next` (each component as [`OdeState::euler_from`]
-    /// computes it) and returns the output and whether every component of
-    /// `next` is finite. `next` is scratch: it is written whatever the outcome. The
-    /// default zeroes `next`, calls [`Controller::law`] into it and steps
-    /// in place; a controller may skip the zeroing or fuse the two (the
-    /// NNBVSC skips it, and on a Cortex-M writes ξ + dt·ξ̇ in one pass).
+    /// computes it, except where [`crate::math::Real::FOLDED_EULER`]
+    /// applies: f32's NNBVSC weights) and returns the output and whether
+    /// every component of `next` is finite. `next` is scratch: it is
+    /// written whatever the outcome. The default zeroes `next`, calls
+    /// [`Controller::law`] into it and steps in place; a controller may
+    /// skip the zeroing or fuse the two (the NNBVSC skips it, and on a
+    /// Cortex-M, or in f32, writes ξ + dt·ξ̇ in one pass).
     #[inline]
     fn law_euler(
         &self,
