@@ -276,12 +276,11 @@ fn f32_rbf_far_axis_is_flushed() {
     let mut p64 = [0.0f64; N_PHI];
     let at = |xt: [f64; 3]| [xt[0] * s[0], xt[1] * s[1], xt[2] * s[2]];
     // Flushed.
-    let x = at([0.1, -0.2, 5.6]);
-    let norm = r32.phi(&x.map(|v| v as f32), &z32, &mut p32);
+    let far = at([0.1, -0.2, 5.6]).map(|v| v as f32);
+    let norm = r32.phi(&far, &z32, &mut p32);
     assert!(p32[1..=N_KERNELS].iter().all(|&p| p == 0.0));
     let expect = (1.0 + z.iter().map(|v| v * v).sum::<f64>()).sqrt();
     assert!((f64::from(norm) - expect).abs() <= 1e-6 * expect);
-    let far = at([0.1, -0.2, 5.6]).map(|v| v as f32);
     r32.phi(&[far[0], f32::NAN, far[2]], &z32, &mut p32);
     assert!(p32[1..=N_KERNELS].iter().all(|p| p.is_nan()));
     // Kept: the kernel at the centre nearest x (levels 0, 0, 1: index
