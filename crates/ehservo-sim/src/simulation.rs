@@ -367,6 +367,21 @@ impl<P: Plant> Truth for TruthAt<'_, P> {
     }
 }
 
+/// One RK4 step of `f` from `t`, from the first stage `k1` when it is known.
+#[inline(always)]
+fn stage_step<S: OdeState, F: FnMut(f64, &S, &mut S)>(
+    f: F,
+    t: f64,
+    y: &mut S,
+    k1: Option<&S>,
+    h: f64,
+) {
+    match k1 {
+        Some(k1) => rk4_step_with_k1(f, t, y, k1, h),
+        None => rk4_step(f, t, y, h),
+    }
+}
+
 /// Everything a simulation is built from besides its plant, controller and
 /// reference.
 #[derive(Debug, Clone)]
@@ -607,13 +622,11 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 }
                 let k1 = k1.filter(|(bits, _)| *bits == u.to_bits());
                 let (plant, act) = (&self.plant, &self.actuator);
-                let f = |tt: f64,
-                         s: &PlantAct<P::State>,
-                         ds: &mut PlantAct<P::State>,
-                         v: &Variation| {
-                    plant.deriv(tt, &s.x, act.output(&s.a, u), v, &mut ds.x);
-                    act.deriv(&s.a, u, &mut ds.a);
-                };
+                // A valve without spool dynamics gives the plant the same
+                // input at every stage, and its state derivative is zero:
+                // computed once here instead of at each stage (the same
+                // bits, `Actuator::output` of such a valve reads no state).
+                let held = (!act.has_lag()).then(|| act.output(&[0.0; 2], u));
                 for j in 0..m {
                     let ts = t + j as f64 * hs;
                     let v = if j == 0 {
@@ -621,15 +634,30 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     } else {
                         self.unc.at_step(j0 + j, hs, self.per_hold)
                     };
-                    let stage = |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
-                        f(tt, s, ds, &v)
-                    };
-                    match k1 {
-                        // The same k1 = f(t, y) that rk4_step would compute.
-                        Some((_, k1)) if j == 0 => {
-                            rk4_step_with_k1(stage, ts, &mut self.y.pa, &k1, hs)
-                        }
-                        _ => rk4_step(stage, ts, &mut self.y.pa, hs),
+                    // The same k1 = f(t, y) that rk4_step would compute.
+                    let k1 = k1.as_ref().filter(|_| j == 0).map(|(_, k1)| k1);
+                    let y = &mut self.y.pa;
+                    match held {
+                        Some(u_plant) => stage_step(
+                            |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+                                plant.deriv(tt, &s.x, u_plant, &v, &mut ds.x);
+                                ds.a = [0.0; 2];
+                            },
+                            ts,
+                            y,
+                            k1,
+                            hs,
+                        ),
+                        None => stage_step(
+                            |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+                                plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
+                                act.deriv(&s.a, u, &mut ds.a);
+                            },
+                            ts,
+                            y,
+                            k1,
+                            hs,
+                        ),
                     }
                 }
             }
@@ -1008,6 +1036,57 @@ mod tests {
             .unwrap()
             .run(&mut |s| a2.push(bits(s)));
         assert_eq!(a1, a2);
+    }
+
+    /// A valve without spool dynamics gives every RK4 stage the input that
+    /// the sampled step computes once for all of them (`advance`): the same
+    /// step, bit for bit, as evaluating the valve at each stage, here with
+    /// saturation, a dead band and a null bias, with and without sub-steps.
+    #[test]
+    fn a_static_valve_is_evaluated_once_per_step() {
+        let valve = Actuator::try_new(&ActuatorConfig {
+            limit: Some(0.3),
+            dead_band: Some(0.01),
+            null_bias: Some(0.004),
+            ..Default::default()
+        })
+        .unwrap();
+        assert!(!valve.has_lag() && !valve.is_identity());
+        let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+        for substeps in [1u32, 2] {
+            let mut c = cfg(Mode::Sampled);
+            c.substeps = substeps;
+            let (m, hs) = (u64::from(substeps), c.step / f64::from(substeps));
+            let mut sim = Simulation::new(plant, nn(), Sine::paper(), stages(valve), c).unwrap();
+            let (mut steps, mut saturated) = (0, 0);
+            loop {
+                let (k, mut y) = (sim.k, sim.y.pa);
+                let smp = sim.step().expect("the paper's loop does not stop early");
+                if sim.stopped().is_some() {
+                    break;
+                }
+                let u = smp.u;
+                for j in 0..m {
+                    let v = sim.unc.at_step(k * m + j, hs, sim.per_hold);
+                    let f = |tt: f64, s: &PlantAct<[f64; 3]>, ds: &mut PlantAct<[f64; 3]>| {
+                        plant.deriv(tt, &s.x, valve.output(&s.a, u), &v, &mut ds.x);
+                        valve.deriv(&s.a, u, &mut ds.a);
+                    };
+                    rk4_step(f, k as f64 * c.step + j as f64 * hs, &mut y, hs);
+                }
+                let b = |p: &PlantAct<[f64; 3]>| {
+                    p.x.iter()
+                        .chain(&p.a)
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(b(&sim.y.pa), b(&y), "step {k}, {substeps} sub-step(s)");
+                steps += 1;
+                saturated += usize::from(u.abs() > 0.3);
+            }
+            assert_eq!(steps, 300);
+            assert!(saturated > 0, "the limit was reached");
+        }
     }
 
     /// A lag of τ between command and plant: the plant sees the valve
