@@ -368,7 +368,7 @@ impl<P: Plant> Truth for TruthAt<'_, P> {
 }
 
 /// One RK4 step of `f` from `t`, from the first stage `k1` when it is known.
-#[inline(always)]
+#[inline]
 fn stage_step<S: OdeState, F: FnMut(f64, &S, &mut S)>(
     f: F,
     t: f64,
