@@ -256,6 +256,17 @@ impl Actuator {
         }
     }
 
+    /// What the plant sees under command `u` when it does not depend on
+    /// the stage's state (no spool dynamics): the same over a whole step,
+    /// so the sampled loop computes it once. None with spool dynamics.
+    #[inline]
+    pub fn held_output(&self, u: f64) -> Option<f64> {
+        match self.dynamics {
+            Dynamics::None => Some(self.output(&[0.0; 2], u)),
+            _ => None,
+        }
+    }
+
     /// The state derivative under command `u`.
     #[inline]
     pub fn deriv(&self, s: &[f64; 2], u: f64, ds: &mut [f64; 2]) {

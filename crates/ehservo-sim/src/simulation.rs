@@ -624,9 +624,8 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 let (plant, act) = (&self.plant, &self.actuator);
                 // A valve without spool dynamics gives the plant the same
                 // input at every stage, and its state derivative is zero:
-                // computed once here instead of at each stage (the same
-                // bits, `Actuator::output` of such a valve reads no state).
-                let held = (!act.has_lag()).then(|| act.output(&[0.0; 2], u));
+                // computed once here instead of at each stage (the same bits).
+                let held = act.held_output(u);
                 for j in 0..m {
                     let ts = t + j as f64 * hs;
                     let v = if j == 0 {

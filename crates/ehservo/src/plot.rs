@@ -12,6 +12,9 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 #[cfg(not(target_arch = "wasm32"))]
 use plotters::style::FontStyle;
+use plotters_backend::{
+    BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingErrorKind,
+};
 use std::path::Path;
 use std::sync::Once;
 
@@ -38,10 +41,6 @@ fn ensure_font() {
 /// (callgrind). Every other drawing call, and lines of other widths or
 /// with transparency, go to the wrapped backend unchanged.
 pub struct Stroked<B>(B);
-
-use plotters_backend::{
-    BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingErrorKind,
-};
 
 impl<B: DrawingBackend> DrawingBackend for Stroked<B> {
     type ErrorType = B::ErrorType;
