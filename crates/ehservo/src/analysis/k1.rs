@@ -4,7 +4,7 @@
 //! K1 = sup_t g(t) with its proof-of-bound check.
 
 use super::poles::Pole;
-use super::spectral::{polished_eigenvalues, sylvester_products, SpectralExp};
+use super::spectral::{exp4, polished_eigenvalues, sylvester_products, SpectralExp};
 use nalgebra::{Complex, Matrix3};
 use serde::Serialize;
 
@@ -246,15 +246,17 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
     };
 
     // 2. Search grid: linear ∪ geometric, sorted; each point with its
-    //    index on the linear grid (usize::MAX for a geometric point).
+    //    index on the linear grid, or GEO + its index on the geometric one.
     let n_lin = 4000usize;
     let n_geo = 1000usize;
     let t0 = 1e-3 / scale;
     let linear = (0..=n_lin).map(|i| (span * i as f64 / n_lin as f64, i));
     let geometric: Vec<(f64, usize)> = if t0 < span {
         let ratio = (span / t0).ln();
-        (0..n_geo)
-            .map(|i| (t0 * (ratio * i as f64 / n_geo as f64).exp(), usize::MAX))
+        geometric_times(t0, ratio, n_geo, 0.0)
+            .into_iter()
+            .enumerate()
+            .map(|(j, t)| (t, GEO + j))
             .collect()
     } else {
         Vec::new()
@@ -287,9 +289,13 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
             // first: a profile that rises to its limit has its largest
             // values there.
             let lin = c.uniform(span / n_lin as f64, 0.0, n_lin + 1);
+            // The geometric points' coefficients, four at a time.
+            let geo_t: Vec<f64> = geometric.iter().map(|q| q.0).collect();
+            let geo_c = c.coefficients_many(&geo_t);
             let m_at = |&(t, i): &(f64, usize)| match (&lin, i) {
-                (Some(u), i) if i != usize::MAX => u.exp(i),
-                _ => c.exp(t),
+                (_, i) if i >= GEO => c.combine(geo_c[i - GEO]),
+                (Some(u), i) => u.exp(i),
+                (None, _) => c.exp(t),
             };
             let mut floor = points.last().map_or(0.0, |q| norm2_fast(&m_at(q)));
             points
@@ -432,7 +438,6 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
     let m_geo = 3 * n_geo;
     let t_lin = |i: usize| 2.0 * span * (i as f64 + 0.5) / m_lin as f64;
     let geo = (t0 < 2.0 * span).then(|| (2.0 * span / t0).ln());
-    let t_geo = |i: usize, ratio: f64| t0 * (ratio * (i as f64 + 0.5) / m_geo as f64).exp();
     let worst = match &closed {
         None => {
             let mut worst: f64 = 0.0;
@@ -440,8 +445,8 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
                 worst = worst.max(g(t_lin(i)) / k1v);
             }
             if let Some(ratio) = geo {
-                for i in 0..m_geo {
-                    worst = worst.max(g(t_geo(i, ratio)) / k1v);
+                for t in geometric_times(t0, ratio, m_geo, 0.5) {
+                    worst = worst.max(g(t) / k1v);
                 }
             }
             worst
@@ -478,8 +483,15 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
                 visit(m_at(i));
             }
             if let Some(ratio) = geo {
-                for i in 0..m_geo {
-                    visit(c.exp(t_geo(i, ratio)));
+                let t = geometric_times(t0, ratio, m_geo, 0.5);
+                let mut chunks = t.chunks_exact(4);
+                for q in &mut chunks {
+                    for m in c.exp4([q[0], q[1], q[2], q[3]]) {
+                        visit(m);
+                    }
+                }
+                for &t in chunks.remainder() {
+                    visit(c.exp(t));
                 }
             }
             best.max(bound) / k1v
@@ -499,6 +511,23 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
         tolerance,
         verified: worst <= 1.0 + tolerance && tail_ok,
     }
+}
+
+/// The tag of a geometric point's index on the search grid.
+const GEO: usize = 1 << (usize::BITS - 1);
+
+/// The geometric grid t0·e^(ratio·(i + offset)/n), i < n, its exponentials
+/// four at a time ([`exp4`]: the same bits as one by one).
+fn geometric_times(t0: f64, ratio: f64, n: usize, offset: f64) -> Vec<f64> {
+    let arg = |i: usize| ratio * (i as f64 + offset) / n as f64;
+    let mut out = Vec::with_capacity(n);
+    let mut i = 0;
+    while i + 4 <= n {
+        out.extend(exp4(std::array::from_fn(|k| arg(i + k))).map(|e| t0 * e));
+        i += 4;
+    }
+    out.extend((i..n).map(|i| t0 * arg(i).exp()));
+    out
 }
 
 /// A grid point's g against `floor` (the largest g so far).
@@ -560,6 +589,27 @@ mod tests {
 
     /// Sylvester's A_i for the paper's P are the spectral projectors:
     /// Σ A_i = I, Σ λ_i A_i = P, A_i² = A_i and A_i A_j = 0.
+    /// The geometric grids four exponentials at a time: the bits of the
+    /// formula point by point, for counts with and without a remainder.
+    #[test]
+    fn geometric_times_are_the_formula_to_the_bit() {
+        for (t0, span, n, offset) in [
+            (1e-3f64 / 20.0, 4.0f64, 8usize, 0.0f64),
+            (1e-3 / 40.0, 4.0, 1000, 0.0),
+            (1e-3 / 40.0, 8.0, 3000, 0.5),
+            (2.5e-5, 3.07, 7, 0.0),
+            (1e-6, 1e4, 1, 0.5),
+        ] {
+            let ratio = (span / t0).ln();
+            let t = geometric_times(t0, ratio, n, offset);
+            assert_eq!(t.len(), n);
+            for (i, t) in t.iter().enumerate() {
+                let want = t0 * (ratio * (i as f64 + offset) / n as f64).exp();
+                assert_eq!(t.to_bits(), want.to_bits(), "n = {n}, i = {i}");
+            }
+        }
+    }
+
     #[test]
     fn sylvester_terms_are_the_spectral_projectors() {
         let p = p_matrix([90.0, 2600.0, 24000.0]);

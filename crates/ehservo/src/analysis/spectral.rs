@@ -35,6 +35,14 @@
 use super::poles::Pole;
 use nalgebra::{Complex, Matrix3};
 
+/// Four `exp`s with the bits of four calls ([`Real::exp4`]).
+///
+/// [`Real::exp4`]: ehservo_core::math::Real::exp4
+#[inline]
+pub(super) fn exp4(v: [f64; 4]) -> [f64; 4] {
+    <f64 as ehservo_core::math::Real>::exp4(v)
+}
+
 /// Least gap |λ_i − λ_j|/max|λ| at which distinct eigenvalues take the
 /// closed form.
 ///
@@ -265,8 +273,55 @@ impl SpectralExp {
         }
     }
 
+    /// [`Self::coefficients`] at four times, the same bits: each rate's four
+    /// exponentials in one [`exp4`] (glibc's `exp` in four lanes where it
+    /// has the platform's bits, four calls elsewhere).
+    fn coefficients4(&self, t: [f64; 4]) -> [[f64; 3]; 4] {
+        let at = |rate: f64| exp4(t.map(|t| rate * t));
+        match self.modes {
+            Modes::Real(mu) => {
+                let e = mu.map(at);
+                std::array::from_fn(|i| [e[0][i], e[1][i], e[2][i]])
+            }
+            Modes::Pair { real, mu, omega } => {
+                let (r, e) = (at(real), at(mu));
+                std::array::from_fn(|i| {
+                    let (s, c) = (omega * t[i]).sin_cos();
+                    [r[i], e[i] * c, e[i] * s]
+                })
+            }
+            Modes::Double { simple, double } => {
+                let (a, e) = (at(simple), at(double));
+                std::array::from_fn(|i| [a[i], e[i], t[i] * e[i]])
+            }
+            Modes::Triple(mu) => {
+                let e = at(mu);
+                std::array::from_fn(|i| [e[i], t[i] * e[i], t[i] * t[i] * e[i]])
+            }
+        }
+    }
+
+    /// The coefficients c_k at each of `t` (for [`Self::combine`]), four
+    /// at a time ([`Self::coefficients4`]): the same bits as
+    /// [`Self::exp`]'s at each.
+    pub(super) fn coefficients_many(&self, t: &[f64]) -> Vec<[f64; 3]> {
+        let mut out = Vec::with_capacity(t.len());
+        let mut chunks = t.chunks_exact(4);
+        for c in &mut chunks {
+            out.extend(self.coefficients4([c[0], c[1], c[2], c[3]]));
+        }
+        out.extend(chunks.remainder().iter().map(|&t| self.coefficients(t)));
+        out
+    }
+
+    /// exp((P + shift·I)t) at four times: the same bits as four
+    /// [`Self::exp`]s.
+    pub fn exp4(&self, t: [f64; 4]) -> [Matrix3<f64>; 4] {
+        self.coefficients4(t).map(|c| self.combine(c))
+    }
+
     /// Σ B_k c_k.
-    fn combine(&self, c: [f64; 3]) -> Matrix3<f64> {
+    pub(super) fn combine(&self, c: [f64; 3]) -> Matrix3<f64> {
         self.b[0] * c[0] + self.b[1] * c[1] + self.b[2] * c[2]
     }
 
@@ -394,6 +449,45 @@ mod tests {
             let g = SpectralExp::new(&p, &poles, q).unwrap();
             let e = g.exp(2.0 / q);
             assert!((e[(0, 0)] - (1.0 + 2.0 + 2.0)).abs() < 1e-13);
+        }
+    }
+
+    /// The four-at-a-time path gives each time the bits of the one-at-a-time
+    /// one, in every mode (distinct real, a pair, a double and a triple
+    /// pole), at times whose exponents fall in the vector exp's range and
+    /// outside it (t = 0, tiny t, exponents below −512).
+    #[test]
+    fn four_at_a_time_is_one_at_a_time_to_the_bit() {
+        let cases: [([f64; 3], [Pole; 3]); 4] = [
+            ([90.0, 2600.0, 24000.0], cubic_roots(90.0, 2600.0, 24000.0)),
+            ([40.0, 900.0, 10000.0], cubic_roots(40.0, 900.0, 10000.0)),
+            (
+                [70.0, 1500.0, 9000.0],
+                [pole(-10.0, 0.0), pole(-30.0, 0.0), pole(-30.0, 0.0)],
+            ),
+            ([60.0, 1200.0, 8000.0], [pole(-20.0, 0.0); 3]),
+        ];
+        let times = [
+            0.0, 1e-300, 3e-3, 0.017, 0.25, 1.0, 2.5, 7.0, 40.0, 1e3, 0.125, 3.75,
+        ];
+        for (k, (a, poles)) in cases.iter().enumerate() {
+            let p = p_matrix(*a);
+            for shift in [0.0, 10.0] {
+                let f = SpectralExp::new(&p, poles, shift).unwrap();
+                let mode = std::mem::discriminant(&f.modes);
+                let bits = |m: &Matrix3<f64>| m.map(f64::to_bits);
+                for q in times.chunks_exact(4) {
+                    let m4 = f.exp4([q[0], q[1], q[2], q[3]]);
+                    for (m, &t) in m4.iter().zip(q) {
+                        assert_eq!(bits(m), bits(&f.exp(t)), "case {k}, t = {t}, {mode:?}");
+                    }
+                }
+                // Eleven times: two chunks of four and a remainder of three.
+                let c = f.coefficients_many(&times[..11]);
+                for (c, &t) in c.iter().zip(&times[..11]) {
+                    assert_eq!(bits(&f.combine(*c)), bits(&f.exp(t)), "case {k}, t = {t}");
+                }
+            }
         }
     }
 
