@@ -474,24 +474,46 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
                 }
             }
             let mut bound: f64 = 0.0;
-            let mut visit = |m: Matrix3<f64>| match screen(&m, best) {
-                Screen::Below => {}
-                Screen::Near(b) => bound = bound.max(b),
-                Screen::Exact(v) => best = best.max(v),
-            };
-            for i in 0..m_lin {
-                visit(m_at(i));
+            // A point screened: its bound or its norm taken.
+            macro_rules! take {
+                ($screen:expr) => {
+                    match $screen {
+                        Screen::Below => {}
+                        Screen::Near(b) => bound = bound.max(b),
+                        Screen::Exact(v) => best = best.max(v),
+                    }
+                };
+            }
+            match &lin {
+                Some(u) => {
+                    // Four points at a time, screened in order.
+                    let mut i = 0;
+                    while i + 4 <= m_lin {
+                        for (l, f2) in u.frobenius2_4(i).into_iter().enumerate() {
+                            take!(screen_f2(f2, || u.exp(i + l), best));
+                        }
+                        i += 4;
+                    }
+                    for i in i..m_lin {
+                        take!(screen(&u.exp(i), best));
+                    }
+                }
+                None => {
+                    for i in 0..m_lin {
+                        take!(screen(&m_at(i), best));
+                    }
+                }
             }
             if let Some(ratio) = geo {
                 let t = geometric_times(t0, ratio, m_geo, 0.5);
                 let mut chunks = t.chunks_exact(4);
                 for q in &mut chunks {
                     for m in c.exp4([q[0], q[1], q[2], q[3]]) {
-                        visit(m);
+                        take!(screen(&m, best));
                     }
                 }
                 for &t in chunks.remainder() {
-                    visit(c.exp(t));
+                    take!(screen(&c.exp(t), best));
                 }
             }
             best.max(bound) / k1v
@@ -548,6 +570,13 @@ enum Screen {
 /// ([`norm2_fast`]); the margin 1e-12 keeps "below" true of the computed
 /// norm too.
 fn screen(m: &Matrix3<f64>, floor: f64) -> Screen {
+    screen_f2(m.iter().map(|v| v * v).sum(), || *m, floor)
+}
+
+/// [`screen`] given the squared Frobenius norm `f2` of the matrix (as
+/// `screen` sums it), the matrix made only if it is needed.
+#[inline]
+fn screen_f2(f2: f64, m: impl FnOnce() -> Matrix3<f64>, floor: f64) -> Screen {
     const MARGIN: f64 = 1.0 + 1e-12;
     // Thresholds on ‖m‖₂².
     let below = (floor / MARGIN) * (floor / MARGIN);
@@ -555,13 +584,13 @@ fn screen(m: &Matrix3<f64>, floor: f64) -> Screen {
         let n = floor * (1.0 + SLACK) / MARGIN;
         n * n
     };
-    let f2: f64 = m.iter().map(|v| v * v).sum();
     if f2 < below {
         return Screen::Below;
     }
     if f2 <= near {
         return Screen::Near(f2.sqrt() * MARGIN);
     }
+    let m = &m();
     let Some((q, p2)) = super::linalg::gram_q_p2(m) else {
         return Screen::Exact(norm2_fast(m));
     };
