@@ -616,8 +616,6 @@ mod tests {
     use crate::analysis::{cubic_roots, p_matrix};
     use nalgebra::Vector3;
 
-    /// Sylvester's A_i for the paper's P are the spectral projectors:
-    /// Σ A_i = I, Σ λ_i A_i = P, A_i² = A_i and A_i A_j = 0.
     /// The geometric grids four exponentials at a time: the bits of the
     /// formula point by point, for counts with and without a remainder.
     #[test]
@@ -639,6 +637,8 @@ mod tests {
         }
     }
 
+    /// Sylvester's A_i for the paper's P are the spectral projectors:
+    /// Σ A_i = I, Σ λ_i A_i = P, A_i² = A_i and A_i A_j = 0.
     #[test]
     fn sylvester_terms_are_the_spectral_projectors() {
         let p = p_matrix([90.0, 2600.0, 24000.0]);

@@ -401,6 +401,7 @@ impl UniformExp<'_> {
     /// `Matrix3::iter`, as `Iterator::sum` does) of exp((P + shift·I)t) at
     /// t_i, …, t_(i+3), without the matrices: the bits of that sum over
     /// [`Self::exp`] at each, computed side by side across the four points.
+    /// The four must be on the grid: i + 4 ≤ n of [`SpectralExp::uniform`].
     pub fn frobenius2_4(&self, i: usize) -> [f64; 4] {
         // c_k of the module doc at the four points, as `coefficients` has
         // them: the tables' products, then the mode's own combination.
