@@ -41,14 +41,4 @@ while [ "$r" -le "$rounds" ]; do
     echo "$ta $tb" >>"$tmp"
     r=$((r + 1))
 done
-# The median of a column of numbers (one per line).
-median() { sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
-mina=$(cut -d' ' -f1 "$tmp" | sort -g | head -n 1)
-minb=$(cut -d' ' -f2 "$tmp" | sort -g | head -n 1)
-meda=$(cut -d' ' -f1 "$tmp" | median)
-medb=$(cut -d' ' -f2 "$tmp" | median)
-ratio=$(awk '{ print $2 / $1 }' "$tmp" | median)
-echo "machine load average $(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo '?'); $rounds rounds of $n runs"
-echo "A: min $mina us, median $meda us per run   ($a)"
-echo "B: min $minb us, median $medb us per run   ($b)"
-awk -v a="$mina" -v b="$minb" -v r="$ratio" 'BEGIN { printf "B/A: minima %.3f, median of the rounds'"'"' ratios %.3f\n", b / a, r }'
+"$(dirname "$0")/ab-summary.sh" "$tmp" us "$a" "$b" "$rounds rounds of $n runs"

@@ -116,20 +116,23 @@ pub fn kernel_sq_max(rbf: &Rbf, bound: [f64; 3]) -> (f64, [f64; 3]) {
                 _ => {
                     let (mut gu, mut gv) = (lo, f64::NEG_INFINITY);
                     let at = |i: usize| lo + h * i as f64;
+                    // Four points at a time, then the rest one by one; in
+                    // order, the first of equal values kept.
                     let mut i = 0;
-                    while i <= n {
+                    while i + 4 <= n + 1 {
                         let u: [f64; 4] = std::array::from_fn(|k| at(i + k));
-                        let v = if i + 4 <= n + 1 {
-                            axis_sq_sum4(&levels, w, u)
-                        } else {
-                            u.map(&f)
-                        };
-                        for k in 0..4.min(n + 1 - i) {
-                            if v[k] > gv {
-                                (gu, gv) = (u[k], v[k]);
+                        for (u, v) in u.into_iter().zip(axis_sq_sum4(&levels, w, u)) {
+                            if v > gv {
+                                (gu, gv) = (u, v);
                             }
                         }
                         i += 4;
+                    }
+                    for u in (i..=n).map(at) {
+                        let v = f(u);
+                        if v > gv {
+                            (gu, gv) = (u, v);
+                        }
                     }
                     grid_memo = Some(((lo, hi), (gu, gv)));
                     (gu, gv)
