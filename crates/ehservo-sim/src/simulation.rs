@@ -722,7 +722,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
     /// Counts the law's flags and fills `sample` at `t_k`; false (and the
     /// run stopped) when the output or a logged signal is not finite.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn log(
         &mut self,
         sample: &mut Sample,

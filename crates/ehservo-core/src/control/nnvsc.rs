@@ -343,6 +343,22 @@ impl<T: Real> NnVsc<T> {
         (out, finite)
     }
 
+    /// [`NnVsc::law_then_euler`] for the target's baseline (SSE2 on an
+    /// x86-64), as a function of its own: [`Controller::law_euler`], then
+    /// only a dispatch to this or to [`NnVsc::law_then_euler_avx2`], is
+    /// small enough to inline into the simulator's loop, and the law's
+    /// output is written straight into the caller's frame.
+    #[inline(never)]
+    fn law_then_euler_baseline(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        next: &mut NnState<T>,
+        dt: T,
+    ) -> (Output<SlidingParts<T>, T>, bool) {
+        self.law_then_euler(m, s, next, dt)
+    }
+
     /// [`NnVsc::law_then_euler`] compiled for AVX2 and FMA: the rows, WᵀΦ's
     /// sums and the Euler pass in 4-wide vectors instead of SSE2's 2-wide,
     /// and Φ's four exponentials in one vector ([`Real::exp4`], inlined
@@ -827,7 +843,7 @@ impl<T: Real> Controller<T> for NnVsc<T> {
                 #[allow(unsafe_code)]
                 return unsafe { self.law_then_euler_avx2(m, s, next, dt) };
             }
-            self.law_then_euler(m, s, next, dt)
+            self.law_then_euler_baseline(m, s, next, dt)
         }
     }
 
