@@ -263,6 +263,13 @@ impl Sensor {
         if self.pure {
             return self.measure(x);
         }
+        self.sample_drawn(x)
+    }
+
+    /// [`Sensor::sample`] with noise or a delay: behind a call, so that the
+    /// pure stage's test and `measure` inline into the simulator's loop.
+    #[inline(never)]
+    fn sample_drawn(&mut self, x: [f64; 3]) -> [f64; 3] {
         let m: [f64; 3] = core::array::from_fn(|i| {
             let s = self.cfg.noise[i];
             let n = if s > 0.0 {

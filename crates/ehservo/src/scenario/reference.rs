@@ -617,8 +617,20 @@ impl From<Sine> for AnyReference {
 }
 
 impl Reference<f64> for AnyReference {
+    /// The sine (the paper's reference) inline in the simulator's loop,
+    /// the others behind a call.
     #[inline]
     fn z(&self, t: f64) -> [f64; 4] {
+        match self {
+            Self::Sine(s) => s.z(t),
+            _ => self.z_other(t),
+        }
+    }
+}
+
+impl AnyReference {
+    #[inline(never)]
+    fn z_other(&self, t: f64) -> [f64; 4] {
         match self {
             Self::Sine(s) => s.z(t),
             Self::Chirp(c) => c.z(t),
