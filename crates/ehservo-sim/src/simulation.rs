@@ -288,6 +288,11 @@ impl<S: OdeState> OdeState for PlantAct<S> {
         self.a.axpy(a, &o.a);
     }
     #[inline]
+    fn set_axpy(&mut self, base: &Self, a: f64, o: &Self) {
+        self.x.set_axpy(&base.x, a, &o.x);
+        self.a.set_axpy(&base.a, a, &o.a);
+    }
+    #[inline]
     fn all_finite(&self) -> bool {
         self.x.all_finite() && self.a.all_finite()
     }
@@ -312,6 +317,11 @@ impl<S: OdeState, X: OdeState> OdeState for Augmented<S, X> {
     fn axpy(&mut self, a: f64, o: &Self) {
         self.pa.axpy(a, &o.pa);
         self.xi.axpy(a, &o.xi);
+    }
+    #[inline]
+    fn set_axpy(&mut self, base: &Self, a: f64, o: &Self) {
+        self.pa.set_axpy(&base.pa, a, &o.pa);
+        self.xi.set_axpy(&base.xi, a, &o.xi);
     }
     #[inline]
     fn all_finite(&self) -> bool {
@@ -576,20 +586,24 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         let z = self.reference.z(t);
         match self.cfg.mode {
             Mode::Sampled => {
-                let mut xm = self.sensor.sample(x);
-                if let Some(est) = &mut self.estimator {
-                    if k == 0 {
-                        est.reset(xm[0]);
-                    }
-                    let xe = est.update(xm[0], self.u_applied);
-                    let measured = self.sensor.measured();
-                    for i in 1..3 {
-                        if !measured.has(i) {
-                            xm[i] = xe[i];
+                let xs = self.sensor.sample(x);
+                // A new array rather than element writes into the sensor's:
+                // the measurement can then stay in registers up to the
+                // sampled loop's range check (written in place, it is
+                // stored and reloaded, across the stores, which stalls).
+                let xm = match &mut self.estimator {
+                    None => xs,
+                    Some(est) => {
+                        if k == 0 {
+                            est.reset(xs[0]);
                         }
+                        let xe = est.update(xs[0], self.u_applied);
+                        sample.x_est = xe;
+                        let measured = self.sensor.measured();
+                        let pick = |i: usize| if measured.has(i) { xs[i] } else { xe[i] };
+                        [xs[0], pick(1), pick(2)]
                     }
-                    sample.x_est = xe;
-                }
+                };
                 let truth = TruthAt {
                     plant: &self.plant,
                     x,
@@ -637,14 +651,19 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     let k1 = k1.as_ref().filter(|_| j == 0).map(|(_, k1)| k1);
                     let y = &mut self.y.pa;
                     match held {
+                        // The valve's state has a zero derivative at every
+                        // stage, so RK4 would leave it as it is (+0, its
+                        // initial state, plus h/6·0): the step integrates
+                        // the plant's state alone. The same bits, and no
+                        // five-wide state whose copies the stages would
+                        // reload across store boundaries.
                         Some(u_plant) => stage_step(
-                            |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
-                                plant.deriv(tt, &s.x, u_plant, &v, &mut ds.x);
-                                ds.a = [0.0; 2];
+                            |tt: f64, s: &P::State, ds: &mut P::State| {
+                                plant.deriv(tt, s, u_plant, &v, ds);
                             },
                             ts,
-                            y,
-                            k1,
+                            &mut y.x,
+                            k1.map(|k1| &k1.x),
                             hs,
                         ),
                         None => stage_step(

@@ -193,6 +193,11 @@ impl<T: Real> OdeState<T> for NnState<T> {
         self.w.axpy(a, &o.w);
     }
     #[inline]
+    fn set_axpy(&mut self, base: &Self, a: T, o: &Self) {
+        self.int_e = base.int_e + a * o.int_e;
+        self.w.set_axpy(&base.w, a, &o.w);
+    }
+    #[inline]
     fn all_finite(&self) -> bool {
         // 0·v is ±0 for a finite v and NaN for ±∞ or NaN, so the sum is NaN
         // exactly when some entry is not finite. Branch-free, in eight lanes
@@ -932,6 +937,35 @@ mod tests {
         close(ds.w[129], -1008.8652, 1e-3);
         assert_eq!(o.wphi, 0.0);
         assert_eq!(ds.int_e, 0.0);
+    }
+
+    /// NnState's set_axpy (the continuous mode's RK4 stages) gives the
+    /// bits of a copy and axpy in every field.
+    #[test]
+    fn nn_state_set_axpy_is_copy_then_axpy() {
+        let base = NnState {
+            int_e: -0.0,
+            w: core::array::from_fn(|i| (i as f64 - 60.0) * 0.37),
+        };
+        let o = NnState {
+            int_e: 2.5,
+            w: core::array::from_fn(|i| {
+                if i == 77 {
+                    f64::INFINITY
+                } else {
+                    1.0 / (1.0 + i as f64)
+                }
+            }),
+        };
+        let mut want = base;
+        want.axpy(0.005, &o);
+        let mut got = NnState {
+            int_e: f64::NAN,
+            w: [f64::NAN; N_PHI],
+        };
+        got.set_axpy(&base, 0.005, &o);
+        assert_eq!(got.int_e.to_bits(), want.int_e.to_bits());
+        assert_eq!(got.w.map(f64::to_bits), want.w.map(f64::to_bits));
     }
 
     /// Inside the dead zone (|σ| ≤ ᾱ‖E‖) σΔ = 0 exactly: no learning, no
