@@ -198,11 +198,15 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
         inspect: impl FnOnce(&C, &C::State, &mut Output<C::Parts, T>),
     ) -> Output<C::Parts, T> {
         let lim = &self.policy.limits;
-        let bad_x = x
-            .iter()
-            .zip(lim.x.iter())
-            .any(|(&v, &l)| !v.is_finite() || v.abs() > l);
-        if bad_x || !t.is_finite() || z.iter().any(|v| !v.is_finite()) {
+        // Branch-free: 0·v is ±0 for a finite v and NaN for ±∞ or NaN, so
+        // the sum is 0 exactly when t, x and z are all finite; then each
+        // |x_i| ≤ limit (a NaN fails it as well).
+        let o = T::ZERO;
+        let finite = ((o * t + o * x[0]) + (o * x[1] + o * x[2]))
+            + ((o * z[0] + o * z[1]) + (o * z[2] + o * z[3]));
+        let in_range =
+            (x[0].abs() <= lim.x[0]) & (x[1].abs() <= lim.x[1]) & (x[2].abs() <= lim.x[2]);
+        if !(finite == o && in_range) {
             return self.safe_output(flags::MEASUREMENT_FAULT);
         }
         // The spare buffer receives ξ + dt·ξ̇ ([`Controller::law_euler`]);
@@ -353,6 +357,50 @@ mod tests {
         let f = c.step(0.01, [2.0, 0.0, 0.0], r.z(0.01));
         assert_ne!(f.flags & flags::MEASUREMENT_FAULT, 0);
         assert_eq!(f.u, 0.25);
+    }
+
+    /// Every input is checked: a non-finite t or reference component and
+    /// each |x_i| beyond its own limit are faults; |x_i| exactly at the
+    /// limit, and a huge but finite value without limits, are not.
+    #[test]
+    fn every_input_is_checked_and_the_limits_are_inclusive() {
+        let r = Sine::paper();
+        let lim = [1.0, 10.0, 1000.0];
+        let policy = FaultPolicy {
+            safe: SafeCommand::Zero,
+            limits: Limits { x: lim, u: 1e3 },
+        };
+        let fault = |t: f64, x: [f64; 3], z: [f64; 4], p: FaultPolicy| {
+            let mut c = SampledController::with_policy(nn(), 0.01, p).unwrap();
+            c.step(t, x, z).flags & flags::MEASUREMENT_FAULT != 0
+        };
+        let z = r.z(0.0);
+        assert!(!fault(0.0, [0.0; 3], z, policy));
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(fault(bad, [0.0; 3], z, policy), "t = {bad}");
+            for i in 0..4 {
+                let mut zb = z;
+                zb[i] = bad;
+                assert!(fault(0.0, [0.0; 3], zb, policy), "z[{i}] = {bad}");
+            }
+        }
+        for i in 0..3 {
+            let mut x = [0.0; 3];
+            x[i] = -lim[i];
+            assert!(!fault(0.0, x, z, policy), "x[{i}] at -limit");
+            x[i] = lim[i];
+            assert!(!fault(0.0, x, z, policy), "x[{i}] at +limit");
+            x[i] = lim[i] * (1.0 + f64::EPSILON);
+            assert!(fault(0.0, x, z, policy), "x[{i}] just over");
+            x[i] = -x[i];
+            assert!(fault(0.0, x, z, policy), "x[{i}] just under -limit");
+        }
+        let none = FaultPolicy {
+            limits: Limits::NONE,
+            ..policy
+        };
+        assert!(!fault(0.0, [f64::MAX, -f64::MAX, 1e300], z, none));
+        assert!(fault(0.0, [0.0, f64::INFINITY, 0.0], z, none));
     }
 
     /// A step whose ξ + dt·ξ̇ overflows is refused: the state is the one

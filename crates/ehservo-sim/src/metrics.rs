@@ -105,6 +105,17 @@ impl Metrics {
     }
 }
 
+/// `*m ← max(*m, v)` by one comparison: as `f64::max` for a running
+/// maximum that starts at 0 (a NaN `v` is ignored, as `max` ignores it; on
+/// a tie the first is kept), without `max`'s NaN blend, which costs five
+/// more instructions per sample and maximum.
+#[inline(always)]
+fn keep_max(m: &mut f64, v: f64) {
+    if v > *m {
+        *m = v;
+    }
+}
+
 /// Accumulates [`Metrics`] sample by sample.
 #[derive(Debug, Clone)]
 pub struct MetricsAccumulator {
@@ -176,8 +187,8 @@ impl MetricsAccumulator {
         let w_norm = self.i_w_norm.map_or(0.0, |i| s.values[i]);
         self.n += 1;
         self.t_last = s.t;
-        self.u_max = self.u_max.max(u.abs());
-        self.w_max = self.w_max.max(w_norm);
+        keep_max(&mut self.u_max, u.abs());
+        keep_max(&mut self.w_max, w_norm);
         self.w_last = w_norm;
         if s.t >= self.settle {
             if self.i_sigma_delta.is_some_and(|i| s.values[i] == 0.0) {
@@ -187,7 +198,7 @@ impl MetricsAccumulator {
                 self.t_first_after = Some(s.t);
             }
             self.n_after += 1;
-            self.e_max = self.e_max.max(e);
+            keep_max(&mut self.e_max, e);
             self.e_sq += e * e;
             self.u_sq += u * u;
             if let Some(p) = self.prev_u {
@@ -198,7 +209,7 @@ impl MetricsAccumulator {
         }
         if s.t >= self.final_from {
             self.saw_final = true;
-            self.e_final = self.e_final.max(e);
+            keep_max(&mut self.e_final, e);
         }
         self.prev_u = Some(u);
     }
@@ -282,6 +293,31 @@ mod tests {
         close(r.dead_zone_fraction, 0.4);
         assert!(!r.diverged);
         assert_eq!(r.samples, 10);
+    }
+
+    /// keep_max is f64::max for a maximum running from 0: a peak in the
+    /// middle is kept, NaN and smaller values leave it, +∞ takes it.
+    #[test]
+    fn keep_max_is_a_running_max() {
+        let seq = [
+            0.5,
+            3.0,
+            f64::NAN,
+            2.0,
+            3.0,
+            1e-300,
+            7.25,
+            0.0,
+            f64::INFINITY,
+            1.0,
+        ];
+        let (mut a, mut b) = (0.0f64, 0.0f64);
+        for v in seq {
+            keep_max(&mut a, v);
+            b = b.max(v);
+            assert_eq!(a.to_bits(), b.to_bits(), "after {v}");
+        }
+        assert_eq!(a, f64::INFINITY);
     }
 
     #[test]
