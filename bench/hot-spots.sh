@@ -10,7 +10,8 @@
 #   PATTERN  part of the (mangled) symbol name, e.g. ControllerCfg5visit,
 #            rk4_step_with_k1, b_and_d; every matching function is shown
 #   BIN      the program, e.g. target/release/deps/sweep_run-HASH
-#   ARGS     its arguments (default for sweep_run: 6000 1)
+#   ARGS     its arguments (default: 6000 1, which is sweep_run's 6 000
+#            Fig. 2 runs on one thread; give your own for another program)
 # Prints each function's share of all samples, its source lines by share
 # and its hottest instructions. Needs perf, objdump (binutils) and python3.
 set -eu
@@ -27,7 +28,12 @@ for t in perf objdump nm readelf python3; do
 done
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT INT TERM
-perf record -q -e cpu-clock -F 25000 -o "$tmp/perf.data" "$bin" "$@" >/dev/null 2>&1
+if ! perf record -q -e cpu-clock -F 25000 -o "$tmp/perf.data" "$bin" "$@" \
+    >/dev/null 2>"$tmp/perf.err"; then
+    echo "hot-spots: perf record $bin $* failed:" >&2
+    cat "$tmp/perf.err" >&2
+    exit 1
+fi
 perf script -i "$tmp/perf.data" -F ip 2>/dev/null | sort | uniq -c > "$tmp/ips"
 # The load address: the executable mapping's start, less its file offset
 # and the segment's virtual-address-to-offset difference.
@@ -38,7 +44,7 @@ if [ -z "$map" ]; then
     exit 1
 fi
 start=$(echo "$map" | sed 's/.*\[\(0x[0-9a-f]*\)(.*/\1/')
-pgoff=$(echo "$map" | sed 's/.*@ \(0x[0-9a-f]*\) .*/\1/')
+pgoff=$(echo "$map" | sed 's/.*@ \([0-9a-fx]*\) .*/\1/')
 seg=$(readelf -lW "$bin" | awk '$1 == "LOAD" && $0 ~ / R E / { print $3, $2; exit }')
 vaddr=${seg% *}
 off=${seg#* }
@@ -59,7 +65,7 @@ line_of, by_line, hot = '?', collections.Counter(), []
 for l in open(dis):
     m = re.match(r'^(/\S+):(\d+)', l)
     if m:
-        line_of = m.group(1).split('/')[-1] + ':' + m.group(2)
+        line_of = '/'.join(m.group(1).split('/')[-2:]) + ':' + m.group(2)
         continue
     m = re.match(r'^\s+([0-9a-f]+):\s+(.*)', l)
     if m:
@@ -71,7 +77,7 @@ share = sum(by_line.values()) / total * 100
 if share < 0.1:
     sys.exit(0)
 print('== %s: %.2f%% of %d samples' % (name, share, total))
-for k, v in by_line.most_common(12):
+for k, v in [kv for kv in by_line.most_common(12) if kv[1]]:
     print('  %5.2f%%  %s' % (v / total * 100, k))
 print('  hottest instructions:')
 for c, a, k, ins in sorted(hot, reverse=True)[:12]:

@@ -400,7 +400,14 @@ mod tests {
             ..policy
         };
         assert!(!fault(0.0, [f64::MAX, -f64::MAX, 1e300], z, none));
-        assert!(fault(0.0, [0.0, f64::INFINITY, 0.0], z, none));
+        // Without limits, finiteness is the only guard: every component.
+        for i in 0..3 {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let mut x = [0.0; 3];
+                x[i] = bad;
+                assert!(fault(0.0, x, z, none), "x[{i}] = {bad} without limits");
+            }
+        }
     }
 
     /// A step whose ξ + dt·ξ̇ overflows is refused: the state is the one

@@ -295,11 +295,14 @@ mod tests {
         assert_eq!(r.samples, 10);
     }
 
-    /// keep_max is f64::max for a maximum running from 0: a peak in the
-    /// middle is kept, NaN and smaller values leave it, +∞ takes it.
+    /// keep_max is f64::max for a maximum running from +0: −0 and
+    /// negative values leave +0 as it is, a peak in the middle is kept,
+    /// NaN and smaller values leave it, +∞ takes it.
     #[test]
     fn keep_max_is_a_running_max() {
         let seq = [
+            -0.0,
+            -1.0,
             0.5,
             3.0,
             f64::NAN,

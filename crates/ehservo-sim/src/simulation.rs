@@ -655,7 +655,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                         // stage, so RK4 would leave it as it is (+0, its
                         // initial state, plus h/6·0): the step integrates
                         // the plant's state alone. The same bits, and no
-                        // five-wide state whose copies the stages would
+                        // plant+valve state whose copies the stages would
                         // reload across store boundaries.
                         Some(u_plant) => stage_step(
                             |tt: f64, s: &P::State, ds: &mut P::State| {
