@@ -68,14 +68,8 @@ pub struct WeightCheck {
     pub note: String,
 }
 
-fn weight_check(c: &SlidingConfig, trace: &[Sample]) -> WeightCheck {
-    let read = |smp: &Sample| {
-        (
-            smp.part("uncertainty"),
-            smp.part("phi_norm"),
-            smp.part("w_norm"),
-        )
-    };
+fn weight_check(c: &SlidingConfig, trace: &[DiagSample]) -> WeightCheck {
+    let read = |smp: &DiagSample| (smp.uncertainty(), smp.phi_norm(), smp.w_norm());
     let bound = |phi: f64| {
         super::weights::invariant_radius(c.eta, c.w_max, c.eps0, c.eps1, phi).map(|r| c.w_max + r)
     };
@@ -168,13 +162,23 @@ fn f_with(c: &SlidingConfig, mu: f64, gain: f64, phi_norm: f64) -> f64 {
 /// The signals the diagnostics read, looked up by key once per trace
 /// rather than once per sample (a sample of another controller, were one
 /// mixed in, is looked up by key).
+#[derive(Debug, Clone, Copy)]
 struct Parts {
     signals: &'static [ehservo_core::control::Signal],
-    index: [Option<usize>; 5],
+    index: [Option<usize>; 7],
 }
 
 impl Parts {
-    const KEYS: [&'static str; 5] = ["mu", "gain", "phi_norm", "norm_e", "sigma_delta"];
+    /// The keys, in the order of [`DiagSample::v`].
+    const KEYS: [&'static str; 7] = [
+        "mu",
+        "gain",
+        "phi_norm",
+        "norm_e",
+        "sigma_delta",
+        "uncertainty",
+        "w_norm",
+    ];
 
     fn of(first: &Sample) -> Self {
         Self {
@@ -183,13 +187,86 @@ impl Parts {
         }
     }
 
-    /// (μ, gain, ‖Φ‖, ‖E‖, σΔ) of a sample, as [`Sample::part`] gives them.
-    fn read(&self, smp: &Sample) -> [f64; 5] {
-        if std::ptr::eq(smp.signals, self.signals) {
+    /// What the diagnostics read of a sample, as [`Sample::part`] gives it.
+    fn read(&self, smp: &Sample) -> DiagSample {
+        let v = if std::ptr::eq(smp.signals, self.signals) {
             self.index.map(|i| i.map_or(0.0, |i| smp.values[i]))
         } else {
             Self::KEYS.map(|k| smp.part(k))
+        };
+        DiagSample { t: smp.t, v }
+    }
+}
+
+/// The numbers of one sample that [`diagnostics`] reads: its time and
+/// seven of the controller's signals (0 for one the controller does not
+/// log, as [`Sample::part`] gives it). A run that needs only the
+/// diagnostics keeps these (64 bytes a sample) instead of whole samples
+/// ([`DiagRecorder`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiagSample {
+    t: f64,
+    /// μ, gain, ‖Φ‖, ‖E‖, σΔ, the lumped uncertainty, ‖W‖.
+    v: [f64; 7],
+}
+
+impl DiagSample {
+    fn mu(&self) -> f64 {
+        self.v[0]
+    }
+    fn gain(&self) -> f64 {
+        self.v[1]
+    }
+    fn phi_norm(&self) -> f64 {
+        self.v[2]
+    }
+    fn norm_e(&self) -> f64 {
+        self.v[3]
+    }
+    fn sigma_delta(&self) -> f64 {
+        self.v[4]
+    }
+    fn uncertainty(&self) -> f64 {
+        self.v[5]
+    }
+    fn w_norm(&self) -> f64 {
+        self.v[6]
+    }
+}
+
+/// Collects what [`diagnostics`] needs of a run's samples as they are
+/// produced: `DiagRecorder::new(s)`, [`DiagRecorder::push`] each sample
+/// that would be kept, then [`DiagRecorder::finish`] gives what
+/// `diagnostics(s, &kept)` gives for those samples, the same bits.
+#[derive(Debug, Clone)]
+pub struct DiagRecorder {
+    /// None when the scenario's controller has no diagnostics (not the
+    /// NNBVSC): nothing is recorded.
+    rows: Option<Vec<DiagSample>>,
+    parts: Option<Parts>,
+}
+
+impl DiagRecorder {
+    /// A recorder for a run of `s`, with room for `capacity` samples.
+    pub fn new(s: &Scenario, capacity: usize) -> Self {
+        let wanted = matches!(paper_law(s), Some((PaperLaw::Nnvsc, _)));
+        Self {
+            rows: wanted.then(|| Vec::with_capacity(capacity)),
+            parts: None,
         }
+    }
+
+    /// Records a sample (the signals are looked up on the first).
+    pub fn push(&mut self, smp: &Sample) {
+        if let Some(rows) = &mut self.rows {
+            let parts = self.parts.get_or_insert_with(|| Parts::of(smp));
+            rows.push(parts.read(smp));
+        }
+    }
+
+    /// The diagnostics of the samples pushed.
+    pub fn finish(self, s: &Scenario) -> Option<RunDiagnostics> {
+        diagnostics_of(s, &self.rows?)
     }
 }
 
@@ -215,6 +292,15 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// trace). The shares are over the samples of the trace (a decimated trace
 /// gives the shares of its samples), and again over t ≥ settle.
 pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
+    let mut rec = DiagRecorder::new(s, trace.len());
+    for smp in trace {
+        rec.push(smp);
+    }
+    rec.finish(s)
+}
+
+/// [`diagnostics`] of the samples' rows.
+fn diagnostics_of(s: &Scenario, trace: &[DiagSample]) -> Option<RunDiagnostics> {
     let Some((PaperLaw::Nnvsc, c)) = paper_law(s) else {
         return None;
     };
@@ -222,16 +308,15 @@ pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
         return None;
     }
     let tol = 1e-9 * s.simulation.horizon.max(1.0);
-    let parts = Parts::of(&trace[0]);
     let cc_of = |phi_norm: f64| c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * phi_norm + c.eps1;
-    let eval = |smp: &Sample| {
-        let [mu, gain, phi_norm, norm_e, sigma_delta] = parts.read(smp);
+    let eval = |smp: &DiagSample| {
+        let (mu, gain, phi_norm, norm_e) = (smp.mu(), smp.gain(), smp.phi_norm(), smp.norm_e());
         let cc = cc_of(phi_norm);
         let left = f_with(c, mu, gain, phi_norm) + c.alpha_bar * norm_e < c.alpha * norm_e;
         let right = c.alpha * norm_e < cc / c.gamma1 + c.alpha_bar * norm_e;
-        [left && right, left, right, sigma_delta == 0.0]
+        [left && right, left, right, smp.sigma_delta() == 0.0]
     };
-    let share = |it: &mut dyn Iterator<Item = &Sample>| {
+    let share = |it: &mut dyn Iterator<Item = &DiagSample>| {
         let mut n = 0usize;
         let mut k = [0usize; 4];
         for smp in it {
@@ -253,11 +338,11 @@ pub fn diagnostics(s: &Scenario, trace: &[Sample]) -> Option<RunDiagnostics> {
         condition4_right: all[2],
         dead_zone: all[3],
         after_settle: after,
-        norm_e_median: median(trace.iter().map(|x| parts.read(x)[3]).collect()),
+        norm_e_median: median(trace.iter().map(DiagSample::norm_e).collect()),
         right_half_limit_median: median(
             trace
                 .iter()
-                .map(|x| cc_of(parts.read(x)[2]) / (c.gamma1 * (c.alpha - c.alpha_bar)))
+                .map(|x| cc_of(x.phi_norm()) / (c.gamma1 * (c.alpha - c.alpha_bar)))
                 .collect(),
         ),
         weights: weight_check(c, trace),
@@ -321,6 +406,12 @@ mod tests {
         assert!(f_of(&s, &smp).abs() < 1e-300);
     }
 
+    /// The diagnostics' numbers of samples, as `diagnostics` reads them.
+    fn rows(trace: &[Sample]) -> Vec<DiagSample> {
+        let parts = Parts::of(&trace[0]);
+        trace.iter().map(|x| parts.read(x)).collect()
+    }
+
     #[test]
     fn a5_and_remark6_against_hand_values() {
         let s = paper_scenario(&[]);
@@ -341,7 +432,7 @@ mod tests {
             ..Default::default()
         });
         b.t = 1.5;
-        let w = weight_check(c, &[a, b]);
+        let w = weight_check(c, &rows(&[a, b]));
         // (3000 − 0.1)/21.7 − 0.1 = 138.1442396…
         assert!((w.w_bar_required - (2999.9 / 21.7 - 0.1)).abs() < 1e-9);
         assert!(!w.a5_holds);
@@ -362,7 +453,7 @@ mod tests {
             w_norm: 8.19,
             ..Default::default()
         });
-        let w = weight_check(c, &[a, b]);
+        let w = weight_check(c, &rows(&[a, b]));
         assert!(w.a5_holds && w.remark6_left_at_s.is_none());
     }
 

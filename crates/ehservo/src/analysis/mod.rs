@@ -118,7 +118,7 @@ mod spectral;
 mod weights;
 
 pub use closed_loop::{rk4_amplification, LoopAnalysis, RK4_REAL_LIMIT};
-pub use diagnostics::{diagnostics, f_of, RunDiagnostics};
+pub use diagnostics::{diagnostics, f_of, DiagRecorder, DiagSample, RunDiagnostics};
 pub use k1::{k1, k1_expm, k1_profile, sylvester_terms, K1, K1_TOLERANCE};
 pub use poles::{cubic_roots, open_loop_poles, p_matrix, Pole};
 pub use spectral::{SpectralExp, SEPARATION};

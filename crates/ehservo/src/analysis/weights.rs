@@ -6,7 +6,7 @@ use super::fmt_sig;
 use super::k1::golden_max;
 use crate::scenario::Scenario;
 use ehservo_core::control::sliding::SlidingConfig;
-use ehservo_core::rbf::{Rbf, N_PHI};
+use ehservo_core::rbf::Rbf;
 use ehservo_core::reference::Reference;
 use serde::Serialize;
 
@@ -175,11 +175,10 @@ pub fn phi_norm_reference(s: &Scenario) -> (f64, f64) {
     // One period of a sine (as it always was), else the whole horizon,
     // finer.
     let period = s.reference_span();
-    let mut out = [0.0; N_PHI];
     let n = if r.as_sine().is_some() { 2000 } else { 20_000 };
     (0..n).fold((1.0, 0.0), |(pm, zm), i| {
         let z = r.z(period * i as f64 / n as f64);
-        let nrm = rbf.phi(&[z[0], z[1], z[2]], &z, &mut out);
+        let nrm = rbf.phi_norm(&[z[0], z[1], z[2]], &z);
         let zn = z.iter().map(|v| v * v).sum::<f64>().sqrt();
         (f64::max(pm, nrm), f64::max(zm, zn))
     })
@@ -255,6 +254,7 @@ pub(super) fn weight_analysis(s: &Scenario, c: &SlidingConfig) -> WeightAnalysis
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ehservo_core::rbf::N_PHI;
 
     /// One axis's factor of Σφ² at a level (u = 0):
     /// 1 + 2e^(−2) + 2e^(−8) = 1.2713414917; the kernels' sup is its cube,

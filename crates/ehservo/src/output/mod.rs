@@ -298,8 +298,18 @@ pub struct Derived {
     pub steps: u64,
 }
 
-/// Builds the summary of a run.
+/// Builds the summary of a run (its diagnostics from the run's trace).
 pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
+    summary_with(s, run, crate::analysis::diagnostics(s, &run.trace))
+}
+
+/// [`summary`] with the run's diagnostics given (as a
+/// [`crate::analysis::DiagRecorder`] collected them).
+pub fn summary_with<'a>(
+    s: &'a Scenario,
+    run: &RunResult,
+    diagnostics: Option<crate::analysis::RunDiagnostics>,
+) -> Summary<'a> {
     let model = ehservo_core::servo::NominalModel::new(s.servo(), s.load_model());
     Summary {
         software: SOFTWARE,
@@ -319,7 +329,7 @@ pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
             steps: s.sim_config().steps,
         },
         analysis: crate::analysis::analyze(s),
-        diagnostics: crate::analysis::diagnostics(s, &run.trace),
+        diagnostics,
     }
 }
 
@@ -484,7 +494,10 @@ pub const MAX_KEPT: u64 = 200_000;
 /// Runs a scenario and writes its outputs into `dir` as it goes: the trace
 /// is streamed to `trace.csv` (so a run of millions of steps needs no
 /// memory for it), a bounded subsample is kept for `trace.png` and the
-/// diagnostics. Returns the result (with the kept subsample) and the files.
+/// diagnostics. Returns the result and the files; the result's trace is
+/// the kept subsample when `plot`, else empty (without a plot only the
+/// few numbers of each kept sample that the diagnostics read are kept,
+/// [`crate::analysis::DiagRecorder`]: the same summary.json).
 pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Vec<PathBuf>)> {
     let stage = Staging::new(dir)?;
     let csv_path = stage.path().join("trace.csv");
@@ -497,7 +510,14 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     let decimate = s.output.decimate.max(1) as u64;
     let steps = s.sim_config().steps;
     let keep_every = decimate.max((steps + 1).div_ceil(MAX_KEPT));
-    let mut kept = Vec::with_capacity(((steps + 1) / keep_every + 2) as usize);
+    let capacity = ((steps + 1) / keep_every + 2) as usize;
+    // The samples the plot and the diagnostics see: every keep_every-th
+    // and the last. Whole samples only for the plot (about 460 bytes
+    // each, most of a short run's memory); the diagnostics' numbers of
+    // each in any case.
+    let mut kept = Vec::with_capacity(if plot { capacity } else { 0 });
+    let mut diag = crate::analysis::DiagRecorder::new(s, capacity);
+    let mut last_kept: Option<u64> = None;
     let mut last = None;
     let mut failure: Option<anyhow::Error> = None;
     let (outcome, metrics) = crate::run::run_observed(s, &mut |smp| {
@@ -507,7 +527,11 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
             }
         }
         if smp.k % keep_every == 0 {
-            kept.push(*smp);
+            if plot {
+                kept.push(*smp);
+            }
+            diag.push(smp);
+            last_kept = Some(smp.k);
         } else {
             last = Some(*smp);
         }
@@ -516,8 +540,11 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
         return Err(e);
     }
     if let Some(l) = last {
-        if kept.last().is_none_or(|t: &Sample| t.k < l.k) {
-            kept.push(l);
+        if last_kept.is_none_or(|k| k < l.k) {
+            if plot {
+                kept.push(l);
+            }
+            diag.push(&l);
         }
     }
     let mut inner = w.finish()?;
@@ -528,7 +555,7 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
         trace: kept,
     };
     let mut files = vec!["trace.csv", "summary.json"];
-    let json = serde_json::to_string_pretty(&summary(s, &run))?;
+    let json = serde_json::to_string_pretty(&summary_with(s, &run, diag.finish(s)))?;
     // Straight into the staging folder, which is what makes the output
     // whole or absent (write_atomic's own temporary file, rename and fsync
     // would add nothing to that, and its fsync cost more than the rest of

@@ -485,3 +485,41 @@ fn text_report_sections() {
     }
     assert!(!t.contains("warning:"));
 }
+
+/// `ehservo run` keeps whole samples only for its plot; without one it
+/// keeps the few numbers of each sample that the diagnostics read. Both
+/// write the diagnostics of the kept samples (every `decimate`-th and the
+/// last, here off that stride) into summary.json, as `diagnostics` gives
+/// them from those samples of a trace kept whole.
+#[test]
+fn run_to_dir_diagnostics_are_those_of_the_kept_samples() {
+    let s = scenario(&["output.decimate=3", "simulation.horizon=0.5"]);
+    let full = run(&s, Keep::Every(1)).unwrap();
+    let last = full.trace.last().unwrap().k;
+    assert_ne!(last % 3, 0, "the last sample should be off the stride");
+    let kept: Vec<_> = full
+        .trace
+        .iter()
+        .filter(|x| x.k % 3 == 0 || x.k == last)
+        .copied()
+        .collect();
+    let want = serde_json::to_value(diagnostics(&s, &kept).unwrap()).unwrap();
+    assert_eq!(want["samples"], kept.len());
+    let tmp = tempfile::tempdir().unwrap();
+    for plot in [false, true] {
+        let dir = tmp.path().join(format!("plot-{plot}"));
+        let (r, _) = ehservo::output::run_to_dir(&dir, &s, plot).unwrap();
+        assert_eq!(r.trace.len(), if plot { kept.len() } else { 0 });
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(summary["diagnostics"], want, "plot = {plot}");
+    }
+    // Another controller has no diagnostics, with or without a plot.
+    let vsc = scenario(&["controller.kind=vsc", "simulation.horizon=0.1"]);
+    let dir = tmp.path().join("vsc");
+    ehservo::output::run_to_dir(&dir, &vsc, false).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert!(summary["diagnostics"].is_null());
+}
