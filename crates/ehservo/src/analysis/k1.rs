@@ -276,16 +276,24 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
     }
     points.dedup_by(|a, b| a.0.to_bits() == b.0.to_bits());
-    let grid: Vec<f64> = points.iter().map(|q| q.0).collect();
+    let grid_len = points.len();
+    let t_at = |i: usize| points[i].0;
     // The points where nalgebra's exp is compared with the closed form.
-    let stride = grid.len().div_ceil(DISCREPANCY_POINTS).max(1);
-    let compared = |i: usize| i % stride == 0 || i + 1 == grid.len();
-    let values: Vec<f64> = match &closed {
-        None => grid.iter().map(|&t| g(t)).collect(),
+    let stride = grid_len.div_ceil(DISCREPANCY_POINTS).max(1);
+    let compared = |i: usize| i % stride == 0 || i + 1 == grid_len;
+    // g at every point (nalgebra's exp) or at the compared points only
+    // (closed form), for the discrepancy below; and the largest g of the
+    // grid with its index (the last of equal ones, as `max_by` picks).
+    let mut sampled: Vec<(usize, f64)> = Vec::new();
+    let best = match &closed {
+        None => {
+            sampled = points.iter().map(|q| g(q.0)).enumerate().collect();
+            sampled.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1))
+        }
         Some(c) => {
             // Only the largest value matters (and the compared ones): a
             // point screened out (below the largest so far, or within
-            // SLACK of it) is recorded as −∞. The last point (t = span)
+            // SLACK of it) counts as −∞. The last point (t = span)
             // first: a profile that rises to its limit has its largest
             // values there.
             let lin = c.uniform(span / n_lin as f64, 0.0, n_lin + 1);
@@ -298,13 +306,16 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
                 (None, _) => c.exp(t),
             };
             let mut floor = points.last().map_or(0.0, |q| norm2_fast(&m_at(q)));
+            sampled.reserve(DISCREPANCY_POINTS + 1);
             points
                 .iter()
                 .enumerate()
                 .map(|(i, q)| {
                     let m = m_at(q);
                     let v = if compared(i) {
-                        norm2_fast(&m)
+                        let v = norm2_fast(&m);
+                        sampled.push((i, v));
+                        v
                     } else {
                         match screen(&m, floor) {
                             Screen::Exact(v) => v,
@@ -312,28 +323,24 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
                         }
                     };
                     floor = floor.max(v);
-                    v
+                    (i, v)
                 })
-                .collect()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
         }
     };
-    let (imax, &vmax) = values
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .unwrap_or((0, &1.0));
+    let (imax, vmax) = best.unwrap_or((0, 1.0));
     // 3. Refinement between the neighbours of the best sample.
-    let lo = grid[imax.saturating_sub(1)];
-    let hi = grid[(imax + 1).min(grid.len() - 1)];
+    let lo = t_at(imax.saturating_sub(1));
+    let hi = t_at((imax + 1).min(grid_len - 1));
     let (tr, vr) = if hi > lo {
         golden_max(g, lo, hi)
     } else {
-        (grid[imax], vmax)
+        (t_at(imax), vmax)
     };
     let (mut t_star, mut k1v) = if vr > vmax {
         (tr, vr)
     } else {
-        (grid[imax], vmax)
+        (t_at(imax), vmax)
     };
 
     // 4. The limit and the tail bound from Sylvester's terms.
@@ -385,20 +392,18 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
             // on the strided points of the search grid (the disagreement is
             // smooth in t; the whole grid would cost what the closed form
             // saves).
-            return grid
+            return sampled
                 .iter()
-                .zip(&values)
-                .enumerate()
-                .filter(|(i, _)| compared(*i))
-                .map(|(_, (&t, &v))| {
-                    let e = k1_profile(p, k2, t);
+                .map(|&(i, v)| {
+                    let e = k1_profile(p, k2, t_at(i));
                     (v - e).abs() / v
                 })
                 .fold(0.0, f64::max);
         }
-        grid.iter()
-            .zip(&values)
-            .map(|(&t, &v)| {
+        sampled
+            .iter()
+            .map(|&(i, v)| {
+                let t = t_at(i);
                 let mut m = CMat::zeros();
                 for (ai, q) in a.iter().zip(poles) {
                     m += ai * (Complex::new(q.re + k2, q.im) * t).exp();
@@ -524,7 +529,7 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
         value: Some(k1v),
         at_t: if approached { None } else { Some(t_star) },
         span,
-        grid_points: grid.len(),
+        grid_points: grid_len,
         limit,
         tail_bound,
         check_points: m_lin + m_geo,
