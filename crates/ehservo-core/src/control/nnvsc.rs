@@ -437,22 +437,26 @@ impl<T: Real> NnVsc<T> {
         // same operations in the same order as in the fused pass.
         let w = &s.w;
         let g3 = &g[2];
-        let mut wphi_k = T::ZERO;
-        for (i1, &g1) in g[0].iter().enumerate() {
-            let t = |i2: usize| {
-                let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
-                let wr = &w[j..j + N_LEVELS];
-                ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3])) + wr[4] * g3[4]
-            };
-            // u = Σ g2·t from its first term rather than from 0 + first term:
-            // they differ only when every term is −0 (u = −0 against +0), and
-            // u only enters wphi_k += g1·u, where wphi_k (from 0 + …) is never
-            // −0, so wphi_k + g1·(±0) is the same.
-            let mut u = g[1][0] * t(0);
-            for (i2, &g2) in g[1].iter().enumerate().skip(1) {
-                u += g2 * t(i2);
+        let t = |i1: usize, i2: usize| {
+            let j = 1 + N_LEVELS * (N_LEVELS * i1 + i2);
+            let wr = &w[j..j + N_LEVELS];
+            ((wr[0] * g3[0] + wr[2] * g3[2]) + (wr[1] * g3[1] + wr[3] * g3[3])) + wr[4] * g3[4]
+        };
+        // u[i1] = Σ_i2 g2·t(i1, i2) from its first term rather than from
+        // 0 + first term: they differ only when every term is −0 (u = −0
+        // against +0), and u only enters wphi_k += g1·u, where wphi_k (from
+        // 0 + …) is never −0, so wphi_k + g1·(±0) is the same. Built i2 by
+        // i2 for the five i1 side by side (each u[i1] by the same
+        // operations in the same order as one i1 at a time).
+        let mut u: [T; N_LEVELS] = core::array::from_fn(|i1| g[1][0] * t(i1, 0));
+        for (i2, &g2) in g[1].iter().enumerate().skip(1) {
+            for (i1, ui) in u.iter_mut().enumerate() {
+                *ui += g2 * t(i1, i2);
             }
-            wphi_k += g1 * u;
+        }
+        let mut wphi_k = T::ZERO;
+        for (&g1, &ui) in g[0].iter().zip(&u) {
+            wphi_k += g1 * ui;
         }
         let mut wphi = w[0] + wphi_k;
         for (i, &zi) in m.z.iter().enumerate() {
