@@ -505,6 +505,22 @@ fn run_to_dir_diagnostics_are_those_of_the_kept_samples() {
         .collect();
     let want = serde_json::to_value(diagnostics(&s, &kept).unwrap()).unwrap();
     assert_eq!(want["samples"], kept.len());
+    // Two of its numbers recounted here from the samples by key: the
+    // median ‖E‖ and the largest |Δ|.
+    let mut norm_e: Vec<f64> = kept.iter().map(|x| x.part("norm_e")).collect();
+    norm_e.sort_by(f64::total_cmp);
+    let m = norm_e.len() / 2;
+    let median = if norm_e.len() % 2 == 1 {
+        norm_e[m]
+    } else {
+        0.5 * (norm_e[m - 1] + norm_e[m])
+    };
+    assert_eq!(want["norm_e_median"].as_f64(), Some(median));
+    let unc_max = kept
+        .iter()
+        .map(|x| x.part("uncertainty").abs())
+        .fold(0.0, f64::max);
+    assert_eq!(want["weights"]["uncertainty_max"].as_f64(), Some(unc_max));
     let tmp = tempfile::tempdir().unwrap();
     for plot in [false, true] {
         let dir = tmp.path().join(format!("plot-{plot}"));
