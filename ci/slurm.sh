@@ -51,6 +51,13 @@ finish() {
   trap - EXIT INT TERM
   cd "$repo"
   if [ "$rc" -ne 0 ]; then
+    # What the tasks themselves said (the folder goes with the cluster).
+    local f
+    for f in "$W"/job/*.out; do
+      [ -e "$f" ] || continue
+      echo "--- $f (last 30 lines)" >&2
+      tail -n 30 "$f" >&2 || true
+    done
     ci/slurm-cluster.sh down --logs || true
   else
     ci/slurm-cluster.sh down
@@ -81,7 +88,8 @@ echo "== the job array, shard 1/4 cancelled in mid-run"
 start=$(date +%s)
 job=$(sub --array=0-3 "$repo/deploy/slurm/sweep.sbatch" "$study" shards 4)
 for _ in $(seq 120); do [ "$(state "${job}_1")" = RUNNING ] && break; sleep 0.5; done
-[ "$(state "${job}_1")" = RUNNING ] || fail "task 1 did not start: $(squeue 2>&1)"
+[ "$(state "${job}_1")" = RUNNING ] \
+  || fail "task 1 did not start: $(state "${job}_1") ExitCode=$(exit_code "${job}_1"); $(squeue 2>&1)"
 # Its ehservo has started (a shard lasts seconds, the start milliseconds).
 for _ in $(seq 100); do pgrep -f -- "--out shards/1 --shard 1/4" >/dev/null && break; sleep 0.1; done
 pgrep -f -- "--out shards/1 --shard 1/4" >/dev/null || fail "task 1's ehservo is not running"
