@@ -387,6 +387,25 @@ impl<T: Real> NnVsc<T> {
         self.law_then_euler(m, s, next, dt)
     }
 
+    /// [`NnVsc::law_body`] for the target's baseline, as a function of its
+    /// own: [`Controller::law`] is then only the dispatch and a tail call
+    /// (with the body inlined there, every call, AVX2 or not, paid the
+    /// body's prologue: six registers saved and a 700-byte frame). Where
+    /// there is no dispatch, inlined as before.
+    #[cfg_attr(all(any(test, feature = "std"), target_arch = "x86_64"), inline(never))]
+    #[cfg_attr(
+        not(all(any(test, feature = "std"), target_arch = "x86_64")),
+        inline(always)
+    )]
+    fn law_baseline(
+        &self,
+        m: &Measurement<T>,
+        s: &NnState<T>,
+        ds: &mut NnState<T>,
+    ) -> Output<SlidingParts<T>, T> {
+        self.law_body(m, s, ds)
+    }
+
     /// [`NnVsc::law_body`] compiled for AVX2 and FMA, as
     /// [`NnVsc::law_then_euler_avx2`] is: the same bits.
     ///
@@ -821,7 +840,7 @@ impl<T: Real> Controller<T> for NnVsc<T> {
             #[allow(unsafe_code)]
             return unsafe { self.law_avx2(m, s, ds) };
         }
-        self.law_body(m, s, ds)
+        self.law_baseline(m, s, ds)
     }
 
     /// The law and the Euler step, with no zeroed ξ̇ buffer (the law writes
