@@ -491,6 +491,46 @@ impl<T: Real> NominalModel<T> {
     /// `sin`'s and `cos`'s bits); `s` is a sign (−1, 0, 1).
     #[inline]
     pub fn b_and_d(&self, x: &[T; 3], s: T) -> (T, T) {
+        let (pl, d) = self.pl_and_d(x);
+        (self.b_per_kg * self.params.flow_gain(pl, s).0, d)
+    }
+
+    /// [`Self::b_and_d`] before the sign is known: `b(x, +1)`, `b(x, −1)`
+    /// and `d(x)` from the state alone, the same bits. A simulator computes
+    /// them as a sample begins, ahead of the law, so that the load's sine,
+    /// the divisions and the roots run beside the law's own chains instead
+    /// of after the command they would otherwise wait for
+    /// ([`Self::b_and_d_from`] then picks by the command's sign).
+    #[inline]
+    pub fn b_and_d_both(&self, x: &[T; 3]) -> BothDirections<T> {
+        let (pl, d) = self.pl_and_d(x);
+        let p = &self.params;
+        BothDirections {
+            pl,
+            d,
+            up: self.b_per_kg * p.flow_gain(pl, T::ONE).0,
+            down: self.b_per_kg * p.flow_gain(pl, -T::ONE).0,
+        }
+    }
+
+    /// [`Self::b_and_d`]`(x, s)` from [`Self::b_and_d_both`]`(x)`: the same
+    /// bits for every `s` (a sign other than ±1, rare, is computed here).
+    #[inline]
+    pub fn b_and_d_from(&self, both: &BothDirections<T>, s: T) -> (T, T) {
+        let b = if s == T::ONE {
+            both.up
+        } else if s == -T::ONE {
+            both.down
+        } else {
+            self.b_per_kg * self.params.flow_gain(both.pl, s).0
+        };
+        (b, both.d)
+    }
+
+    /// The load pressure and `d(x)`, the load's sine and cosine from one
+    /// `sin_cos`, Tl once: what [`Self::b_and_d`] shares between b and d.
+    #[inline(always)]
+    fn pl_and_d(&self, x: &[T; 3]) -> (T, T) {
         let (p, l) = (&self.params, &self.load);
         let (sin_kt, cos_kt) = (l.wavenumber * x[0]).sin_cos();
         // Load::torque and Load::torque_rate.
@@ -500,11 +540,10 @@ impl<T: Real> NominalModel<T> {
             tl += f.torque(x[1]);
             tl_rate += f.slope(x[1]) * x[2];
         }
-        // Self::load_pressure, ::b and ::d.
+        // Self::load_pressure and ::d.
         let pl = (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + tl) / p.dm;
-        let b = self.b_per_kg * p.flow_gain(pl, s).0;
         let d = self.d_per_torque * tl + tl_rate / p.jt;
-        (b, d)
+        (pl, d)
     }
 
     /// `d(t) = 4βe·Kce·Tl/(Vt·Jt) + Ṫl/Jt` of (9) at state `x`.
@@ -513,6 +552,15 @@ impl<T: Real> NominalModel<T> {
         self.d_per_torque * self.load.torque(x[0], x[1])
             + self.load.torque_rate(x[0], x[1], x[2]) / self.params.jt
     }
+}
+
+/// `b(x, ±1)` and `d(x)` at one state ([`NominalModel::b_and_d_both`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BothDirections<T: Real = f64> {
+    pl: T,
+    d: T,
+    up: T,
+    down: T,
 }
 
 /// Whether [`NominalModel::directional_gains`] computes both directions

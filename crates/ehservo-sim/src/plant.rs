@@ -24,7 +24,7 @@
 use ehservo_core::control::Signal;
 use ehservo_core::math::sgn;
 use ehservo_core::rk4::OdeState;
-use ehservo_core::servo::{Load, NominalModel, ServoParams};
+use ehservo_core::servo::{BothDirections, Load, NominalModel, ServoParams};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -261,6 +261,53 @@ pub trait Plant {
         self.deriv(t, s, u_plant, v, ds);
         self.lumped_uncertainty(&self.measure(s), u, u_eq, b_bar, v)
     }
+
+    /// What the derivative at state `s` needs of `s` alone, before the
+    /// command is known: the simulator asks for it as a sample begins, so
+    /// that its latency (for the third-order plant: the load's sine, and
+    /// the division and root of both valve directions) runs beside the
+    /// law's instead of after the command, and hands it to
+    /// [`Plant::deriv_prepared`] and [`Plant::deriv_and_lumped_prepared`]
+    /// for the sample's first RK4 stage. `None` (the default): nothing.
+    #[inline]
+    fn prepare(&self, _s: &Self::State) -> Option<BothDirections> {
+        None
+    }
+
+    /// [`Plant::deriv`] at the state `prepared` was made from, by
+    /// [`Plant::prepare`]: must give exactly what `deriv` gives; the
+    /// default calls it.
+    #[inline]
+    fn deriv_prepared(
+        &self,
+        _prepared: Option<&BothDirections>,
+        t: f64,
+        s: &Self::State,
+        u: f64,
+        v: &Variation,
+        ds: &mut Self::State,
+    ) {
+        self.deriv(t, s, u, v, ds);
+    }
+
+    /// [`Plant::deriv_and_lumped`] at the state `prepared` was made from:
+    /// must give exactly what it gives; the default calls it.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn deriv_and_lumped_prepared(
+        &self,
+        _prepared: Option<&BothDirections>,
+        t: f64,
+        s: &Self::State,
+        u_plant: f64,
+        v: &Variation,
+        ds: &mut Self::State,
+        u: f64,
+        u_eq: f64,
+        b_bar: f64,
+    ) -> f64 {
+        self.deriv_and_lumped(t, s, u_plant, v, ds, u, u_eq, b_bar)
+    }
 }
 
 /// `Σ Δa_i x_i − Δb·u_eq + d` with `Δb = b_true − b̄`, from the nominal
@@ -338,6 +385,51 @@ impl Plant for ThirdOrderPlant {
             let (bp, dp) = self.model.b_and_d(x, sgn(u_plant));
             self.deriv_with(x, u_plant, v, bp, dp, dx);
         }
+        lumped(x, u_eq, b_bar, v, b, d)
+    }
+
+    /// b(x, ±1) and d(x) ([`NominalModel::b_and_d_both`]).
+    #[inline]
+    fn prepare(&self, x: &[f64; 3]) -> Option<BothDirections> {
+        Some(self.model.b_and_d_both(x))
+    }
+
+    #[inline]
+    fn deriv_prepared(
+        &self,
+        prepared: Option<&BothDirections>,
+        t: f64,
+        x: &[f64; 3],
+        u: f64,
+        v: &Variation,
+        dx: &mut [f64; 3],
+    ) {
+        let Some(both) = prepared else {
+            return self.deriv(t, x, u, v, dx);
+        };
+        let (b, d) = self.model.b_and_d_from(both, sgn(u));
+        self.deriv_with(x, u, v, b, d, dx);
+    }
+
+    #[inline]
+    fn deriv_and_lumped_prepared(
+        &self,
+        prepared: Option<&BothDirections>,
+        t: f64,
+        x: &[f64; 3],
+        u_plant: f64,
+        v: &Variation,
+        dx: &mut [f64; 3],
+        u: f64,
+        u_eq: f64,
+        b_bar: f64,
+    ) -> f64 {
+        let Some(both) = prepared else {
+            return self.deriv_and_lumped(t, x, u_plant, v, dx, u, u_eq, b_bar);
+        };
+        let (b, d) = self.model.b_and_d_from(both, sgn(u));
+        let (bp, dp) = self.model.b_and_d_from(both, sgn(u_plant));
+        self.deriv_with(x, u_plant, v, bp, dp, dx);
         lumped(x, u_eq, b_bar, v, b, d)
     }
 }
@@ -561,14 +653,47 @@ mod tests {
             };
             for (i, w) in xs.windows(3).enumerate().step_by(7) {
                 let x = [w[0] * 1e-2, w[1], w[2] * 1e2];
+                let both = plant.prepare(&x).expect("the third-order plant prepares");
                 for s in [-1.0, 0.0, 1.0] {
                     let (b, d) = plant.model.b_and_d(&x, s);
                     assert_eq!(b.to_bits(), m.b(&x, s).0.to_bits(), "b at {x:?}, {s}");
                     assert_eq!(d.to_bits(), m.d(&x).to_bits(), "d at {x:?}");
+                    // Both directions made before the sign is known.
+                    let (bp, dp) = plant.model.b_and_d_from(&both, s);
+                    assert_eq!(bp.to_bits(), b.to_bits(), "prepared b at {x:?}, {s}");
+                    assert_eq!(dp.to_bits(), d.to_bits(), "prepared d at {x:?}");
                 }
                 let u = w[(i % 3).min(2)] * 1e-3;
                 let mut dx = [0.0; 3];
                 plant.deriv(0.0, &x, u, &v, &mut dx);
+                // The prepared derivative and the first stage with the lumped
+                // uncertainty, for commands of every sign pair (0 included).
+                for (uc, up) in [(u, u), (u, -u), (0.0, u), (u, 0.0), (-u, u)] {
+                    let mut d1 = [0.0; 3];
+                    let mut d2 = [0.0; 3];
+                    plant.deriv(0.0, &x, up, &v, &mut d1);
+                    plant.deriv_prepared(Some(&both), 0.0, &x, up, &v, &mut d2);
+                    assert_eq!(d1.map(f64::to_bits), d2.map(f64::to_bits), "at {x:?}, {up}");
+                    let (ueq, bb) = (w[0] * 0.3, 16000.0);
+                    let l1 = plant.deriv_and_lumped(0.0, &x, up, &v, &mut d1, uc, ueq, bb);
+                    let l2 = plant.deriv_and_lumped_prepared(
+                        Some(&both),
+                        0.0,
+                        &x,
+                        up,
+                        &v,
+                        &mut d2,
+                        uc,
+                        ueq,
+                        bb,
+                    );
+                    assert_eq!(
+                        d1.map(f64::to_bits),
+                        d2.map(f64::to_bits),
+                        "at {x:?}, {uc}, {up}"
+                    );
+                    assert_eq!(l1.to_bits(), l2.to_bits(), "lumped at {x:?}, {uc}, {up}");
+                }
                 let a = &m.coeffs;
                 let bt = (1.0 + v.db_rel) * m.b(&x, sgn(u)).0;
                 let dx2 =

@@ -40,6 +40,7 @@ use ehservo_core::math::DR;
 use ehservo_core::reference::Reference;
 use ehservo_core::rk4::{rk4_step, rk4_step_with_k1, OdeState};
 use ehservo_core::sampled::{FaultPolicy, SampledController};
+use ehservo_core::servo::BothDirections;
 use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 
@@ -348,8 +349,29 @@ struct FirstStage<'a, P: Plant> {
     t: f64,
     y: &'a PlantAct<P::State>,
     act: &'a Actuator,
+    /// What the plant's derivative needs of the state alone
+    /// ([`Plant::prepare`]), made as the sample began.
+    prepared: Option<BothDirections>,
     /// The command's bits and k1.
     k1: Cell<Option<(u64, PlantAct<P::State>)>>,
+}
+
+impl<P: Plant> FirstStage<'_, P> {
+    /// k1 for the command `u`, under the variation `var`: the plant's
+    /// derivative from [`FirstStage::prepared`] and the valve's.
+    fn k1(&self, plant: &P, var: &Variation, u: f64) -> PlantAct<P::State> {
+        let mut k1 = PlantAct::<P::State>::zero();
+        plant.deriv_prepared(
+            self.prepared.as_ref(),
+            self.t,
+            &self.y.x,
+            self.act.output(&self.y.a, u),
+            var,
+            &mut k1.x,
+        );
+        self.act.deriv(&self.y.a, u, &mut k1.a);
+        k1
+    }
 }
 
 impl<P: Plant> Truth for TruthAt<'_, P> {
@@ -361,7 +383,8 @@ impl<P: Plant> Truth for TruthAt<'_, P> {
         };
         // What the RK4 step's derivative computes first (see `advance`).
         let mut k1 = PlantAct::<P::State>::zero();
-        let lumped = self.plant.deriv_and_lumped(
+        let lumped = self.plant.deriv_and_lumped_prepared(
+            st.prepared.as_ref(),
             st.t,
             &st.y.x,
             st.act.output(&st.y.a, u),
@@ -586,6 +609,10 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         let z = self.reference.z(t);
         match self.cfg.mode {
             Mode::Sampled => {
+                // First: what the step's first RK4 stage needs of the state
+                // alone (a sine, divisions, roots), so that it runs beside
+                // the law rather than after the command it waits for.
+                let prepared = self.plant.prepare(&self.y.pa.x);
                 let xs = self.sensor.sample(x);
                 // A new array rather than element writes into the sensor's:
                 // the measurement can then stay in registers up to the
@@ -612,6 +639,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                         t,
                         y: &self.y.pa,
                         act: &self.actuator,
+                        prepared,
                         k1: Cell::new(None),
                     }),
                 };
@@ -620,12 +648,19 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     .step_with(t, xm, z, |c, s, o| c.annotate_stepped(s, o, &truth));
                 // k1 of the step below, if the law's diagnostics evaluated
                 // it for the command the plant now gets (checked below).
-                let k1 = truth.stage.and_then(|st| st.k1.get());
                 let u = if self.cfg.computation_delay {
                     self.u_applied
                 } else {
                     out.u
                 };
+                // The step's k1: the one the law's diagnostics evaluated, if
+                // for the command the plant now gets; else from what was
+                // prepared (as rk4_step would compute it, the same bits).
+                let k1 = truth.stage.and_then(|st| match st.k1.get() {
+                    Some((bits, k1)) if bits == u.to_bits() => Some(k1),
+                    _ if st.prepared.is_some() => Some(st.k1(&self.plant, &var, u)),
+                    _ => None,
+                });
                 if !self.log(sample, t, z, x, xm, u, &out) {
                     return false;
                 }
@@ -634,7 +669,6 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     self.stop = Some(Stop::Horizon);
                     return true;
                 }
-                let k1 = k1.filter(|(bits, _)| *bits == u.to_bits());
                 let (plant, act) = (&self.plant, &self.actuator);
                 // A valve without spool dynamics gives the plant the same
                 // input at every stage, and its state derivative is zero:
@@ -648,7 +682,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                         self.unc.at_step(j0 + j, hs, self.per_hold)
                     };
                     // The same k1 = f(t, y) that rk4_step would compute.
-                    let k1 = k1.as_ref().filter(|_| j == 0).map(|(_, k1)| k1);
+                    let k1 = k1.as_ref().filter(|_| j == 0);
                     let y = &mut self.y.pa;
                     match held {
                         // The valve's state has a zero derivative at every
@@ -965,7 +999,8 @@ mod tests {
     }
 
     /// The third-order plant through the trait's defaults only: no shared
-    /// evaluation of k1 and the lumped uncertainty.
+    /// evaluation of k1 and the lumped uncertainty, nothing prepared ahead
+    /// of the law (`Plant::prepare`), so every step is `rk4_step`'s.
     #[derive(Debug, Clone, Copy)]
     struct Plain(ThirdOrderPlant);
 
@@ -1014,14 +1049,20 @@ mod tests {
         })
         .unwrap();
         let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
-        for (a, substeps) in [
-            (Actuator::IDENTITY, 1),
-            (lag, 1),
-            (sat, 1),
-            (Actuator::IDENTITY, 3),
+        // (With a computation delay the plant gets the previous command, not
+        // the one the diagnostics' k1 was for: k1 comes from what was
+        // prepared.)
+        for (a, substeps, delay) in [
+            (Actuator::IDENTITY, 1, false),
+            (lag, 1, false),
+            (sat, 1, false),
+            (Actuator::IDENTITY, 3, false),
+            (Actuator::IDENTITY, 1, true),
+            (lag, 2, true),
         ] {
             let mut c = cfg(Mode::Sampled);
             c.substeps = substeps;
+            c.computation_delay = delay;
             let mut shared = Vec::new();
             let o1 = Simulation::new(plant, nn(), Sine::paper(), stages(a), c)
                 .unwrap()
@@ -1031,10 +1072,11 @@ mod tests {
                 .unwrap()
                 .run(&mut |s| plain.push(bits(s)));
             assert_eq!(o1, o2);
-            assert_eq!(shared, plain, "{a:?}, {substeps} sub-steps");
+            assert_eq!(shared, plain, "{a:?}, {substeps} sub-steps, delay {delay}");
             assert_eq!(shared.len(), 301);
         }
-        // A PID has no diagnostics: no k1 is shared, the step is rk4_step.
+        // A PID has no diagnostics: no k1 is shared with them; the step's
+        // k1 comes from what was prepared, and is rk4_step's all the same.
         let pid = ehservo_core::control::Config::build(
             &ehservo_core::control::pid::PidConfig::default(),
             &ehservo_core::control::Design {
