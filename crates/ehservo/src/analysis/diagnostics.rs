@@ -69,7 +69,7 @@ pub struct WeightCheck {
 }
 
 fn weight_check(c: &SlidingConfig, trace: &[DiagSample]) -> WeightCheck {
-    let read = |smp: &DiagSample| (smp.uncertainty(), smp.phi_norm(), smp.w_norm());
+    let read = |smp: &DiagSample| (smp.uncertainty, smp.phi_norm, smp.w_norm);
     let bound = |phi: f64| {
         super::weights::invariant_radius(c.eta, c.w_max, c.eps0, c.eps1, phi).map(|r| c.w_max + r)
     };
@@ -169,7 +169,7 @@ struct Parts {
 }
 
 impl Parts {
-    /// The keys, in the order of [`DiagSample::v`].
+    /// The keys, in the order of [`DiagSample`]'s fields after `t`.
     const KEYS: [&'static str; 7] = [
         "mu",
         "gain",
@@ -194,7 +194,17 @@ impl Parts {
         } else {
             Self::KEYS.map(|k| smp.part(k))
         };
-        DiagSample { t: smp.t, v }
+        let [mu, gain, phi_norm, norm_e, sigma_delta, uncertainty, w_norm] = v;
+        DiagSample {
+            t: smp.t,
+            mu,
+            gain,
+            phi_norm,
+            norm_e,
+            sigma_delta,
+            uncertainty,
+            w_norm,
+        }
     }
 }
 
@@ -206,32 +216,14 @@ impl Parts {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DiagSample {
     t: f64,
-    /// μ, gain, ‖Φ‖, ‖E‖, σΔ, the lumped uncertainty, ‖W‖.
-    v: [f64; 7],
-}
-
-impl DiagSample {
-    fn mu(&self) -> f64 {
-        self.v[0]
-    }
-    fn gain(&self) -> f64 {
-        self.v[1]
-    }
-    fn phi_norm(&self) -> f64 {
-        self.v[2]
-    }
-    fn norm_e(&self) -> f64 {
-        self.v[3]
-    }
-    fn sigma_delta(&self) -> f64 {
-        self.v[4]
-    }
-    fn uncertainty(&self) -> f64 {
-        self.v[5]
-    }
-    fn w_norm(&self) -> f64 {
-        self.v[6]
-    }
+    mu: f64,
+    gain: f64,
+    phi_norm: f64,
+    norm_e: f64,
+    sigma_delta: f64,
+    /// The lumped uncertainty.
+    uncertainty: f64,
+    w_norm: f64,
 }
 
 /// Collects what [`diagnostics`] needs of a run's samples as they are
@@ -310,11 +302,11 @@ fn diagnostics_of(s: &Scenario, trace: &[DiagSample]) -> Option<RunDiagnostics> 
     let tol = 1e-9 * s.simulation.horizon.max(1.0);
     let cc_of = |phi_norm: f64| c.eta * c.w_max * c.w_max / 4.0 + c.eps0 * phi_norm + c.eps1;
     let eval = |smp: &DiagSample| {
-        let (mu, gain, phi_norm, norm_e) = (smp.mu(), smp.gain(), smp.phi_norm(), smp.norm_e());
+        let (mu, gain, phi_norm, norm_e) = (smp.mu, smp.gain, smp.phi_norm, smp.norm_e);
         let cc = cc_of(phi_norm);
         let left = f_with(c, mu, gain, phi_norm) + c.alpha_bar * norm_e < c.alpha * norm_e;
         let right = c.alpha * norm_e < cc / c.gamma1 + c.alpha_bar * norm_e;
-        [left && right, left, right, smp.sigma_delta() == 0.0]
+        [left && right, left, right, smp.sigma_delta == 0.0]
     };
     let share = |it: &mut dyn Iterator<Item = &DiagSample>| {
         let mut n = 0usize;
@@ -338,11 +330,11 @@ fn diagnostics_of(s: &Scenario, trace: &[DiagSample]) -> Option<RunDiagnostics> 
         condition4_right: all[2],
         dead_zone: all[3],
         after_settle: after,
-        norm_e_median: median(trace.iter().map(DiagSample::norm_e).collect()),
+        norm_e_median: median(trace.iter().map(|smp| smp.norm_e).collect()),
         right_half_limit_median: median(
             trace
                 .iter()
-                .map(|x| cc_of(x.phi_norm()) / (c.gamma1 * (c.alpha - c.alpha_bar)))
+                .map(|x| cc_of(x.phi_norm) / (c.gamma1 * (c.alpha - c.alpha_bar)))
                 .collect(),
         ),
         weights: weight_check(c, trace),
