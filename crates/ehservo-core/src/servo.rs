@@ -514,7 +514,8 @@ impl<T: Real> NominalModel<T> {
     }
 
     /// [`Self::b_and_d`]`(x, s)` from [`Self::b_and_d_both`]`(x)`: the same
-    /// bits for every `s` (a sign other than ±1, rare, is computed here).
+    /// bits for every `s` (for s = 0, a command or valve output of exactly
+    /// zero, or anything but ±1, b is computed here from the kept P_L).
     #[inline]
     pub fn b_and_d_from(&self, both: &BothDirections<T>, s: T) -> (T, T) {
         let b = if s == T::ONE {

@@ -268,7 +268,11 @@ pub trait Plant {
     /// the division and root of both valve directions) runs beside the
     /// law's instead of after the command, and hands it to
     /// [`Plant::deriv_prepared`] and [`Plant::deriv_and_lumped_prepared`]
-    /// for the sample's first RK4 stage. `None` (the default): nothing.
+    /// for the sample's first RK4 stage, at that same state `s` only (the
+    /// caller's contract: nothing checks it). `None` (the default):
+    /// nothing. The values are the third-order model's
+    /// ([`BothDirections`]: b for both valve directions, d), which the
+    /// plants of this crate that prepare anything share.
     #[inline]
     fn prepare(&self, _s: &Self::State) -> Option<BothDirections> {
         None

@@ -341,10 +341,12 @@ struct TruthAt<'a, P: Plant> {
 }
 
 /// The first RK4 stage of a sampled step: at the sample's time and state,
-/// under the command the law returns. [`Plant::deriv_and_lumped`] gives
-/// it with the lumped uncertainty (the third-order plant computes the b
-/// and d both need once); the step then starts from it
-/// ([`rk4_step_with_k1`]) if the command was not changed afterwards.
+/// under the command the law returns. [`Plant::deriv_and_lumped_prepared`]
+/// gives it with the lumped uncertainty (the third-order plant computes
+/// the b and d both need once, from what [`Plant::prepare`] made as the
+/// sample began); the step starts from it ([`rk4_step_with_k1`]) if it
+/// was for the command the plant gets, else from [`FirstStage::k1`] when
+/// the plant prepared something, else it is `rk4_step`'s.
 struct FirstStage<'a, P: Plant> {
     t: f64,
     y: &'a PlantAct<P::State>,
@@ -646,8 +648,6 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 let out = self
                     .ctrl
                     .step_with(t, xm, z, |c, s, o| c.annotate_stepped(s, o, &truth));
-                // k1 of the step below, if the law's diagnostics evaluated
-                // it for the command the plant now gets (checked below).
                 let u = if self.cfg.computation_delay {
                     self.u_applied
                 } else {
@@ -1032,10 +1032,14 @@ mod tests {
     }
 
     /// The sampled step that starts from the k1 the diagnostics evaluated
-    /// (`Plant::deriv_and_lumped`) gives the run the plain RK4 step gives,
-    /// bit for bit: with the valve passing the command, lagging it (the
-    /// plant's input then differs from the command, and its sign may too),
-    /// saturating it, with sub-steps, and for a law without diagnostics.
+    /// (`Plant::deriv_and_lumped_prepared`), or from the one made of what
+    /// the plant prepared (`FirstStage::k1`), gives the run the plain RK4
+    /// step gives, bit for bit: with the valve passing the command,
+    /// lagging it (the plant's input then differs from the command, and
+    /// its sign may too), saturating it, with sub-steps, with a computation
+    /// delay (the plant gets the previous command), with a law's safe
+    /// output after a measurement fault, and for a law without
+    /// diagnostics.
     #[test]
     fn the_shared_first_stage_changes_nothing() {
         let lag = Actuator::try_new(&ActuatorConfig {
@@ -1075,6 +1079,31 @@ mod tests {
             assert_eq!(shared, plain, "{a:?}, {substeps} sub-steps, delay {delay}");
             assert_eq!(shared.len(), 301);
         }
+        // The prepared path is the one taken (the plant prepares).
+        assert!(plant.prepare(&[0.01, -0.2, 3.0]).is_some());
+        // Measurement faults: the law does not run (no diagnostics, no
+        // shared k1) and the plant gets the safe output, zero: the step's
+        // k1 is made of what was prepared, for a command of sign 0.
+        let mut faulty = stages(Actuator::IDENTITY);
+        faulty.policy = FaultPolicy {
+            safe: ehservo_core::sampled::SafeCommand::Zero,
+            limits: ehservo_core::sampled::Limits {
+                x: [0.04, f64::INFINITY, f64::INFINITY],
+                u: f64::INFINITY,
+            },
+        };
+        let c = cfg(Mode::Sampled);
+        let mut f1 = Vec::new();
+        let o1 = Simulation::new(plant, nn(), Sine::paper(), faulty.clone(), c)
+            .unwrap()
+            .run(&mut |s| f1.push(bits(s)));
+        let mut f2 = Vec::new();
+        let o2 = Simulation::new(Plain(plant), nn(), Sine::paper(), faulty, c)
+            .unwrap()
+            .run(&mut |s| f2.push(bits(s)));
+        assert!(o1.measurement_faults > 10, "{o1:?}");
+        assert_eq!(o1, o2);
+        assert_eq!(f1, f2);
         // A PID has no diagnostics: no k1 is shared with them; the step's
         // k1 comes from what was prepared, and is rk4_step's all the same.
         let pid = ehservo_core::control::Config::build(

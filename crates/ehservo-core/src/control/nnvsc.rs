@@ -423,8 +423,9 @@ impl<T: Real> NnVsc<T> {
         self.law_body(m, s, ds)
     }
 
-    /// [`Controller::law`]'s body, inlined into it and into the AVX2
-    /// copies of it and of [`Controller::law_euler`].
+    /// [`Controller::law`]'s body, inlined into [`NnVsc::law_baseline`]
+    /// (itself inlined into `law` where there is no AVX2 dispatch) and
+    /// into the AVX2 copies of `law` and of [`Controller::law_euler`].
     #[inline(always)]
     fn law_body(
         &self,
