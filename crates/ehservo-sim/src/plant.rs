@@ -243,12 +243,14 @@ pub trait Plant {
     /// [`Plant::lumped_uncertainty`] at `x = measure(s)` for the command
     /// `u`: the simulator asks for both at once for the first RK4 stage of
     /// a sample (whose state is the sample's), so that a plant can evaluate
-    /// what the two share only once. Must return exactly what the two
-    /// calls return; the default makes them.
+    /// what the two share only once, with what [`Plant::prepare`] made at
+    /// `s` if anything. Must return exactly what the two calls return; the
+    /// default makes them.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn deriv_and_lumped(
         &self,
+        prepared: Option<&BothDirections>,
         t: f64,
         s: &Self::State,
         u_plant: f64,
@@ -258,7 +260,7 @@ pub trait Plant {
         u_eq: f64,
         b_bar: f64,
     ) -> f64 {
-        self.deriv(t, s, u_plant, v, ds);
+        self.deriv_prepared(prepared, t, s, u_plant, v, ds);
         self.lumped_uncertainty(&self.measure(s), u, u_eq, b_bar, v)
     }
 
@@ -267,8 +269,8 @@ pub trait Plant {
     /// that its latency (for the third-order plant: the load's sine, and
     /// the division and root of both valve directions) runs beside the
     /// law's instead of after the command, and hands it to
-    /// [`Plant::deriv_prepared`] and [`Plant::deriv_and_lumped_prepared`]
-    /// for the sample's first RK4 stage, at that same state `s` only (the
+    /// [`Plant::deriv_prepared`] and [`Plant::deriv_and_lumped`] for the
+    /// sample's first RK4 stage, at that same state `s` only (the
     /// caller's contract: nothing checks it). `None` (the default):
     /// nothing. The values are the third-order model's
     /// ([`BothDirections`]: b for both valve directions, d), which the
@@ -292,25 +294,6 @@ pub trait Plant {
         ds: &mut Self::State,
     ) {
         self.deriv(t, s, u, v, ds);
-    }
-
-    /// [`Plant::deriv_and_lumped`] at the state `prepared` was made from:
-    /// must give exactly what it gives; the default calls it.
-    #[allow(clippy::too_many_arguments)]
-    #[inline]
-    fn deriv_and_lumped_prepared(
-        &self,
-        _prepared: Option<&BothDirections>,
-        t: f64,
-        s: &Self::State,
-        u_plant: f64,
-        v: &Variation,
-        ds: &mut Self::State,
-        u: f64,
-        u_eq: f64,
-        b_bar: f64,
-    ) -> f64 {
-        self.deriv_and_lumped(t, s, u_plant, v, ds, u, u_eq, b_bar)
     }
 }
 
@@ -371,6 +354,7 @@ impl Plant for ThirdOrderPlant {
     #[inline]
     fn deriv_and_lumped(
         &self,
+        prepared: Option<&BothDirections>,
         _t: f64,
         x: &[f64; 3],
         u_plant: f64,
@@ -381,12 +365,12 @@ impl Plant for ThirdOrderPlant {
         b_bar: f64,
     ) -> f64 {
         let s = sgn(u);
-        let (b, d) = self.model.b_and_d(x, s);
+        let (b, d) = self.b_and_d(prepared, x, s);
         // Signs are exactly −1, 0 or +1 (never −0): compare their bits.
         if sgn(u_plant).to_bits() == s.to_bits() {
             self.deriv_with(x, u_plant, v, b, d, dx);
         } else {
-            let (bp, dp) = self.model.b_and_d(x, sgn(u_plant));
+            let (bp, dp) = self.b_and_d(prepared, x, sgn(u_plant));
             self.deriv_with(x, u_plant, v, bp, dp, dx);
         }
         lumped(x, u_eq, b_bar, v, b, d)
@@ -402,43 +386,28 @@ impl Plant for ThirdOrderPlant {
     fn deriv_prepared(
         &self,
         prepared: Option<&BothDirections>,
-        t: f64,
+        _t: f64,
         x: &[f64; 3],
         u: f64,
         v: &Variation,
         dx: &mut [f64; 3],
     ) {
-        let Some(both) = prepared else {
-            return self.deriv(t, x, u, v, dx);
-        };
-        let (b, d) = self.model.b_and_d_from(both, sgn(u));
+        let (b, d) = self.b_and_d(prepared, x, sgn(u));
         self.deriv_with(x, u, v, b, d, dx);
-    }
-
-    #[inline]
-    fn deriv_and_lumped_prepared(
-        &self,
-        prepared: Option<&BothDirections>,
-        t: f64,
-        x: &[f64; 3],
-        u_plant: f64,
-        v: &Variation,
-        dx: &mut [f64; 3],
-        u: f64,
-        u_eq: f64,
-        b_bar: f64,
-    ) -> f64 {
-        let Some(both) = prepared else {
-            return self.deriv_and_lumped(t, x, u_plant, v, dx, u, u_eq, b_bar);
-        };
-        let (b, d) = self.model.b_and_d_from(both, sgn(u));
-        let (bp, dp) = self.model.b_and_d_from(both, sgn(u_plant));
-        self.deriv_with(x, u_plant, v, bp, dp, dx);
-        lumped(x, u_eq, b_bar, v, b, d)
     }
 }
 
 impl ThirdOrderPlant {
+    /// b(x, s) and d(x): picked from what was prepared at x, if anything,
+    /// else evaluated (the same bits either way).
+    #[inline]
+    fn b_and_d(&self, prepared: Option<&BothDirections>, x: &[f64; 3], s: f64) -> (f64, f64) {
+        match prepared {
+            Some(both) => self.model.b_and_d_from(both, s),
+            None => self.model.b_and_d(x, s),
+        }
+    }
+
     /// ẋ from the nominal `b(x, sgn u)` and `d(x)`.
     #[inline]
     fn deriv_with(&self, x: &[f64; 3], u: f64, v: &Variation, b: f64, d: f64, dx: &mut [f64; 3]) {
@@ -670,33 +639,30 @@ mod tests {
                 let u = w[(i % 3).min(2)] * 1e-3;
                 let mut dx = [0.0; 3];
                 plant.deriv(0.0, &x, u, &v, &mut dx);
-                // The prepared derivative and the first stage with the lumped
-                // uncertainty, for commands of every sign pair (0 included).
+                // The prepared derivative, and the first stage with the
+                // lumped uncertainty with and without what was prepared, are
+                // `deriv` and `lumped_uncertainty` (held to the formulas
+                // below), for commands of every sign pair (0 included).
                 for (uc, up) in [(u, u), (u, -u), (0.0, u), (u, 0.0), (-u, u)] {
-                    let mut d1 = [0.0; 3];
-                    let mut d2 = [0.0; 3];
-                    plant.deriv(0.0, &x, up, &v, &mut d1);
-                    plant.deriv_prepared(Some(&both), 0.0, &x, up, &v, &mut d2);
-                    assert_eq!(d1.map(f64::to_bits), d2.map(f64::to_bits), "at {x:?}, {up}");
                     let (ueq, bb) = (w[0] * 0.3, 16000.0);
-                    let l1 = plant.deriv_and_lumped(0.0, &x, up, &v, &mut d1, uc, ueq, bb);
-                    let l2 = plant.deriv_and_lumped_prepared(
-                        Some(&both),
-                        0.0,
-                        &x,
-                        up,
-                        &v,
-                        &mut d2,
-                        uc,
-                        ueq,
-                        bb,
-                    );
+                    let mut want = [0.0; 3];
+                    plant.deriv(0.0, &x, up, &v, &mut want);
+                    let lumped = plant.lumped_uncertainty(&x, uc, ueq, bb, &v);
+                    let mut got = [0.0; 3];
+                    plant.deriv_prepared(Some(&both), 0.0, &x, up, &v, &mut got);
                     assert_eq!(
-                        d1.map(f64::to_bits),
-                        d2.map(f64::to_bits),
-                        "at {x:?}, {uc}, {up}"
+                        got.map(f64::to_bits),
+                        want.map(f64::to_bits),
+                        "at {x:?}, {up}"
                     );
-                    assert_eq!(l1.to_bits(), l2.to_bits(), "lumped at {x:?}, {uc}, {up}");
+                    for prep in [Some(&both), None] {
+                        let mut got = [0.0; 3];
+                        let l =
+                            plant.deriv_and_lumped(prep, 0.0, &x, up, &v, &mut got, uc, ueq, bb);
+                        let at = format!("{x:?}, {uc}, {up}, prepared {}", prep.is_some());
+                        assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "at {at}");
+                        assert_eq!(l.to_bits(), lumped.to_bits(), "lumped at {at}");
+                    }
                 }
                 let a = &m.coeffs;
                 let bt = (1.0 + v.db_rel) * m.b(&x, sgn(u)).0;

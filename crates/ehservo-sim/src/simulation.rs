@@ -341,7 +341,7 @@ struct TruthAt<'a, P: Plant> {
 }
 
 /// The first RK4 stage of a sampled step: at the sample's time and state,
-/// under the command the law returns. [`Plant::deriv_and_lumped_prepared`]
+/// under the command the law returns. [`Plant::deriv_and_lumped`]
 /// gives it with the lumped uncertainty (the third-order plant computes
 /// the b and d both need once, from what [`Plant::prepare`] made as the
 /// sample began); the step starts from it ([`rk4_step_with_k1`]) if it
@@ -385,7 +385,7 @@ impl<P: Plant> Truth for TruthAt<'_, P> {
         };
         // What the RK4 step's derivative computes first (see `advance`).
         let mut k1 = PlantAct::<P::State>::zero();
-        let lumped = self.plant.deriv_and_lumped_prepared(
+        let lumped = self.plant.deriv_and_lumped(
             st.prepared.as_ref(),
             st.t,
             &st.y.x,
@@ -1032,7 +1032,7 @@ mod tests {
     }
 
     /// The sampled step that starts from the k1 the diagnostics evaluated
-    /// (`Plant::deriv_and_lumped_prepared`), or from the one made of what
+    /// (`Plant::deriv_and_lumped`), or from the one made of what
     /// the plant prepared (`FirstStage::k1`), gives the run the plain RK4
     /// step gives, bit for bit: with the valve passing the command,
     /// lagging it (the plant's input then differs from the command, and
