@@ -90,15 +90,22 @@ def reference(t):
     return Y_0 + Y_A if t >= T_STEP else Y_0
 
 
-def deriv(t, s):
-    """dS/dt for S = [x, v, p1~, p2~, ps~, xv, xv', x0, z]."""
+def deriv(t, s, u_held=None):
+    """dS/dt for S = [x, v, p1~, p2~, ps~, xv, xv', x0, z].
+
+    With u_held (the sampled controller's output) the PI is not integrated
+    here: u = u_held and dz/dt = 0.
+    """
     x, v, p1t, p2t, pst, xv, xvd, x0, z = s
     # cavitation: the pressure states may go below zero (a cavity to refill);
     # what acts on orifices and the piston is max(p~, 0)
     p1, p2, ps = max(p1t, 0.0), max(p2t, 0.0), max(pst, 0.0)
     # PI controller on the valve's desired spool position, limited to x_vmax
     e = reference(t) - x
-    u = min(max(K_P * e + K_I * z, -X_VMAX), X_VMAX)
+    if u_held is None:
+        u = min(max(K_P * e + K_I * z, -X_VMAX), X_VMAX)
+    else:
+        u, e = u_held, 0.0
     # spool: second order, output within +/- x_vmax
     xvl = min(max(xv, -X_VMAX), X_VMAX)
     xva = OMEGA_V * OMEGA_V * (u - xv) - 2.0 * DELTA_V * OMEGA_V * xvd
@@ -144,11 +151,11 @@ def clamp_state(s):
     return s
 
 
-def rk4(t, s, h):
-    k1 = deriv(t, s)
-    k2 = deriv(t + h / 2, [a + h / 2 * b for a, b in zip(s, k1)])
-    k3 = deriv(t + h / 2, [a + h / 2 * b for a, b in zip(s, k2)])
-    k4 = deriv(t + h, [a + h * b for a, b in zip(s, k3)])
+def rk4(t, s, h, u_held=None):
+    k1 = deriv(t, s, u_held)
+    k2 = deriv(t + h / 2, [a + h / 2 * b for a, b in zip(s, k1)], u_held)
+    k3 = deriv(t + h / 2, [a + h / 2 * b for a, b in zip(s, k2)], u_held)
+    k4 = deriv(t + h, [a + h * b for a, b in zip(s, k3)], u_held)
     return clamp_state([a + h / 6 * (b + 2 * c + 2 * d + e) for a, b, c, d, e in zip(s, k1, k2, k3, k4)])
 
 
@@ -164,10 +171,23 @@ def log_steps(n_steps, samples, h):
     return [min(k, n_steps) for k in steps]
 
 
-def simulate(h, samples):
+def simulate(h, samples, control_period=0.0):
+    """Integrate 0..T_STOP at step h; log `samples` points.
+
+    control_period = 0: the PI is continuous (the ODE of the doc).
+    control_period = Ts > 0 (a whole number of steps h): the PI runs as
+    Hopsan's signal components do at a time step Ts (ComponentSystem.cpp
+    lines 3380-3400, SignalIntegrator2, Integrator.h lines 61-67): at the
+    n-th sample, time t_n accumulated as t_n = t_(n-1) + Ts, e_n =
+    r(t_n) - x(t_(n-1)) (the sensor reads the position the mass wrote one
+    step earlier), z_n = z_(n-1) + Ts/2*(e_n + e_(n-1)), u_n = Kp*e_n +
+    Ki*z_n limited to x_vmax, held over (t_(n-1), t_n].
+    """
     n_steps = int(round(T_STOP / h))
     want = log_steps(n_steps, samples, h)
     s = [0.0, 0.0, P_TANK, P_TANK, P_TANK, 0.0, 0.0, 0.0, 0.0]
+    m = int(round(control_period / h)) if control_period > 0.0 else 0
+    t_acc, e_prev, z_pi, u_held = 0.0, reference(0.0) - s[0], 0.0, None
     rows, j = [], 0
     for k in range(n_steps + 1):
         t = k * h
@@ -178,7 +198,13 @@ def simulate(h, samples):
                          max(s[4], 0.0), max(s[2], 0.0), max(s[3], 0.0)))
             j += 1
         if k < n_steps:
-            s = rk4(t, s, h)
+            if m and k % m == 0:
+                t_acc += control_period
+                e_n = reference(t_acc) - s[0]
+                z_pi += control_period / 2.0 * (e_n + e_prev)
+                e_prev = e_n
+                u_held = min(max(K_P * e_n + K_I * z_pi, -X_VMAX), X_VMAX)
+            s = rk4(t, s, h, u_held)
     return rows
 
 
@@ -187,6 +213,8 @@ def main(argv=None):
     ap.add_argument("out")
     ap.add_argument("--dt", type=float, default=1e-5, help="RK4 step, s (default 1e-5)")
     ap.add_argument("--samples", type=int, default=2048, help="logged samples (default 2048, the .hmf's)")
+    ap.add_argument("--control-period", type=float, default=0.0,
+                    help="run the PI sampled like Hopsan's signal components at this period, s (default 0: continuous)")
     a = ap.parse_args(argv)
     if not (a.dt > 0.0 and a.dt <= 1e-3 and math.isfinite(a.dt)):
         print(f"error: --dt: {a.dt!r} is not in (0, 1e-3] s", file=sys.stderr)
@@ -194,8 +222,12 @@ def main(argv=None):
     if not (2 <= a.samples <= int(round(T_STOP / a.dt)) + 1):
         print(f"error: --samples: {a.samples} is not in [2, steps + 1]", file=sys.stderr)
         return 2
+    cp = a.control_period
+    if not (math.isfinite(cp) and cp >= 0.0) or (cp > 0.0 and (cp < a.dt or abs(cp / a.dt - round(cp / a.dt)) > 1e-9)):
+        print(f"error: --control-period: {cp!r} is not 0 or a whole number of --dt steps", file=sys.stderr)
+        return 2
     try:
-        rows = simulate(a.dt, a.samples)
+        rows = simulate(a.dt, a.samples, cp)
     except ArithmeticError as err:
         print(f"error: diverged: {err}", file=sys.stderr)
         return 1
