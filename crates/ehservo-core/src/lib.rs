@@ -9,7 +9,6 @@
 //! | module | what it holds | paper |
 //! |---|---|---|
 //! | [`servo`] | physical parameters (SI) → coefficients `a1, a2, a3`, the state-dependent gain `b` and load term `d`; the load `Tl` | (1)–(9) |
-//! | [`cylinder`] | a valve-controlled double-rod cylinder on a rack and pinion, and the paper's parameters equal to its linearisation | (1)–(6), docs/cylinder.md |
 //! | [`reference`] | the desired trajectory and its first three derivatives `z` | A3, §IV |
 //! | [`surface`] | the switching surface `σ`, the error vector `E`, design from poles | (10), (15)–(16) |
 //! | [`rbf`] | the modified radial-basis vector `Φ(x, z)` (130 entries) | (20) |
@@ -41,7 +40,6 @@
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 
 pub mod control;
-pub mod cylinder;
 pub mod error;
 pub mod estimate;
 pub mod math;

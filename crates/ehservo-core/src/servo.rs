@@ -383,6 +383,14 @@ pub struct NominalModel<T: Real = f64> {
     pub load: Load<T>,
     b_per_kg: T,
     d_per_torque: T,
+    /// The valve's load-pressure offset p_off (Pa): `Kg = Cd·Ag·√((Ps −
+    /// sgn(xv)·(Pl − p_off))/ρ)`; 0 for the paper's servo (see
+    /// [`NominalModel::with_offset`]).
+    offset: T,
+    /// `Ps + p_off` and `Ps − p_off`: the root's constant part for each
+    /// valve direction (both `Ps`, the same value, without an offset).
+    ps_up: T,
+    ps_down: T,
 }
 
 impl<T: Real> NominalModel<T> {
@@ -395,13 +403,60 @@ impl<T: Real> NominalModel<T> {
             load,
             b_per_kg: params.b_per_kg(),
             d_per_torque: params.d_per_torque(),
+            offset: T::ZERO,
+            ps_up: params.ps,
+            ps_down: params.ps,
         }
+    }
+
+    /// The model whose valve sees the load pressure shifted by `offset`
+    /// (Pa): `Kg(Pl, s) = Cd·Ag·√((Ps − s·(Pl − offset))/ρ)`, i.e. the
+    /// root's constant part is `Ps + offset` for s = +1 and `Ps − offset`
+    /// for s = −1. A single-rod cylinder's direction-dependent gain and a
+    /// constant load are exactly this (docs/cylinder.md); `offset = 0` is
+    /// [`NominalModel::new`].
+    pub fn with_offset(params: ServoParams<T>, load: Load<T>, offset: T) -> Self {
+        let mut m = Self::new(params, load);
+        m.offset = offset;
+        m.ps_up = params.ps + offset;
+        m.ps_down = params.ps - offset;
+        m
+    }
+
+    /// The valve's load-pressure offset (Pa; 0 for the paper's servo).
+    pub fn offset(&self) -> T {
+        self.offset
     }
 
     /// The same model in another float type (its derived factors
     /// recomputed in `U` from the cast parameters).
     pub fn cast<U: Real>(&self) -> NominalModel<U> {
-        NominalModel::new(self.params.cast(), self.load.cast())
+        NominalModel::with_offset(
+            self.params.cast(),
+            self.load.cast(),
+            U::of(self.offset.to_f64()),
+        )
+    }
+
+    /// Kg of (2) with this model's offset: [`ServoParams::flow_gain`] with
+    /// the direction's `Ps ± offset` (without an offset the same
+    /// operations on the same values, so the same bits).
+    #[inline(always)]
+    fn flow_gain(&self, pl: T, s: T) -> (T, bool) {
+        let ps = if s > T::ZERO {
+            self.ps_up
+        } else if s < T::ZERO {
+            self.ps_down
+        } else {
+            self.params.ps
+        };
+        let p = &self.params;
+        let arg = ps - s * pl;
+        if arg >= T::ZERO {
+            (p.cd * p.ag * sqrt(arg / p.rho), false)
+        } else {
+            (T::ZERO, true)
+        }
     }
 
     /// Builds the model after validating parameters and load.
@@ -423,7 +478,7 @@ impl<T: Real> NominalModel<T> {
     /// Returns `(b, clamped)` (see the module doc on the valve root).
     #[inline]
     pub fn b(&self, x: &[T; 3], s: T) -> (T, bool) {
-        let (kg, clamped) = self.params.flow_gain(self.load_pressure(x), sgn(s));
+        let (kg, clamped) = self.flow_gain(self.load_pressure(x), sgn(s));
         (self.b_per_kg * kg, clamped)
     }
 
@@ -471,7 +526,7 @@ impl<T: Real> NominalModel<T> {
     /// floored as [`NominalModel::gain_for`] describes.
     #[inline]
     fn floored_gain(&self, pl: T, s: T, floor: T) -> (T, bool) {
-        let (kg, clamped) = self.params.flow_gain(pl, sgn(s));
+        let (kg, clamped) = self.flow_gain(pl, sgn(s));
         let b = self.b_per_kg * kg;
         if clamped || b < floor {
             (b.max(floor), true)
@@ -482,7 +537,7 @@ impl<T: Real> NominalModel<T> {
 
     /// `b` at zero load pressure: `4βe·Dm·Kv·Cd·Ag·sqrt(Ps/ρ)/(Vt·Jt)`.
     pub fn b_at_rest(&self) -> T {
-        self.b_per_kg * self.params.flow_gain(T::ZERO, T::ZERO).0
+        self.b_per_kg * self.flow_gain(T::ZERO, T::ZERO).0
     }
 
     /// `(b(x, s), d(x))` in one evaluation: the load's sine and cosine
@@ -492,7 +547,7 @@ impl<T: Real> NominalModel<T> {
     #[inline]
     pub fn b_and_d(&self, x: &[T; 3], s: T) -> (T, T) {
         let (pl, d) = self.pl_and_d(x);
-        (self.b_per_kg * self.params.flow_gain(pl, s).0, d)
+        (self.b_per_kg * self.flow_gain(pl, s).0, d)
     }
 
     /// [`Self::b_and_d`] before the sign is known: `b(x, +1)`, `b(x, −1)`
@@ -504,12 +559,11 @@ impl<T: Real> NominalModel<T> {
     #[inline]
     pub fn b_and_d_both(&self, x: &[T; 3]) -> BothDirections<T> {
         let (pl, d) = self.pl_and_d(x);
-        let p = &self.params;
         BothDirections {
             pl,
             d,
-            up: self.b_per_kg * p.flow_gain(pl, T::ONE).0,
-            down: self.b_per_kg * p.flow_gain(pl, -T::ONE).0,
+            up: self.b_per_kg * self.flow_gain(pl, T::ONE).0,
+            down: self.b_per_kg * self.flow_gain(pl, -T::ONE).0,
         }
     }
 
@@ -523,7 +577,7 @@ impl<T: Real> NominalModel<T> {
         } else if s == -T::ONE {
             both.down
         } else {
-            self.b_per_kg * self.params.flow_gain(both.pl, s).0
+            self.b_per_kg * self.flow_gain(both.pl, s).0
         };
         (b, both.d)
     }

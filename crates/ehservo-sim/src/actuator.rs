@@ -50,6 +50,11 @@ pub struct ActuatorConfig {
     /// Order of the spool dynamics with `bandwidth_hz`: 1 or 2 (default 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub order: Option<u8>,
+    /// Natural frequency ωn of a second-order spool (rad/s), instead of
+    /// `bandwidth_hz` (a datasheet's or a model's ω, as Hopsan's
+    /// `omega_h`); with `damping`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub natural_frequency: Option<f64>,
     /// Damping ratio ζ of a second-order spool (default 0.7).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub damping: Option<f64>,
@@ -141,6 +146,18 @@ impl Actuator {
                 f64::NAN,
             ));
         }
+        if c.natural_frequency.is_some() && (c.order == Some(1)) {
+            return Err(ParamError::new(
+                "order",
+                "a natural_frequency sets a second-order spool: remove order = 1",
+                f64::NAN,
+            ));
+        }
+        let order = if c.natural_frequency.is_some() {
+            2
+        } else {
+            order
+        };
         if c.damping.is_some() && order != 2 {
             return Err(ParamError::new(
                 "damping",
@@ -148,7 +165,23 @@ impl Actuator {
                 f64::NAN,
             ));
         }
+        if c.natural_frequency.is_some() && (c.time_constant.is_some() || c.bandwidth_hz.is_some())
+        {
+            return Err(ParamError::new(
+                "natural_frequency",
+                "give one of actuator.time_constant, actuator.bandwidth_hz and actuator.natural_frequency",
+                f64::NAN,
+            ));
+        }
         let dynamics = match (c.time_constant, c.bandwidth_hz) {
+            (None, None) if c.natural_frequency.is_some() => {
+                let wn = pos("natural_frequency", c.natural_frequency, 0.0)?;
+                let zeta = pos("damping", c.damping, 0.7)?;
+                Dynamics::Second {
+                    wn2: wn * wn,
+                    two_zeta_wn: 2.0 * zeta * wn,
+                }
+            }
             (Some(_), Some(_)) => {
                 return Err(ParamError::new(
                     "bandwidth_hz",
@@ -177,7 +210,7 @@ impl Actuator {
         if c.rate_limit.is_some() && dynamics == Dynamics::None {
             return Err(ParamError::new(
                 "rate_limit",
-                "needs spool dynamics: actuator.time_constant or actuator.bandwidth_hz (the rate limit bounds the spool's slew)",
+                "needs spool dynamics: actuator.time_constant, bandwidth_hz or natural_frequency (the rate limit bounds the spool's slew)",
                 f64::NAN,
             ));
         }

@@ -1,572 +1,1039 @@
-//! A valve-controlled double-rod cylinder on a rack and pinion as a
-//! [`Plant`]: state `[y, ẏ, P1, P2]` in SI (m, m/s, Pa, Pa), output
-//! θ = y/r (docs/cylinder.md, [`CylinderParams`] for the equations).
+//! A valve-controlled linear cylinder as a plant: single-rod or double-rod,
+//! the 4/3 valve of [`crate::valve`], the supply of [`crate::supply`], a
+//! load (mass, spring, viscous and Stribeck friction, gravity on an
+//! inclined axis, an external force signal), end stops, and cavitation.
+//! `[plant] model = "cylinder"`; docs/cylinder.md has the derivations.
 //!
-//! The controller is told the paper's model with the parameters the
-//! cylinder linearises to ([`CylinderParams::nominal_servo_params`]) and the
-//! scenario's load; what the linearisation drops (chamber volumes varying
-//! with y, the common-mode pressure, the seal friction) is what the
-//! controller does not know. The scenario's `[load]` is a torque on the
-//! pinion shaft: a force `Tl/r` on the rod.
+//! State `[y, ẏ, p̃_A, p̃_B, p̃_s, x_r]` in SI (m, m/s, Pa, Pa, Pa,
+//! m³/(s·√Pa)): the rod's extension y ∈ [0, stroke], its speed, the
+//! pressure states of chamber A (the piston side, which grows with y),
+//! chamber B (the rod side) and the supply line, and the relief valve's
+//! opening (the last two constant with a fixed supply). Pressures are
+//! absolute; the spool is the actuator stage's (`[actuator]`), the valve
+//! reads its output.
 //!
-//! **Variations** are carried as on [`PhysicalPlant`](crate::plant::PhysicalPlant):
-//! both valve flows scaled by `1 + δb`, and the `Δa_i` as a load-pressure
-//! rate `−(M·r/A)·Σ Δa_i·x_i` split evenly between the chambers, which adds
-//! exactly `−Σ Δa_i·x_i` to θ⃛. [`Plant::lumped_uncertainty`] is the
-//! default one: the variation's part only, not the cylinder's own mismatch.
+//! ```text
+//! V_A = V_0A + A_A·y,   V_B = V_0B + A_B·(stroke − y)              (floored at 1 % of V_0)
+//! p = max(p̃, 0)                                                    cavitation: a state below 0 is a cavity
+//! (V_A/βe)·dp̃_A/dt = Q_A − A_A·ẏ − C_l·(p_A − p_B)
+//! (V_B/βe)·dp̃_B/dt = Q_B + A_B·ẏ + C_l·(p_A − p_B)
+//! M·ÿ = A_A·p_A − A_B·p_B − B·ẏ − F_f(ẏ) − K·(y − y_K) − M·g·sin α − F(t) + F_stop(y, ẏ)
+//! F_stop = max(k_s·(−y) − c_s·ẏ, 0)             for y < 0
+//!        = min(k_s·(stroke − y) − c_s·ẏ, 0)      for y > stroke
+//! ```
 //!
-//! **Stroke.** End stops are not modelled. The scenario's `theta_limit` is
-//! lowered to the stroke's angle, so a run whose |θ| reaches the end of the
-//! stroke stops as diverged; the chamber volumes are floored at their
-//! end-of-stroke values so that a last RK4 stage past it stays finite.
+//! The cavitation rule is Hopsan's (`HydraulicCylinderC` and
+//! `Hydraulic43Valve`: a port whose pressure would fall below 0 is held at
+//! 0 while its chamber keeps integrating the net flow, docs/hopsan/
+//! position-servo.md, "The model as ODEs"): the pressure that acts on the
+//! orifices and the piston is max(p̃, 0), and a cavity must be refilled
+//! before the pressure rises again. End stops are a stiff spring-damper
+//! contact that only pushes (no sticking), so a run goes on at the stop as
+//! a real cylinder does; by default k_s is 100 times the oil column's
+//! stiffness βe·(A_A²/V_A + A_B²/V_B) at mid-stroke and c_s = 2·√(k_s·M)
+//! (critically damped): a modelling choice, stated, not a measured stop.
+//!
+//! With `[plant.transmission] radius = r` (a rack and pinion) the axis is
+//! rotary: θ = (y − stroke/2)/r, the pinion at 0 with the piston at
+//! mid-stroke.
+//!
+//! **Nominal model.** The controller is told the paper's third-order model
+//! (8)–(9) of the axis, linearised at `[plant.nominal] position` (default
+//! mid-stroke): the volumes there, Ā = (A_A + A_B)/2 as Dm, M as Jt, the
+//! valve's land as the flow gain, and the single rod's direction-dependent
+//! gain and the constant load as the valve's load-pressure offset
+//! ([`NominalModel::with_offset`]); see [`CylinderPlant::nominal_model`].
+//!
+//! **Variation.** `[uncertainty.physical]` only: the mass, the bulk
+//! modulus (chambers and supply line), the cross-piston leakage, the supply
+//! pressure (a fixed supply's Ps, a pump's relief setting), every friction
+//! force (viscous, Coulomb, stiction) and the load (spring, gravity,
+//! external force), each scaled by `1 + bias + random·r`.
 
-use crate::plant::{Plant, Variation, MAX_STATES};
+use crate::axis::Axis;
+use crate::force::{Force, ForceCfg};
+use crate::plant::{Draw, Plant, PlantConfig, PlantContext, UncertaintySpec, MAX_STATES};
+use crate::supply::{Supply, SupplyCfg};
+use crate::uncertainty::Factors;
+use crate::valve::{SpoolValve, ValveCfg};
 use ehservo_core::control::Signal;
-use ehservo_core::cylinder::CylinderParams;
-use ehservo_core::servo::{Load, NominalModel};
+use ehservo_core::math::sgn;
+use ehservo_core::servo::{Friction, Load, NominalModel, ServoParams};
+use serde::{Deserialize, Serialize};
+
+/// Standard gravity g_n = 9.80665 m/s², exact by definition (3rd CGPM,
+/// 1901; BIPM SI Brochure, 9th ed., 2019).
+pub const STANDARD_GRAVITY: f64 = 9.806_65;
+
+/// The kinematic viscosity of an ISO VG 46 hydraulic oil at 40 °C
+/// (46 mm²/s: ISO 3448 names a viscosity grade by its mid-point kinematic
+/// viscosity at 40 °C in mm²/s), the default of `[plant.fluid] viscosity`.
+pub const ISO_VG46_VISCOSITY: f64 = 46e-6;
+
+/// `[plant.cylinder]`: the geometry, by areas or by diameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct CylinderGeom {
+    /// Piston-side area A_A (m²), or give `bore`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub area_a: Option<f64>,
+    /// Rod-side area A_B (m²), or give `rod_diameter`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub area_b: Option<f64>,
+    /// Bore D (m): A_A = πD²/4 (a double-rod's both sides A = π(D² − d²)/4).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bore: Option<f64>,
+    /// Rod diameter d (m): A_B = π(D² − d²)/4.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rod_diameter: Option<f64>,
+    /// With `bore`: 1 (single-rod, the default) or 2 (double-rod).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rods: Option<u8>,
+    /// Stroke (m).
+    pub stroke: f64,
+    /// Dead volume of chamber A at y = 0 (m³).
+    pub dead_volume_a: f64,
+    /// Dead volume of chamber B at y = stroke (m³).
+    pub dead_volume_b: f64,
+    /// Cross-piston leakage C_l (m³/(s·Pa)). Default 0.
+    pub leakage: f64,
+    /// Viscous friction of the piston B_p (N·s/m). Default 0.
+    pub viscous: f64,
+}
+
+/// `[plant.fluid]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FluidCfg {
+    /// Density ρ (kg/m³).
+    pub density: f64,
+    /// Effective bulk modulus βe (Pa).
+    pub bulk_modulus: f64,
+    /// Kinematic viscosity ν (m²/s): the orifices' laminar transition.
+    /// Default 46e-6 (ISO VG 46 at 40 °C).
+    pub viscosity: f64,
+}
+
+impl Default for FluidCfg {
+    fn default() -> Self {
+        Self {
+            density: 0.0,
+            bulk_modulus: 0.0,
+            viscosity: ISO_VG46_VISCOSITY,
+        }
+    }
+}
+
+/// `[plant.load]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LoadCfg {
+    /// The moving mass M (kg): rod, piston and load.
+    pub mass: f64,
+    /// Spring stiffness K (N/m). Default 0.
+    pub spring: f64,
+    /// Where the spring is relaxed, y_K (m). Default 0.
+    pub spring_origin: f64,
+    /// External viscous damping (N·s/m). Default 0.
+    pub damping: f64,
+    /// Inclination of the axis (deg): gravity pulls M·g·sin α toward y = 0.
+    /// Default 0 (horizontal).
+    pub incline_deg: f64,
+    /// g (m/s²). Default 9.80665.
+    pub gravity: f64,
+    /// `[plant.load.friction]`: Stribeck friction of the rod (N, m/s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<Friction>,
+    /// `[plant.load.force]`: an external force F(t) (N) opposing extension.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub force: Option<ForceCfg>,
+}
+
+impl Default for LoadCfg {
+    fn default() -> Self {
+        Self {
+            mass: 0.0,
+            spring: 0.0,
+            spring_origin: 0.0,
+            damping: 0.0,
+            incline_deg: 0.0,
+            gravity: STANDARD_GRAVITY,
+            friction: None,
+            force: None,
+        }
+    }
+}
+
+/// `[plant.end_stop]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct EndStopCfg {
+    /// Contact stiffness k_s (N/m); default 100·βe·(A_A²/V_A + A_B²/V_B) at mid-stroke.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Contact damping c_s (N·s/m); default 2·√(k_s·M).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+}
+
+/// `[plant.initial]`: the pressures at t = 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct InitialCfg {
+    /// p_A(0) (Pa); default: the pair that holds the load at x(0) about
+    /// the mid pressure (Ps + Pt)/2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pressure_a: Option<f64>,
+    /// p_B(0) (Pa).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pressure_b: Option<f64>,
+}
+
+/// `[plant.transmission]`: a rack and pinion that makes the axis rotary.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransmissionCfg {
+    /// Pinion radius r (m): θ = (y − stroke/2)/r.
+    pub radius: f64,
+}
+
+/// `[plant.nominal]`: where the controller's model is linearised.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct NominalCfg {
+    /// The rod position of the operating point (m); default mid-stroke.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position: Option<f64>,
+}
+
+/// `[plant] model = "cylinder"`: the tables of a valve-controlled cylinder.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct CylinderCfg {
+    /// `[plant.cylinder]`.
+    pub cylinder: CylinderGeom,
+    /// `[plant.fluid]`.
+    pub fluid: FluidCfg,
+    /// `[plant.valve]`.
+    pub valve: ValveCfg,
+    /// `[plant.supply]`.
+    pub supply: SupplyCfg,
+    /// `[plant.load]`.
+    pub load: LoadCfg,
+    /// `[plant.end_stop]`.
+    #[serde(skip_serializing_if = "is_default")]
+    pub end_stop: EndStopCfg,
+    /// `[plant.initial]`.
+    #[serde(skip_serializing_if = "is_default")]
+    pub initial: InitialCfg,
+    /// `[plant.transmission]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transmission: Option<TransmissionCfg>,
+    /// `[plant.nominal]`.
+    #[serde(skip_serializing_if = "is_default")]
+    pub nominal: NominalCfg,
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
+}
+
+/// The validated cylinder's constants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cylinder {
+    /// A_A, A_B (m²).
+    pub area: [f64; 2],
+    /// Stroke (m).
+    pub stroke: f64,
+    /// Dead volumes (m³).
+    pub v0: [f64; 2],
+    /// C_l (m³/(s·Pa)).
+    pub leakage: f64,
+    /// B_p + external damping (N·s/m).
+    pub viscous: f64,
+    /// βe (Pa).
+    pub beta: f64,
+    /// ρ (kg/m³).
+    pub rho: f64,
+    /// M (kg).
+    pub mass: f64,
+    /// K (N/m).
+    pub spring: f64,
+    /// y_K (m).
+    pub spring_origin: f64,
+    /// M·g·sin α (N).
+    pub gravity_force: f64,
+    /// Friction of the rod.
+    pub friction: Option<Friction>,
+    /// The external force.
+    pub force: Force,
+    /// k_s, c_s of the end stops.
+    pub stop: [f64; 2],
+    /// The valve.
+    pub valve: SpoolValve,
+    /// The supply.
+    pub supply: Supply,
+    /// Tank pressure (Pa).
+    pub pt: f64,
+    /// Pinion radius, when the axis is rotary.
+    pub radius: Option<f64>,
+    /// p_A(0), p_B(0) when given.
+    pub initial: [Option<f64>; 2],
+}
 
 /// The cylinder plant.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct CylinderPlant {
-    params: CylinderParams,
+    c: Cylinder,
     model: NominalModel,
 }
 
-impl CylinderPlant {
-    /// From validated parameters and the load torque on the pinion.
-    pub fn new(params: CylinderParams, load: Load) -> Self {
-        Self {
-            params,
-            model: NominalModel::new(params.nominal_servo_params(), load),
-        }
-    }
-
-    /// The cylinder's parameters.
-    pub fn params(&self) -> &CylinderParams {
-        &self.params
-    }
-
-    /// The external force on the rod from the load torque, `Tl(θ, θ̇)/r`.
-    #[inline]
-    fn load_force(&self, y: f64, v: f64) -> f64 {
-        let r = self.params.r;
-        self.model.load.torque(y / r, v / r) / r
-    }
-
-    /// Rod acceleration ÿ from the force balance.
-    #[inline]
-    pub fn acceleration(&self, s: &[f64; 4]) -> f64 {
-        let c = &self.params;
-        let [y, v, p1, p2] = *s;
-        (c.area * (p1 - p2)
-            - c.damping * v
-            - c.spring * y
-            - c.friction_force(v)
-            - self.load_force(y, v))
-            / c.mass
-    }
-
-    /// The derivative and whether a valve root was clamped.
-    #[inline]
-    pub fn deriv_clamped(&self, s: &[f64; 4], u: f64, v: &Variation, ds: &mut [f64; 4]) -> bool {
-        let c = &self.params;
-        let [y, yd, p1, p2] = *s;
-        let (q1, q2, clamped) = c.valve_flows(c.kv * u, p1, p2);
-        let scale = 1.0 + v.db_rel;
-        let (v1, v2) = c.volumes(y);
-        let leak = c.leakage * (p1 - p2);
-        let ydd = self.acceleration(s);
-        // The Δa_i as a load-pressure rate (module doc).
-        let r = c.r;
-        let x = [y / r, yd / r, ydd / r];
-        let extra = -0.5 * c.mass * r / c.area * (v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2]);
-        ds[0] = yd;
-        ds[1] = ydd;
-        ds[2] = c.beta_e / v1 * (scale * q1 - c.area * yd - leak) + extra;
-        ds[3] = c.beta_e / v2 * (-scale * q2 + c.area * yd + leak) - extra;
-        clamped
-    }
-
-    /// The storage of docs/cylinder.md: kinetic, spring, load-potential and
-    /// compression energy, `½Mẏ² + ½Ky² + U_load(θ) + Σ V_i·g(P_i)` (J).
-    /// The load potential is that of the load's sine,
-    /// `(amplitude/k)·(1 − cos kθ)`; friction has none.
-    pub fn storage(&self, s: &[f64; 4]) -> f64 {
-        let c = &self.params;
-        let [y, yd, p1, p2] = *s;
-        let (v1, v2) = c.volumes(y);
-        let l = &self.model.load;
-        let theta = y / c.r;
-        let u_load = if l.wavenumber == 0.0 {
-            0.0
-        } else {
-            l.amplitude / l.wavenumber * (1.0 - (l.wavenumber * theta).cos())
-        };
-        0.5 * c.mass * yd * yd
-            + 0.5 * c.spring * y * y
-            + u_load
-            + v1 * c.compression_energy_density(p1)
-            + v2 * c.compression_energy_density(p2)
-    }
+/// One hold interval's variation of a cylinder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CylinderVariation {
+    /// The physical factors.
+    pub f: Factors,
 }
 
 /// The cylinder's physical states in a trace.
-const CYLINDER_STATES: [Signal; 4] = [
-    Signal::new("y", "y_mm", "mm", "rod position y = r·θ"),
+const CYLINDER_STATES: [Signal; 6] = [
     Signal::new(
-        "p1",
-        "p1_Pa",
+        "p_a",
+        "p_a_Pa",
         "Pa",
-        "pressure of chamber 1 (extends the rod)",
+        "pressure of chamber A (piston side), max(p̃_A, 0)",
     ),
-    Signal::new("p2", "p2_Pa", "Pa", "pressure of chamber 2"),
-    Signal::new("p_load", "p_load_Pa", "Pa", "load pressure P1 − P2"),
+    Signal::new(
+        "p_b",
+        "p_b_Pa",
+        "Pa",
+        "pressure of chamber B (rod side), max(p̃_B, 0)",
+    ),
+    Signal::new("p_supply", "p_supply_Pa", "Pa", "supply pressure"),
+    Signal::new(
+        "relief",
+        "relief_m3_s_sqrtPa",
+        "m³/(s·√Pa)",
+        "relief valve opening (flow coefficient)",
+    ),
+    Signal::new(
+        "f_load",
+        "f_load_N",
+        "N",
+        "load force on the rod: spring, gravity and F(t)",
+    ),
+    Signal::new("f_stop", "f_stop_N", "N", "end-stop contact force"),
 ];
 
+/// The volumes' floor as a share of the dead volume: a stop's
+/// penetration can otherwise shrink a chamber to nothing.
+const VOLUME_FLOOR: f64 = 0.01;
+
+/// A positive finite key or its error.
+fn pos(k: &str, v: f64) -> Result<f64, (String, String)> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err((k.to_string(), format!("must be finite and > 0 (got {v:?})")))
+    }
+}
+
+fn nonneg(k: &str, v: f64) -> Result<f64, (String, String)> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err((
+            k.to_string(),
+            format!("must be finite and >= 0 (got {v:?})"),
+        ))
+    }
+}
+
+fn fin(k: &str, v: f64) -> Result<f64, (String, String)> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err((k.to_string(), format!("must be finite (got {v:?})")))
+    }
+}
+
+/// Prefixes a key error with its table.
+fn at(prefix: &'static str) -> impl Fn((String, String)) -> (String, String) {
+    move |(k, r)| (format!("plant.{prefix}.{k}"), r)
+}
+
+impl CylinderCfg {
+    /// Checks every key; the error is the full key path and the reason.
+    pub fn resolve(&self, ctx: &PlantContext) -> Result<Cylinder, (String, String)> {
+        let g = &self.cylinder;
+        let cyl = at("cylinder");
+        let area = match (g.area_a, g.area_b, g.bore, g.rod_diameter) {
+            (Some(a), Some(b), None, None) => {
+                if g.rods.is_some() {
+                    return Err(cyl(("rods".into(), "goes with bore and rod_diameter, not areas".into())));
+                }
+                let a = pos("area_a", a).map_err(&cyl)?;
+                let b = pos("area_b", b).map_err(&cyl)?;
+                if b > a {
+                    return Err(cyl((
+                        "area_b".into(),
+                        format!("the rod side ({b} m²) is larger than the piston side ({a} m²): area_a is the piston side"),
+                    )));
+                }
+                [a, b]
+            }
+            (None, None, Some(d), Some(dr)) => {
+                let d = pos("bore", d).map_err(&cyl)?;
+                let dr = pos("rod_diameter", dr).map_err(&cyl)?;
+                if dr >= d {
+                    return Err(cyl((
+                        "rod_diameter".into(),
+                        format!("the rod ({dr} m) must be thinner than the bore ({d} m): A_rod ≥ A_A leaves no rod-side area"),
+                    )));
+                }
+                let q = core::f64::consts::PI / 4.0;
+                let annulus = q * (d * d - dr * dr);
+                match g.rods.unwrap_or(1) {
+                    1 => [q * d * d, annulus],
+                    2 => [annulus, annulus],
+                    n => {
+                        return Err(cyl((
+                            "rods".into(),
+                            format!("must be 1 (single-rod) or 2 (double-rod), got {n}"),
+                        )))
+                    }
+                }
+            }
+            (None, None, None, None) => {
+                return Err(cyl((
+                    "area_a".into(),
+                    "the geometry is required: area_a and area_b (m²), or bore and rod_diameter (m) with rods = 1 or 2".into(),
+                )))
+            }
+            _ => {
+                return Err(cyl((
+                    "area_a".into(),
+                    "give either area_a and area_b, or bore and rod_diameter, not a mix".into(),
+                )))
+            }
+        };
+        let stroke = pos("stroke", g.stroke).map_err(&cyl)?;
+        let v0a = g.dead_volume_a;
+        let v0b = g.dead_volume_b;
+        if !(v0a.is_finite() && v0a > 0.0) {
+            return Err(cyl((
+                "dead_volume_a".into(),
+                format!("must be finite and > 0 (got {v0a:?}): chamber A's volume V_0A + A_A·y would not be positive at y = 0"),
+            )));
+        }
+        if !(v0b.is_finite() && v0b > 0.0) {
+            return Err(cyl((
+                "dead_volume_b".into(),
+                format!("must be finite and > 0 (got {v0b:?}): chamber B's volume V_0B + A_B·(stroke − y) would not be positive at y = stroke"),
+            )));
+        }
+        let leakage = nonneg("leakage", g.leakage).map_err(&cyl)?;
+        let bp = nonneg("viscous", g.viscous).map_err(&cyl)?;
+        let fl = at("fluid");
+        let rho = pos("density", self.fluid.density).map_err(&fl)?;
+        let beta = pos("bulk_modulus", self.fluid.bulk_modulus).map_err(&fl)?;
+        let nu = pos("viscosity", self.fluid.viscosity).map_err(&fl)?;
+        let valve = SpoolValve::try_new(&self.valve, rho, nu).map_err(at("valve"))?;
+        let (supply, pt) = Supply::try_new(&self.supply, beta).map_err(at("supply"))?;
+        let l = &self.load;
+        let ld = at("load");
+        let mass = pos("mass", l.mass).map_err(&ld)?;
+        let spring = nonneg("spring", l.spring).map_err(&ld)?;
+        let spring_origin = fin("spring_origin", l.spring_origin).map_err(&ld)?;
+        let damping = nonneg("damping", l.damping).map_err(&ld)?;
+        let incline = fin("incline_deg", l.incline_deg).map_err(&ld)?;
+        if incline.abs() > 90.0 {
+            return Err(ld((
+                "incline_deg".into(),
+                format!("must be within ±90° (got {incline})"),
+            )));
+        }
+        let gravity = nonneg("gravity", l.gravity).map_err(&ld)?;
+        if let Some(f) = &l.friction {
+            f.validate().map_err(|e| {
+                (
+                    format!("plant.load.friction.{}", e.name),
+                    format!("{} (got {:?})", e.reason, e.value),
+                )
+            })?;
+        }
+        let force = match &l.force {
+            None => Force::Zero,
+            Some(f) => Force::try_new(f, ctx.base_dir.as_deref())
+                .map_err(|(k, r)| (format!("plant.load.force.{k}"), r))?,
+        };
+        let gravity_force = mass * gravity * incline.to_radians().sin();
+        // The oil column's stiffness at mid-stroke, for the stop's default.
+        let half = 0.5 * stroke;
+        let kh = beta
+            * (area[0] * area[0] / (v0a + area[0] * half)
+                + area[1] * area[1] / (v0b + area[1] * half));
+        let es = at("end_stop");
+        let ks = match self.end_stop.stiffness {
+            None => 100.0 * kh,
+            Some(k) => pos("stiffness", k).map_err(&es)?,
+        };
+        let cs = match self.end_stop.damping {
+            None => 2.0 * (ks * mass).sqrt(),
+            Some(c) => nonneg("damping", c).map_err(&es)?,
+        };
+        let radius = match &self.transmission {
+            None => None,
+            Some(t) => Some(pos("radius", t.radius).map_err(at("transmission"))?),
+        };
+        let ini = at("initial");
+        let initial = [
+            self.initial
+                .pressure_a
+                .map(|p| nonneg("pressure_a", p))
+                .transpose()
+                .map_err(&ini)?,
+            self.initial
+                .pressure_b
+                .map(|p| nonneg("pressure_b", p))
+                .transpose()
+                .map_err(&ini)?,
+        ];
+        if initial[0].is_some() != initial[1].is_some() {
+            return Err(ini((
+                "pressure_a".into(),
+                "give both pressure_a and pressure_b, or neither".into(),
+            )));
+        }
+        let c = Cylinder {
+            area,
+            stroke,
+            v0: [v0a, v0b],
+            leakage,
+            viscous: bp + damping,
+            beta,
+            rho,
+            mass,
+            spring,
+            spring_origin,
+            gravity_force,
+            friction: l.friction,
+            force,
+            stop: [ks, cs],
+            valve,
+            supply,
+            pt,
+            radius,
+            initial,
+        };
+        // The relief must be able to hold the static load: a supply that
+        // cannot push the load off the bottom of the stroke is a mistake.
+        let ps = c.supply.holding_pressure(pt);
+        let hold = c.area[0] * (ps - pt) - (c.area[0] - c.area[1]) * pt;
+        let static_load = c.gravity_force + c.force.static_part();
+        if static_load > 0.0 && hold <= static_load {
+            return Err((
+                match c.supply {
+                    Supply::Fixed { .. } => "plant.supply.pressure",
+                    Supply::Pump(_) => "plant.supply.relief_pressure",
+                }
+                .into(),
+                format!(
+                    "the supply ({:.4e} Pa) cannot hold the static load of {static_load:.4e} N on the piston side's {:.4e} m²",
+                    ps, c.area[0]
+                ),
+            ));
+        }
+        // The operating point and the run's positions inside the stroke.
+        let y_nom = self.nominal.position.unwrap_or(half);
+        if !(y_nom.is_finite() && (0.0..=stroke).contains(&y_nom)) {
+            return Err((
+                "plant.nominal.position".into(),
+                format!("must be within the stroke [0, {stroke}] m (got {y_nom:?})"),
+            ));
+        }
+        let to_y = |p: f64| match radius {
+            None => p,
+            Some(r) => half + r * p,
+        };
+        let y0 = to_y(ctx.x0[0]);
+        if !(0.0..=stroke).contains(&y0) {
+            return Err((
+                "simulation.x0".into(),
+                format!("the rod starts at y = {y0} m, outside the stroke [0, {stroke}] m"),
+            ));
+        }
+        if let Some((lo, hi)) = ctx.reference_range {
+            let (ylo, yhi) = (to_y(lo), to_y(hi));
+            if ylo < 0.0 || yhi > stroke {
+                return Err((
+                    "reference".into(),
+                    format!(
+                        "asks for y from {:.6} to {:.6} m: outside the stroke [0, {stroke}] m",
+                        ylo.min(yhi),
+                        ylo.max(yhi)
+                    ),
+                ));
+            }
+        }
+        Ok(c)
+    }
+}
+
+impl Cylinder {
+    /// The chamber volumes at y (floored at 1 % of the dead volume).
+    #[inline]
+    pub fn volumes(&self, y: f64) -> [f64; 2] {
+        [
+            (self.v0[0] + self.area[0] * y).max(VOLUME_FLOOR * self.v0[0]),
+            (self.v0[1] + self.area[1] * (self.stroke - y)).max(VOLUME_FLOOR * self.v0[1]),
+        ]
+    }
+
+    /// The stop's force at y, ẏ (only pushing).
+    #[inline]
+    pub fn stop_force(&self, y: f64, v: f64) -> f64 {
+        let [k, c] = self.stop;
+        if y < 0.0 {
+            (-k * y - c * v).max(0.0)
+        } else if y > self.stroke {
+            (k * (self.stroke - y) - c * v).min(0.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// The supply pressure acting at the valve for the state `ps_state`
+    /// (a fixed supply's Ps scaled by the variation).
+    #[inline]
+    fn supply_pressure(&self, ps_state: f64, f: &Factors) -> f64 {
+        match self.supply {
+            Supply::Fixed { ps } => ps * f.supply_pressure,
+            Supply::Pump(_) => ps_state.max(0.0),
+        }
+    }
+
+    /// The load force on the rod (N, opposing extension): spring, gravity,
+    /// F(t), scaled by the load factor; and its rate.
+    #[inline]
+    fn load_force(&self, t: f64, y: f64, v: f64, f: &Factors) -> (f64, f64) {
+        let (fe, fe_rate) = self.force.at(t);
+        let spring = self.spring * (y - self.spring_origin);
+        (
+            f.load * (spring + self.gravity_force + fe),
+            f.load * (self.spring * v + fe_rate),
+        )
+    }
+
+    /// The friction force at ẏ (N) and its slope dF/dẏ, scaled.
+    #[inline]
+    fn friction(&self, v: f64, f: &Factors) -> (f64, f64) {
+        let visc = self.viscous * v;
+        match &self.friction {
+            None => (f.friction * visc, f.friction * self.viscous),
+            Some(fr) => (
+                f.friction * (visc + fr.torque(v)),
+                f.friction * (self.viscous + fr.slope(v)),
+            ),
+        }
+    }
+
+    /// The net force on the rod and the parts a trace shows (load, stop).
+    #[inline]
+    fn forces(&self, t: f64, s: &[f64; 6], f: &Factors) -> (f64, f64, f64) {
+        let [y, v, pa, pb, _, _] = *s;
+        let (pa, pb) = (pa.max(0.0), pb.max(0.0));
+        let (fl, _) = self.load_force(t, y, v, f);
+        let (ff, _) = self.friction(v, f);
+        let fs = self.stop_force(y, v);
+        (self.area[0] * pa - self.area[1] * pb - ff - fl + fs, fl, fs)
+    }
+
+    /// The state derivative under the spool command `u` (V).
+    #[inline]
+    pub fn deriv(&self, t: f64, s: &[f64; 6], u: f64, f: &Factors, ds: &mut [f64; 6]) {
+        let [y, v, pa_s, pb_s, ps_s, xr] = *s;
+        let (pa, pb) = (pa_s.max(0.0), pb_s.max(0.0));
+        let ps = self.supply_pressure(ps_s, f);
+        let xv = self.valve.spool(u);
+        let q = self.valve.flows(xv, ps, self.pt, pa, pb);
+        let [va, vb] = self.volumes(y);
+        let beta = self.beta * f.bulk_modulus;
+        let leak = self.leakage * f.leakage * (pa - pb);
+        let (force, _, _) = self.forces(t, s, f);
+        ds[0] = v;
+        ds[1] = force / (self.mass * f.mass);
+        ds[2] = beta / va * (q.a - self.area[0] * v - leak);
+        ds[3] = beta / vb * (q.b + self.area[1] * v + leak);
+        match &self.supply {
+            Supply::Fixed { .. } => {
+                ds[4] = 0.0;
+                ds[5] = 0.0;
+            }
+            Supply::Pump(p) => {
+                let p_max = p.p_max * f.supply_pressure;
+                let relief = crate::supply::Pump { p_max, ..*p };
+                let xs = relief.steady_opening(ps, self.pt);
+                let qr = relief.q_relief(xr, ps, self.pt);
+                ds[4] = p.stiffness * f.bulk_modulus * (p.q_pump(ps, self.pt) - qr - q.p);
+                ds[5] = (xs - xr) * p.rate;
+            }
+        }
+    }
+
+    /// The largest rate the state's dynamics have here (1/s): chamber and
+    /// supply pressure time constants through the open edges, the oil
+    /// column, a stop in contact, friction, the relief spool.
+    pub fn stiffness(&self, s: &[f64; 6], u: f64, f: &Factors) -> f64 {
+        let [y, _, pa_s, pb_s, ps_s, _] = *s;
+        let (pa, pb) = (pa_s.max(0.0), pb_s.max(0.0));
+        let ps = self.supply_pressure(ps_s, f);
+        let pt = self.pt;
+        let xv = self.valve.spool(u);
+        let o = self.valve.openings(xv);
+        let slope = |i: usize, dp: f64| self.valve.orifice_slope(self.valve.cdw[i] * o[i], dp);
+        let (s_pa, s_pb, s_at, s_bt) = (
+            slope(0, ps - pa),
+            slope(1, ps - pb),
+            slope(2, pa - pt),
+            slope(3, pb - pt),
+        );
+        let [va, vb] = self.volumes(y);
+        let beta = self.beta * f.bulk_modulus;
+        let cl = self.leakage * f.leakage;
+        let m = self.mass * f.mass;
+        let mut lam = beta / va * (s_pa + s_at + cl);
+        lam = lam.max(beta / vb * (s_pb + s_bt + cl));
+        let kh = beta * (self.area[0] * self.area[0] / va + self.area[1] * self.area[1] / vb);
+        lam = lam.max((kh / m).sqrt());
+        if y < 0.0 || y > self.stroke {
+            lam = lam.max((self.stop[0] / m).sqrt() + self.stop[1] / m);
+        }
+        let (_, dfdv) = self.friction(s[1], f);
+        lam = lam.max(dfdv / m);
+        if let Supply::Pump(p) = &self.supply {
+            let relief = p.x_max.max(s[5]) * 0.5 / (ps - pt).max(1.0).sqrt();
+            lam = lam.max(p.stiffness * f.bulk_modulus * (p.leakage + relief + s_pa + s_pb));
+            lam = lam.max(p.rate);
+        }
+        lam
+    }
+
+    /// The state at t = 0 with the rod at y0 moving at v0 and accelerating
+    /// at a0 (the pressures then hold that force), or the given pressures.
+    pub fn initial_state(&self, y0: f64, v0: f64, a0: f64, f: &Factors) -> [f64; 6] {
+        let (ps0, x0) = match &self.supply {
+            Supply::Fixed { ps } => (ps * f.supply_pressure, 0.0),
+            Supply::Pump(p) => (p.p0, 0.0),
+        };
+        let [pa, pb] = match self.initial {
+            [Some(a), Some(b)] => [a, b],
+            _ => {
+                // Hold m·a0 + the load at y0 about the mid pressure of the
+                // supply it will have: A_A·p_A − A_B·p_B = F with
+                // p_A + p_B = 2·p_m, p_A = (F + 2·A_B·p_m)/(A_A + A_B).
+                let ps = self.supply.holding_pressure(self.pt) * f.supply_pressure;
+                let pm = 0.5 * (ps + self.pt);
+                let (fl, _) = self.load_force(0.0, y0, v0, f);
+                let (ff, _) = self.friction(v0, f);
+                let force = self.mass * f.mass * a0 + fl + ff - self.stop_force(y0, v0);
+                let [a, b] = self.area;
+                let pa = (force + 2.0 * b * pm) / (a + b);
+                [pa, 2.0 * pm - pa]
+            }
+        };
+        [y0, v0, pa, pb, ps0, x0]
+    }
+}
+
+impl CylinderPlant {
+    /// From a validated cylinder.
+    pub fn new(c: Cylinder, y_nominal: f64) -> Self {
+        let model = Self::nominal_model(&c, y_nominal);
+        Self { c, model }
+    }
+
+    /// The cylinder.
+    pub fn cylinder(&self) -> &Cylinder {
+        &self.c
+    }
+
+    /// The paper's third-order model of this axis at the rod position `y`
+    /// (docs/cylinder.md, "The nominal model"):
+    ///
+    /// | paper | cylinder (r = 1 m without a transmission) |
+    /// |---|---|
+    /// | Dm | Ā·r, Ā = (A_A + A_B)/2 |
+    /// | Jt, Bm, G | M·r², B·r², K·r² |
+    /// | Vt | 4Ā²/(A_A²/V_A + A_B²/V_B) at y |
+    /// | Kce | C_l·Ā·(A_A/V_A + A_B/V_B)/(A_A²/V_A + A_B²/V_B), plus the valve's Kc at null |
+    /// | Ag | w·Ā·√(2Ā/(A_A³ + A_B³)), w the P→A land's area gradient |
+    /// | Ps | holding supply pressure − Pt |
+    /// | offset | (ΔA·(Ps + Pt) − F₀)/Ā, ΔA = (A_A − A_B)/2, F₀ the static load |
+    ///
+    /// so that b(x, sgn u) is the single rod's gain in each direction,
+    /// b₊ ∝ √(A_A·Ps' − F) and b₋ ∝ √(A_B·Ps' + F), and a double-rod
+    /// cylinder at mid-stroke is exactly the paper's servo.
+    pub fn nominal_model(c: &Cylinder, y: f64) -> NominalModel {
+        let [aa, ab] = c.area;
+        let abar = 0.5 * (aa + ab);
+        let da = 0.5 * (aa - ab);
+        let [va, vb] = c.volumes(y);
+        let s2 = aa * aa / va + ab * ab / vb;
+        let vt = 4.0 * abar * abar / s2;
+        let ps_abs = c.supply.holding_pressure(c.pt);
+        let ps = ps_abs - c.pt;
+        let w = c.valve.cdw[0] / c.valve.cd;
+        let ag = w * abar * (2.0 * abar / (aa * aa * aa + ab * ab * ab)).sqrt();
+        // The valve's flow-pressure coefficient at null, Kc = (Kc_A + Kc_B)/4
+        // of the load flow, from the edges' slopes at the mid pressure (0
+        // for a critically centred or overlapped valve).
+        let pm = 0.5 * (ps_abs + c.pt);
+        let o = c.valve.openings(0.0);
+        let sl = |i: usize, dp: f64| c.valve.orifice_slope(c.valve.cdw[i] * o[i], dp);
+        let kc_a = sl(0, ps_abs - pm) + sl(2, pm - c.pt);
+        let kc_b = sl(1, ps_abs - pm) + sl(3, pm - c.pt);
+        let kc = 0.25 * (kc_a + kc_b);
+        let kce = c.leakage * abar * (aa / va + ab / vb) / s2 + kc;
+        let r = c.radius.unwrap_or(1.0);
+        let f0 = c.gravity_force + c.force.static_part() - c.spring * c.spring_origin;
+        let offset = (da * (ps_abs + c.pt) - f0) / abar;
+        let params = ServoParams {
+            ps,
+            beta_e: c.beta,
+            vt,
+            kce,
+            dm: abar * r,
+            jt: c.mass * r * r,
+            bm: c.viscous * r * r,
+            kv: c.valve.kv,
+            g: c.spring * r * r,
+            rho: c.rho,
+            cd: c.valve.cd,
+            ag,
+        };
+        // The rod's friction, as a torque on the pinion with a transmission.
+        let friction = c.friction.map(|f| Friction {
+            coulomb: f.coulomb * r,
+            stiction: f.stiction * r,
+            stribeck_velocity: f.stribeck_velocity / r,
+            viscous: f.viscous * r * r,
+            smoothing: f.smoothing / r,
+        });
+        let load = Load {
+            amplitude: 0.0,
+            wavenumber: 0.0,
+            friction,
+        };
+        NominalModel::with_offset(params, load, offset)
+    }
+
+    /// The rod position and speed for the axis's x.
+    #[inline]
+    fn to_rod(&self, p: f64, v: f64) -> (f64, f64) {
+        match self.c.radius {
+            None => (p, v),
+            Some(r) => (0.5 * self.c.stroke + r * p, r * v),
+        }
+    }
+
+    /// The storage of docs/cylinder.md §"Energy": kinetic, spring, gravity,
+    /// stop and the chambers' compression energy `V·g(p)`,
+    /// g(p) = βe·(e^{p/βe} − 1) − p (J). Without F(t), whose work is
+    /// counted as a port.
+    pub fn storage(&self, s: &[f64; 6]) -> f64 {
+        let c = &self.c;
+        let [y, v, pa, pb, _, _] = *s;
+        let [va, vb] = c.volumes(y);
+        let g = |p: f64| c.beta * (p / c.beta).exp_m1() - p;
+        let pen = if y < 0.0 {
+            -y
+        } else if y > c.stroke {
+            y - c.stroke
+        } else {
+            0.0
+        };
+        0.5 * c.mass * v * v
+            + 0.5 * c.spring * (y - c.spring_origin).powi(2)
+            + c.gravity_force * y
+            + 0.5 * c.stop[0] * pen * pen
+            + va * g(pa)
+            + vb * g(pb)
+    }
+
+    /// The hydraulic potential π(p) = βe·(e^{p/βe} − 1) of fluid at p in
+    /// this constant-βe model (docs/cylinder.md §"Energy").
+    pub fn potential(&self, p: f64) -> f64 {
+        self.c.beta * (p / self.c.beta).exp_m1()
+    }
+
+    /// The power balance's terms at a state (no cavitation, fixed supply):
+    /// `(port power π_s·Q_P − π_t·Q_T − F(t)·ẏ, dissipation)` (W), with the
+    /// valve's, the leakage's, the viscous, the friction's and the stop's
+    /// losses.
+    pub fn power(&self, t: f64, s: &[f64; 6], u: f64) -> (f64, f64) {
+        let c = &self.c;
+        let f = Factors::ONE;
+        let [y, v, pa, pb, ps_s, _] = *s;
+        let ps = c.supply_pressure(ps_s, &f);
+        let xv = c.valve.spool(u);
+        let q = c.valve.flows(xv, ps, c.pt, pa, pb);
+        let pi = |p: f64| self.potential(p);
+        let o = c.valve.openings(xv);
+        let edges = [(0, ps, pa), (1, ps, pb), (2, pa, c.pt), (3, pb, c.pt)];
+        let valve_loss: f64 = edges
+            .iter()
+            .map(|&(i, hi, lo)| c.valve.orifice(c.valve.cdw[i] * o[i], hi - lo) * (pi(hi) - pi(lo)))
+            .sum();
+        let leak = c.leakage * (pa - pb) * (pi(pa) - pi(pb));
+        let (ff, _) = c.friction(v, &f);
+        let stop = if y < 0.0 || y > c.stroke {
+            // Only the damper dissipates; the spring is stored.
+            let fs = c.stop_force(y, v);
+            let spring = if y < 0.0 {
+                -c.stop[0] * y
+            } else {
+                c.stop[0] * (c.stroke - y)
+            };
+            -(fs - spring) * v
+        } else {
+            0.0
+        };
+        let (fe, _) = c.force.at(t);
+        let port = pi(ps) * q.p - pi(c.pt) * q.t - fe * v;
+        (port, valve_loss + leak + ff * v + stop)
+    }
+}
+
 impl Plant for CylinderPlant {
-    type State = [f64; 4];
+    type State = [f64; 6];
+    type Variation = CylinderVariation;
+    type Prepared = ();
     const STATES: &'static [Signal] = &CYLINDER_STATES;
 
-    fn states(&self, s: &[f64; 4], _x: &[f64; 3], out: &mut [f64; MAX_STATES]) {
-        *out = [1e3 * s[0], s[2], s[3], s[2] - s[3]];
+    fn axis(&self) -> Axis {
+        if self.c.radius.is_some() {
+            Axis::Rotary
+        } else {
+            Axis::Linear
+        }
     }
 
-    /// y = r·θ, ẏ = r·θ̇, and the chamber pressures split symmetrically
-    /// about Ps/2 with the load pressure the force balance asks for θ̈(0).
-    fn initial_state(&self, x0: [f64; 3]) -> [f64; 4] {
-        let c = &self.params;
-        let (y, v) = (c.r * x0[0], c.r * x0[1]);
-        let force = c.mass * c.r * x0[2]
-            + c.damping * v
-            + c.spring * y
-            + c.friction_force(v)
-            + self.load_force(y, v);
-        let pl = force / c.area;
-        [y, v, 0.5 * (c.ps + pl), 0.5 * (c.ps - pl)]
+    fn states(&self, t: f64, s: &[f64; 6], _x: &[f64; 3], out: &mut [f64; MAX_STATES]) {
+        let f = Factors::ONE;
+        let (_, fl, fs) = self.c.forces(t, s, &f);
+        *out = [
+            s[2].max(0.0),
+            s[3].max(0.0),
+            self.c.supply_pressure(s[4], &f),
+            s[5],
+            fl,
+            fs,
+        ];
+    }
+
+    fn initial_state(&self, x0: [f64; 3], v: &CylinderVariation) -> [f64; 6] {
+        let (y, yd) = self.to_rod(x0[0], x0[1]);
+        let r = self.c.radius.unwrap_or(1.0);
+        self.c.initial_state(y, yd, r * x0[2], &v.f)
     }
 
     #[inline]
-    fn measure(&self, s: &[f64; 4]) -> [f64; 3] {
-        let r = self.params.r;
-        [s[0] / r, s[1] / r, self.acceleration(s) / r]
+    fn measure(&self, t: f64, s: &[f64; 6], v: &CylinderVariation) -> [f64; 3] {
+        let (force, _, _) = self.c.forces(t, s, &v.f);
+        let a = force / (self.c.mass * v.f.mass);
+        match self.c.radius {
+            None => [s[0], s[1], a],
+            Some(r) => [(s[0] - 0.5 * self.c.stroke) / r, s[1] / r, a / r],
+        }
     }
 
     #[inline]
-    fn deriv(&self, _t: f64, s: &[f64; 4], u: f64, v: &Variation, ds: &mut [f64; 4]) {
-        self.deriv_clamped(s, u, v, ds);
+    fn deriv(&self, t: f64, s: &[f64; 6], u: f64, v: &CylinderVariation, ds: &mut [f64; 6]) {
+        self.c.deriv(t, s, u, &v.f, ds);
+    }
+
+    #[inline]
+    fn stiffness(&self, _t: f64, s: &[f64; 6], u: f64, v: &CylinderVariation) -> f64 {
+        self.c.stiffness(s, u, &v.f)
     }
 
     fn nominal(&self) -> &NominalModel {
         &self.model
     }
+
+    fn variation(&self, spec: &UncertaintySpec, r: &Draw) -> CylinderVariation {
+        CylinderVariation {
+            f: spec.physical.factors(&r.physical),
+        }
+    }
+
+    /// (19) at the applied command: `x⃛_model(u) − x⃛_true + d̄(x)`, the
+    /// nominal model's jerk under u against the cylinder's, plus the
+    /// nominal load term; equal to `Σ Δa_i x_i − Δb·u + d` where the
+    /// paper's form has u_eq in place of u (docs/cylinder.md).
+    fn lumped_uncertainty(
+        &self,
+        s: &[f64; 6],
+        x: &[f64; 3],
+        u: f64,
+        _u_eq: f64,
+        _b_bar: f64,
+        v: &CylinderVariation,
+    ) -> f64 {
+        let c = &self.c;
+        let f = &v.f;
+        let mut ds = [0.0; 6];
+        c.deriv(0.0, s, u, f, &mut ds);
+        // (F(t)'s rate at t = 0: the diagnostic of a time-varying force is
+        // approximate; the dynamics are not.)
+        let [y, yd, pa, pb, _, _] = *s;
+        let dpa = if pa > 0.0 { ds[2] } else { 0.0 };
+        let dpb = if pb > 0.0 { ds[3] } else { 0.0 };
+        let (_, fl_rate) = c.load_force(0.0, y, yd, f);
+        let (_, dfdv) = c.friction(yd, f);
+        let ydd = ds[1];
+        let stop_rate = if y < 0.0 || y > c.stroke {
+            -c.stop[0] * yd - c.stop[1] * ydd
+        } else {
+            0.0
+        };
+        let jerk = (c.area[0] * dpa - c.area[1] * dpb - dfdv * ydd - fl_rate + stop_rate)
+            / (c.mass * f.mass)
+            / c.radius.unwrap_or(1.0);
+        let m = &self.model;
+        let a = m.coeffs.as_array();
+        let (b, d) = m.b_and_d(x, sgn(u));
+        let model = -a[0] * x[0] - a[1] * x[1] - a[2] * x[2] + b * u - d;
+        model - jerk + d
+    }
+}
+
+impl PlantConfig for CylinderCfg {
+    const MODEL: &'static str = "cylinder";
+    const DOC: &'static str =
+        "a valve-controlled single- or double-rod cylinder with its supply, load and end stops, in (y, ẏ, p_A, p_B, p_s, x_r)";
+    const PAPER_UNCERTAINTY: bool = false;
+    const USES_LOAD: bool = false;
+    const END_STOPS: bool = true;
+    type Plant = CylinderPlant;
+
+    fn axis(&self) -> Axis {
+        if self.transmission.is_some() {
+            Axis::Rotary
+        } else {
+            Axis::Linear
+        }
+    }
+
+    fn build(&self, ctx: &PlantContext) -> Result<CylinderPlant, (String, String)> {
+        let c = self.resolve(ctx)?;
+        let y = self.nominal.position.unwrap_or(0.5 * c.stroke);
+        Ok(CylinderPlant::new(c, y))
+    }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::plant::ThirdOrderPlant;
-    use ehservo_core::rk4::rk4_step;
-    use ehservo_core::servo::Friction;
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
-
-    /// Uniform on [lo, hi) from 53 random bits.
-    fn uni(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-
-    fn with_friction() -> CylinderParams {
-        CylinderParams {
-            spring: 2.0e4,
-            friction: Some(Friction {
-                coulomb: 40.0,
-                stiction: 60.0,
-                stribeck_velocity: 0.01,
-                viscous: 50.0,
-                smoothing: 1e-3,
-            }),
-            ..CylinderParams::typical()
-        }
-    }
-
-    /// Steady flow balance: at constant velocity with steady pressures,
-    /// Q1 = Q2 = A·ẏ + Cl·(P1 − P2). The state is built by hand: choose
-    /// ẏ, y and the load; the force balance gives P_L; P1 + P2 = Ps; the
-    /// orifice law solved for x_v. The derivative must then vanish.
-    #[test]
-    fn steady_state_flow_balance() {
-        let c = with_friction();
-        let load = Load::paper();
-        let plant = CylinderPlant::new(c, load);
-        for &(y, v) in &[(0.01, 0.02), (-0.03, 0.05), (0.02, -0.04), (0.0, -0.001)] {
-            let f_ext = load.torque(y / c.r, v / c.r) / c.r;
-            let pl = (c.damping * v + c.spring * y + c.friction_force(v) + f_ext) / c.area;
-            let (p1, p2) = (0.5 * (c.ps + pl), 0.5 * (c.ps - pl));
-            let q = c.area * v + c.leakage * pl;
-            let drop = if v >= 0.0 { c.ps - pl } else { c.ps + pl };
-            let xv = q / (c.cd * c.w * (drop / c.rho).sqrt());
-            let (q1, q2, clamped) = c.valve_flows(xv, p1, p2);
-            assert!(!clamped);
-            assert!((q1 - q).abs() <= 1e-12 * q.abs(), "Q1 {q1} vs {q}");
-            assert!((q2 - q).abs() <= 1e-12 * q.abs(), "Q2 {q2} vs {q}");
-            let s = [y, v, p1, p2];
-            let mut ds = [0.0; 4];
-            plant.deriv(0.0, &s, xv / c.kv, &Variation::NONE, &mut ds);
-            assert_eq!(ds[0].to_bits(), v.to_bits());
-            // Scales: the pressure force per mass, and β/V·A·ẏ.
-            let acc_scale = c.area * c.ps / c.mass;
-            let p_scale = c.beta_e / c.v0 * c.area * v.abs();
-            assert!(ds[1].abs() <= 1e-13 * acc_scale, "ÿ = {}", ds[1]);
-            assert!(ds[2].abs() <= 1e-11 * p_scale, "Ṗ1 = {}", ds[2]);
-            assert!(ds[3].abs() <= 1e-11 * p_scale, "Ṗ2 = {}", ds[3]);
-        }
-    }
-
-    /// dH/dt along the vector field at a state, by the chain rule.
-    fn storage_rate(plant: &CylinderPlant, s: &[f64; 4], ds: &[f64; 4]) -> f64 {
-        let c = plant.params();
-        let [y, v, p1, p2] = *s;
-        let (v1, v2) = c.volumes(y);
-        let l = &plant.nominal().load;
-        let dg = |p: f64| (p / c.beta_e).exp() - 1.0;
-        c.mass * v * ds[1]
-            + c.spring * y * v
-            + l.amplitude * (l.wavenumber * y / c.r).sin() * v / c.r
-            + c.area * v * c.compression_energy_density(p1)
-            - c.area * v * c.compression_energy_density(p2)
-            + v1 * dg(p1) * ds[2]
-            + v2 * dg(p2) * ds[3]
-    }
-
-    /// Passivity, pointwise: the storage's rate is exactly port power
-    /// minus dissipation,
-    /// dH/dt = π(P1)·Q1 − π(P2)·Q2 − B·ẏ² − ẏ·Ff(ẏ) − Cl·(P1 − P2)·(π(P1) − π(P2)),
-    /// so dH/dt ≤ 0 with the valve closed and dH/dt ≤ π(Ps)·Q_supply with
-    /// it open (π(Ps) = Ps·(1 + Ps/2βe + …), the constant-βe model's
-    /// supply potential).
-    #[test]
-    fn storage_balance_and_passivity_at_random_states() {
-        let c = with_friction();
-        let plant = CylinderPlant::new(c, Load::paper());
-        let mut rng = ChaCha8Rng::seed_from_u64(13);
-        for _ in 0..20_000 {
-            let s = [
-                uni(&mut rng, -0.049, 0.049),
-                uni(&mut rng, -0.5, 0.5),
-                uni(&mut rng, -0.1 * c.ps, 1.1 * c.ps),
-                uni(&mut rng, -0.1 * c.ps, 1.1 * c.ps),
-            ];
-            let u = if uni(&mut rng, 0.0, 1.0) < 0.3 {
-                0.0
-            } else {
-                uni(&mut rng, -10.0, 10.0)
-            };
-            let mut ds = [0.0; 4];
-            plant.deriv(0.0, &s, u, &Variation::NONE, &mut ds);
-            let rate = storage_rate(&plant, &s, &ds);
-            let [_, v, p1, p2] = s;
-            let (q1, q2, _) = c.valve_flows(c.kv * u, p1, p2);
-            let pi = |p: f64| c.port_potential(p);
-            let dissipation = c.damping * v * v
-                + v * c.friction_force(v)
-                + c.leakage * (p1 - p2) * (pi(p1) - pi(p2));
-            assert!(dissipation >= 0.0);
-            let port = pi(p1) * q1 - pi(p2) * q2;
-            let expected = port - dissipation;
-            // Round-off scale: the largest term of the sum.
-            let scale = (c.area * v * c.ps).abs() + (pi(p1) * q1).abs() + (pi(p2) * q2).abs() + 1.0;
-            assert!(
-                (rate - expected).abs() <= 1e-9 * scale,
-                "dH/dt {rate} vs {expected} at {s:?}, u = {u}"
-            );
-            let supply = if u >= 0.0 { q1 } else { -q2 };
-            let bound = if u == 0.0 { 0.0 } else { pi(c.ps) * supply };
-            assert!(
-                rate <= bound + 1e-9 * scale,
-                "{rate} > {bound} at {s:?}, u = {u}"
-            );
-        }
-    }
-
-    /// Passivity along trajectories: valve closed, random initial states
-    /// inside the stroke, RK4 at 10 µs: the storage never increases.
-    #[test]
-    fn storage_decreases_along_closed_valve_trajectories() {
-        let c = with_friction();
-        let plant = CylinderPlant::new(c, Load::paper());
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        for _ in 0..4 {
-            let mut s = [
-                uni(&mut rng, -0.02, 0.02),
-                uni(&mut rng, -0.2, 0.2),
-                uni(&mut rng, 0.0, c.ps),
-                uni(&mut rng, 0.0, c.ps),
-            ];
-            let mut h_prev = plant.storage(&s);
-            let h0 = h_prev;
-            for k in 0..20_000 {
-                let f = |t: f64, x: &[f64; 4], d: &mut [f64; 4]| {
-                    plant.deriv(t, x, 0.0, &Variation::NONE, d)
-                };
-                rk4_step(f, k as f64 * 1e-5, &mut s, 1e-5);
-                let h = plant.storage(&s);
-                assert!(
-                    h <= h_prev + 1e-12 * h0,
-                    "H rose {h_prev} → {h} at step {k}"
-                );
-                h_prev = h;
-            }
-            assert!(h_prev < h0, "a damped plant loses energy");
-        }
-    }
-
-    /// The linearised model written down by hand from A, M, B, K, Vt = 2V0,
-    /// βe, Cl and Kq.
-    fn by_hand(c: &CylinderParams) -> ([f64; 3], f64) {
-        let (a, m, b, k, vt, be, cl) = (
-            c.area,
-            c.mass,
-            c.damping,
-            c.spring,
-            2.0 * c.v0,
-            c.beta_e,
-            c.leakage,
-        );
-        let kq = c.cd * c.w * (c.ps / c.rho).sqrt();
-        let a1 = 4.0 * be * cl * k / (vt * m);
-        let a2 = k / m + 4.0 * be * a * a / (vt * m) + 4.0 * be * cl * b / (vt * m);
-        let a3 = b / m + 4.0 * be * cl / vt;
-        // θ⃛ per volt: y⃛ per volt over r.
-        let bu = 4.0 * be * a * kq * c.kv / (vt * m) / c.r;
-        ([a1, a2, a3], bu)
-    }
-
-    fn close(a: f64, b: f64, tol: f64) -> bool {
-        (a - b).abs() <= tol * a.abs().max(b.abs())
-    }
-
-    #[test]
-    fn nominal_params_are_the_hand_linearisation() {
-        for c in [CylinderParams::typical(), with_friction()] {
-            let (a, b) = by_hand(&c);
-            let m = NominalModel::new(c.nominal_servo_params(), Load::none());
-            let got = m.coeffs.as_array();
-            for i in 0..3 {
-                assert!(
-                    close(got[i], a[i], 1e-12),
-                    "a{} {} vs {}",
-                    i + 1,
-                    got[i],
-                    a[i]
-                );
-            }
-            assert!(close(m.b_at_rest(), b, 1e-12), "b {} vs {b}", m.b_at_rest());
-        }
-    }
-
-    /// The plant's own Jacobian at the centre (central differences, exact
-    /// here: the vector field is affine in each direction there), its
-    /// characteristic polynomial by Faddeev–LeVerrier: s·(s³ + a3·s² +
-    /// a2·s + a1), the extra s being the common-mode pressure, which
-    /// nothing observes. Its first Markov parameter C·J²·g is b·r.
-    #[test]
-    fn jacobian_at_centre_is_the_third_order_model() {
-        let c = CylinderParams {
-            spring: 2.0e4,
-            ..CylinderParams::typical()
-        };
-        let plant = CylinderPlant::new(c, Load::none());
-        let s0 = [0.0, 0.0, 0.5 * c.ps, 0.5 * c.ps];
-        let steps = [1e-6, 1e-6, 1.0, 1.0];
-        let f = |s: &[f64; 4], u: f64| {
-            let mut d = [0.0; 4];
-            plant.deriv(0.0, s, u, &Variation::NONE, &mut d);
-            d
-        };
-        let mut j = [[0.0; 4]; 4];
-        for (col, &h) in steps.iter().enumerate() {
-            let (mut sp, mut sm) = (s0, s0);
-            sp[col] += h;
-            sm[col] -= h;
-            let (dp, dm) = (f(&sp, 0.0), f(&sm, 0.0));
-            for row in 0..4 {
-                j[row][col] = (dp[row] - dm[row]) / (2.0 * h);
-            }
-        }
-        let (dp, dm) = (f(&s0, 1e-3), f(&s0, -1e-3));
-        let g: [f64; 4] = core::array::from_fn(|i| (dp[i] - dm[i]) / 2e-3);
-        // Faddeev–LeVerrier: det(sI − J) = s⁴ + c1·s³ + c2·s² + c3·s + c4.
-        let mul = |a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]| {
-            let mut r = [[0.0; 4]; 4];
-            for i in 0..4 {
-                for k in 0..4 {
-                    for l in 0..4 {
-                        r[i][k] += a[i][l] * b[l][k];
-                    }
-                }
-            }
-            r
-        };
-        let mut mk = [[0.0; 4]; 4];
-        let mut coeff = [1.0, 0.0, 0.0, 0.0, 0.0];
-        for k in 1..=4 {
-            let mut next = mul(&j, &mk);
-            for (i, row) in next.iter_mut().enumerate() {
-                row[i] += coeff[k - 1];
-            }
-            mk = next;
-            let amk = mul(&j, &mk);
-            let tr: f64 = (0..4).map(|i| amk[i][i]).sum();
-            coeff[k] = -tr / k as f64;
-        }
-        let (a, b) = by_hand(&c);
-        assert!(
-            close(coeff[1], a[2], 1e-9),
-            "c1 {} vs a3 {}",
-            coeff[1],
-            a[2]
-        );
-        assert!(
-            close(coeff[2], a[1], 1e-9),
-            "c2 {} vs a2 {}",
-            coeff[2],
-            a[1]
-        );
-        assert!(
-            close(coeff[3], a[0], 1e-6),
-            "c3 {} vs a1 {}",
-            coeff[3],
-            a[0]
-        );
-        assert!(
-            coeff[4].abs() <= 1e-9 * coeff[3].abs() * coeff[1].abs(),
-            "c4 {}",
-            coeff[4]
-        );
-        let jg = mul(&j, &{
-            let mut m = [[0.0; 4]; 4];
-            for i in 0..4 {
-                m[i][0] = g[i];
-            }
-            m
-        });
-        let j2g = mul(&j, &jg);
-        assert!(
-            close(j2g[0][0], b * c.r, 1e-9),
-            "CJ²g {} vs b·r {}",
-            j2g[0][0],
-            b * c.r
-        );
-    }
-
-    /// Open loop, small signal: the cylinder and the third-order plant with
-    /// the equivalent parameters give the same θ(t) to first order in the
-    /// amplitude (the relative difference shrinks with it).
-    #[test]
-    fn small_signal_matches_the_third_order_plant() {
-        let c = CylinderParams::typical();
-        let cyl = CylinderPlant::new(c, Load::none());
-        let third = ThirdOrderPlant::new(c.nominal_servo_params(), Load::none());
-        let rel = |eps: f64| {
-            let u = |t: f64| eps * (2.0 * core::f64::consts::PI * 3.0 * t).sin();
-            let mut sc = cyl.initial_state([0.0; 3]);
-            let mut s3 = third.initial_state([0.0; 3]);
-            let (mut diff, mut size) = (0.0_f64, 0.0_f64);
-            let h = 1e-5;
-            for k in 0..30_000 {
-                let t = k as f64 * h;
-                let uk = u(t);
-                rk4_step(
-                    |t, x, d| cyl.deriv(t, x, uk, &Variation::NONE, d),
-                    t,
-                    &mut sc,
-                    h,
-                );
-                rk4_step(
-                    |t, x, d| third.deriv(t, x, uk, &Variation::NONE, d),
-                    t,
-                    &mut s3,
-                    h,
-                );
-                let (a, b) = (cyl.measure(&sc)[0], third.measure(&s3)[0]);
-                diff = diff.max((a - b).abs());
-                size = size.max(b.abs());
-            }
-            diff / size
-        };
-        let (small, large) = (rel(0.01), rel(0.1));
-        assert!(small < 1e-3, "relative difference {small} at 0.01 V");
-        // At least first order: the relative difference falls with the
-        // amplitude. (It falls as its square, ratio ≈ 100: by the double-rod
-        // symmetry the chamber volumes enter Ṗ_L only through
-        // 1/(V0 + A·y) + 1/(V0 − A·y), even in y, and the common-mode
-        // pressure, odd, reaches θ only through the valve roots.)
-        let ratio = large / small;
-        assert!(ratio > 5.0, "difference not first order: {small}, {large}");
-    }
-
-    /// Open-loop step of the valve: the rod settles at the velocity the
-    /// orifice law gives at the load, A·ẏ + Cl·P_L = Cd·w·x_v·√((Ps − P_L)/ρ)
-    /// with P_L = B·ẏ/A, a quadratic solved by hand.
-    #[test]
-    fn valve_step_settles_at_the_orifice_velocity() {
-        let c = CylinderParams::typical();
-        let plant = CylinderPlant::new(c, Load::none());
-        for &u in &[1.0, -2.0] {
-            let xv: f64 = c.kv * u;
-            let k = c.cd * c.w * xv.abs();
-            // a²v² + (k²B/(Aρ))v − k²Ps/ρ = 0 for the speed v = |ẏ|.
-            let a = c.area + c.leakage * c.damping / c.area;
-            let bq = k * k * c.damping / (c.area * c.rho);
-            let cq = -k * k * c.ps / c.rho;
-            let speed = (-bq + (bq * bq - 4.0 * a * a * cq).sqrt()) / (2.0 * a * a);
-            let expected = speed * xv.signum();
-            let mut s = plant.initial_state([0.0; 3]);
-            let h = 1e-5;
-            for i in 0..60_000 {
-                rk4_step(
-                    |t, x, d| plant.deriv(t, x, u, &Variation::NONE, d),
-                    i as f64 * h,
-                    &mut s,
-                    h,
-                );
-            }
-            assert!(s[0].abs() < c.half_stroke(), "inside the stroke");
-            assert!(
-                close(s[1], expected, 1e-6),
-                "ẏ {} vs {expected} (Q/A by hand)",
-                s[1]
-            );
-            // And the steady chamber pressures sum to Ps.
-            assert!(close(s[2] + s[3], c.ps, 1e-6));
-        }
-    }
-
-    /// The variation is carried exactly: Δa_i adds −Σ Δa_i·x_i to θ⃛,
-    /// δb scales the flows.
-    #[test]
-    fn variation_adds_the_papers_terms_to_the_jerk() {
-        let c = with_friction();
-        let plant = CylinderPlant::new(c, Load::paper());
-        let s = [0.01, 0.03, 0.6 * c.ps, 0.45 * c.ps];
-        let v = Variation {
-            da: [0.4, 13000.0, 170.0],
-            db_rel: 0.25,
-        };
-        let jerk = |var: &Variation| {
-            let mut d = [0.0; 4];
-            plant.deriv(0.0, &s, 0.7, var, &mut d);
-            // θ⃛ from d/dt of the force balance, only its pressure part
-            // differs between the two calls.
-            c.area * (d[2] - d[3]) / (c.mass * c.r)
-        };
-        let x = plant.measure(&s);
-        let flow_only = Variation {
-            da: [0.0; 3],
-            db_rel: 0.25,
-        };
-        let want = -(v.da[0] * x[0] + v.da[1] * x[1] + v.da[2] * x[2]);
-        let got = jerk(&v) - jerk(&flow_only);
-        assert!(close(got, want, 1e-9), "{got} vs {want}");
-    }
-}
+#[allow(clippy::float_cmp)] // exact values are the point of some checks
+#[path = "cylinder_tests.rs"]
+mod tests;

@@ -5,8 +5,12 @@
 //!
 //! | module | role |
 //! |---|---|
-//! | [`plant`] | the "true" plants (third-order and physical) with the parameter variations the controller does not know |
-//! | [`cylinder`] | a valve-controlled double-rod cylinder on a rack and pinion, a second plant family |
+//! | [`plant`] | the [`Plant`](plant::Plant) trait, what a plant is in a scenario ([`PlantConfig`](plant::PlantConfig)) and the paper's form of the variation |
+//! | [`third_order`], [`physical`] | the paper's servo: (8)–(9) and (1)–(6) |
+//! | [`uncertainty`] | the variations the controller does not know: the paper's Δa_i/Δb and the physical form, seeded and held |
+//! | [`axis`] | rotary (rad, shown in degrees) or linear (m, shown in mm) |
+//! | [`cylinder`] | a valve-controlled single- or double-rod cylinder: a linear axis, its load and end stops |
+//! | [`valve`], [`supply`], [`force`] | the cylinder's 4/3 valve, its pump or fixed supply, an external force signal |
 //! | [`actuator`] | the valve between controller and plant: saturation, rate limit, first-order lag |
 //! | [`sensor`] | what the controller measures: bias and quantisation |
 //! | [`simulation`] | the resumable loop, continuous and sampled, with its stop reasons |
@@ -16,12 +20,19 @@
 //! runs here, its parts logged as named signals.
 
 pub mod actuator;
+pub mod axis;
 pub mod cylinder;
 pub mod estimator;
+pub mod force;
 pub mod metrics;
+pub mod physical;
 pub mod plant;
 pub mod sensor;
 pub mod simulation;
+pub mod supply;
+pub mod third_order;
 pub mod triple;
+pub mod uncertainty;
+pub mod valve;
 
 pub use ehservo_core as core;

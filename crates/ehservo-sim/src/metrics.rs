@@ -9,6 +9,11 @@
 //! | `e_max_deg` | max \|e\| over t_k ∈ [t_s, T], degrees |
 //! | `e_final_deg` | max \|e\| over the last period of the reference, t_k ∈ [T − 1/f, T] (absent if the run diverged) |
 //! | `e_rms_deg` | RMS of e over t_k ≥ t_s (the L2 measure, per sample), degrees |
+//!
+//! The error metrics are in the axis's display unit ([`Axis`]): on a
+//! rotary axis in degrees with the keys above; on a linear axis in
+//! millimetres as `e_max`, `e_final`, `e_rms`, with `"unit": "mm"` beside
+//! them in JSON. (A rotary axis's `e_max` is also read as `e_max_deg`.)
 //! | `u_max` | max \|u\| over the whole run (the transient included: Fig. 5 is about it), V |
 //! | `u_rms` | RMS of u over t_k ≥ t_s, V |
 //! | `chattering` | c[u] = sqrt(Σ Δu_k²)/sqrt(Σ u_k²) over t_k ≥ t_s, Δu_k = u_k − u_{k−1} |
@@ -20,19 +25,20 @@
 //! A value that is undefined (no sample after t_s, a run with u ≡ 0) is
 //! `None` (JSON `null`), never NaN.
 
+use crate::axis::Axis;
 use crate::simulation::{Divergence, Sample};
-use ehservo_core::math::DR;
+use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize};
 
 /// The metrics of one run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Metrics {
-    /// max |e| after the transient (deg).
-    pub e_max_deg: Option<f64>,
-    /// max |e| over the last period of the reference (deg).
-    pub e_final_deg: Option<f64>,
-    /// RMS of e after the transient (deg).
-    pub e_rms_deg: Option<f64>,
+    /// max |e| after the transient (the axis's unit: deg or mm).
+    pub e_max: Option<f64>,
+    /// max |e| over the last period of the reference (deg or mm).
+    pub e_final: Option<f64>,
+    /// RMS of e after the transient (deg or mm).
+    pub e_rms: Option<f64>,
     /// max |u| over the run (V).
     pub u_max: Option<f64>,
     /// RMS of u after the transient (V).
@@ -53,10 +59,52 @@ pub struct Metrics {
     pub diverged_at_s: Option<f64>,
     /// Samples in the run.
     pub samples: u64,
+    /// The axis the errors are measured on (their unit).
+    pub axis: Axis,
 }
 
 impl Metrics {
-    /// The names of the metrics, in the order of tables and CSV columns.
+    /// The names of a linear axis's metrics ([`Metrics::NAMES`] without
+    /// the `_deg`).
+    pub const NAMES_LINEAR: [&'static str; 13] = [
+        "e_max",
+        "e_final",
+        "e_rms",
+        "u_max",
+        "u_rms",
+        "chattering",
+        "u_tv_per_s",
+        "w_norm_max",
+        "w_norm_final",
+        "dead_zone_fraction",
+        "diverged",
+        "diverged_at_s",
+        "samples",
+    ];
+
+    /// The names of the metrics on `axis`, in the order of tables and CSV
+    /// columns.
+    pub fn names(axis: Axis) -> &'static [&'static str; 13] {
+        match axis {
+            Axis::Rotary => &Self::NAMES,
+            Axis::Linear => &Self::NAMES_LINEAR,
+        }
+    }
+
+    /// The unit of a metric on `axis` (`""` for a ratio, a count or a flag).
+    pub fn unit_of(name: &str, axis: Axis) -> &'static str {
+        match name {
+            "e_max_deg" | "e_final_deg" | "e_rms_deg" => "deg",
+            "e_max" | "e_final" | "e_rms" => axis.unit(),
+            "u_max" | "u_rms" => "V",
+            "u_tv_per_s" => "V/s",
+            "diverged_at_s" => "s",
+            _ => "",
+        }
+    }
+
+    /// The names of the metrics on a rotary axis, in the order of tables
+    /// and CSV columns.
     pub const NAMES: [&'static str; 13] = [
         "e_max_deg",
         "e_final_deg",
@@ -75,10 +123,14 @@ impl Metrics {
 
     /// A metric by name, as a number (`diverged` is 1 or 0).
     pub fn get(&self, name: &str) -> Option<f64> {
+        let rotary = self.axis == Axis::Rotary;
         match name {
-            "e_max_deg" => self.e_max_deg,
-            "e_final_deg" => self.e_final_deg,
-            "e_rms_deg" => self.e_rms_deg,
+            "e_max_deg" if rotary => self.e_max,
+            "e_final_deg" if rotary => self.e_final,
+            "e_rms_deg" if rotary => self.e_rms,
+            "e_max" => self.e_max,
+            "e_final" => self.e_final,
+            "e_rms" => self.e_rms,
             "u_max" => self.u_max,
             "u_rms" => self.u_rms,
             "chattering" => self.chattering,
@@ -102,6 +154,76 @@ impl Metrics {
             "samples" => self.samples.to_string(),
             _ => self.get(name).map(|v| format!("{v}")).unwrap_or_default(),
         }
+    }
+}
+
+impl Serialize for Metrics {
+    /// The keys of [`Metrics::names`] for the axis, in that order, and on a
+    /// linear axis `"unit": "mm"` after the errors.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let linear = self.axis == Axis::Linear;
+        let mut m = s.serialize_map(Some(13 + usize::from(linear)))?;
+        let names = Self::names(self.axis);
+        for (i, name) in names.iter().enumerate() {
+            match *name {
+                "diverged" => m.serialize_entry(name, &self.diverged)?,
+                "samples" => m.serialize_entry(name, &self.samples)?,
+                _ => m.serialize_entry(name, &self.get(name))?,
+            }
+            if linear && i == 2 {
+                m.serialize_entry("unit", self.axis.unit())?;
+            }
+        }
+        m.end()
+    }
+}
+
+/// What [`Metrics`] reads: either axis's keys.
+#[derive(Deserialize)]
+struct MetricsRaw {
+    #[serde(alias = "e_max_deg")]
+    e_max: Option<f64>,
+    #[serde(alias = "e_final_deg")]
+    e_final: Option<f64>,
+    #[serde(alias = "e_rms_deg")]
+    e_rms: Option<f64>,
+    #[serde(default)]
+    unit: Option<String>,
+    u_max: Option<f64>,
+    u_rms: Option<f64>,
+    chattering: Option<f64>,
+    u_tv_per_s: Option<f64>,
+    w_norm_max: Option<f64>,
+    w_norm_final: Option<f64>,
+    dead_zone_fraction: Option<f64>,
+    diverged: bool,
+    diverged_at_s: Option<f64>,
+    samples: u64,
+}
+
+impl<'de> Deserialize<'de> for Metrics {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let r = MetricsRaw::deserialize(d)?;
+        Ok(Metrics {
+            e_max: r.e_max,
+            e_final: r.e_final,
+            e_rms: r.e_rms,
+            u_max: r.u_max,
+            u_rms: r.u_rms,
+            chattering: r.chattering,
+            u_tv_per_s: r.u_tv_per_s,
+            w_norm_max: r.w_norm_max,
+            w_norm_final: r.w_norm_final,
+            dead_zone_fraction: r.dead_zone_fraction,
+            diverged: r.diverged,
+            diverged_at_s: r.diverged_at_s,
+            samples: r.samples,
+            axis: if r.unit.as_deref() == Some("mm") {
+                Axis::Linear
+            } else {
+                Axis::Rotary
+            },
+        })
     }
 }
 
@@ -140,6 +262,7 @@ pub struct MetricsAccumulator {
     saw_final: bool,
     i_w_norm: Option<usize>,
     i_sigma_delta: Option<usize>,
+    axis: Axis,
 }
 
 impl MetricsAccumulator {
@@ -173,7 +296,15 @@ impl MetricsAccumulator {
             saw_final: false,
             i_w_norm: None,
             i_sigma_delta: None,
+            axis: Axis::Rotary,
         }
+    }
+
+    /// The same accumulator for errors measured on `axis` (rotary by
+    /// default).
+    pub fn on(mut self, axis: Axis) -> Self {
+        self.axis = axis;
+        self
     }
 
     /// Takes one sample.
@@ -182,7 +313,7 @@ impl MetricsAccumulator {
             self.i_w_norm = s.index_of("w_norm");
             self.i_sigma_delta = s.index_of("sigma_delta");
         }
-        let e = s.e.abs() / DR;
+        let e = self.axis.display(s.e.abs());
         let u = s.u;
         let w_norm = self.i_w_norm.map_or(0.0, |i| s.values[i]);
         self.n += 1;
@@ -220,9 +351,9 @@ impl MetricsAccumulator {
         let some_if = |c: bool, v: f64| if c && v.is_finite() { Some(v) } else { None };
         let span = self.t_first_after.map(|t0| self.t_last - t0).unwrap_or(0.0);
         Metrics {
-            e_max_deg: some_if(after, self.e_max),
-            e_final_deg: some_if(self.saw_final && diverged.is_none(), self.e_final),
-            e_rms_deg: some_if(after, (self.e_sq / self.n_after.max(1) as f64).sqrt()),
+            e_max: some_if(after, self.e_max),
+            e_final: some_if(self.saw_final && diverged.is_none(), self.e_final),
+            e_rms: some_if(after, (self.e_sq / self.n_after.max(1) as f64).sqrt()),
             u_max: some_if(self.n > 0, self.u_max),
             u_rms: some_if(after, (self.u_sq / self.n_after.max(1) as f64).sqrt()),
             chattering: some_if(after && self.u_sq > 0.0, (self.du_sq / self.u_sq).sqrt()),
@@ -236,6 +367,7 @@ impl MetricsAccumulator {
             diverged: diverged.is_some(),
             diverged_at_s: diverged.map(|d| d.t),
             samples: self.n,
+            axis: self.axis,
         }
     }
 }
@@ -246,6 +378,7 @@ mod tests {
     use super::*;
     use ehservo_core::control::sliding::SlidingParts;
     use ehservo_core::control::Signals;
+    use ehservo_core::math::DR;
 
     fn sample(k: u64, h: f64, e_deg: f64, u: f64) -> Sample {
         let parts = SlidingParts {
@@ -282,9 +415,9 @@ mod tests {
         }
         let r = m.finish(None);
         let close = |a: Option<f64>, b: f64| assert!((a.unwrap() - b).abs() < 1e-9, "{a:?} vs {b}");
-        close(r.e_max_deg, 9.0);
-        close(r.e_final_deg, 9.0);
-        close(r.e_rms_deg, 51f64.sqrt());
+        close(r.e_max, 9.0);
+        close(r.e_final, 9.0);
+        close(r.e_rms, 51f64.sqrt());
         close(r.u_max, 1.0);
         close(r.chattering, 2.0);
         close(r.u_tv_per_s, 2.5);
@@ -331,8 +464,8 @@ mod tests {
             t: 0.01,
             reason: crate::simulation::DivergenceReason::ThetaLimit,
         }));
-        assert_eq!(r.e_max_deg, None);
-        assert_eq!(r.e_final_deg, None);
+        assert_eq!(r.e_max, None);
+        assert_eq!(r.e_final, None);
         assert_eq!(r.chattering, None);
         assert_eq!(r.w_norm_max, None);
         assert!(r.diverged);

@@ -32,15 +32,15 @@
 use crate::actuator::Actuator;
 use crate::estimator::AnyEstimator;
 pub use crate::plant::MAX_STATES;
-use crate::plant::{Plant, UncertaintySignal, UncertaintySpec, Variation};
+use crate::plant::{refinement, Plant, UncertaintySpec};
 use crate::sensor::{Channels, Sensor};
+use crate::uncertainty::Varying;
 use ehservo_core::control::{flags, Controller, Measurement, Output, Signal, Signals, Truth};
 use ehservo_core::error::ParamError;
 use ehservo_core::math::DR;
 use ehservo_core::reference::Reference;
 use ehservo_core::rk4::{rk4_step, rk4_step_with_k1, OdeState};
 use ehservo_core::sampled::{FaultPolicy, SampledController};
-use ehservo_core::servo::BothDirections;
 use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 
@@ -333,8 +333,9 @@ impl<S: OdeState, X: OdeState> OdeState for Augmented<S, X> {
 /// What the loop knows of the true plant at a sample.
 struct TruthAt<'a, P: Plant> {
     plant: &'a P,
+    s: &'a P::State,
     x: [f64; 3],
-    var: Variation,
+    var: P::Variation,
     /// Sampled mode: the first RK4 stage of the step that follows the
     /// sample, evaluated together with the lumped uncertainty.
     stage: Option<FirstStage<'a, P>>,
@@ -353,7 +354,7 @@ struct FirstStage<'a, P: Plant> {
     act: &'a Actuator,
     /// What the plant's derivative needs of the state alone
     /// ([`Plant::prepare`]), made as the sample began.
-    prepared: Option<BothDirections>,
+    prepared: Option<P::Prepared>,
     /// The command's bits and k1.
     k1: Cell<Option<(u64, PlantAct<P::State>)>>,
 }
@@ -361,7 +362,7 @@ struct FirstStage<'a, P: Plant> {
 impl<P: Plant> FirstStage<'_, P> {
     /// k1 for the command `u`, under the variation `var`: the plant's
     /// derivative from [`FirstStage::prepared`] and the valve's.
-    fn k1(&self, plant: &P, var: &Variation, u: f64) -> PlantAct<P::State> {
+    fn k1(&self, plant: &P, var: &P::Variation, u: f64) -> PlantAct<P::State> {
         let mut k1 = PlantAct::<P::State>::zero();
         plant.deriv_prepared(
             self.prepared.as_ref(),
@@ -381,7 +382,7 @@ impl<P: Plant> Truth for TruthAt<'_, P> {
         let Some(st) = &self.stage else {
             return self
                 .plant
-                .lumped_uncertainty(&self.x, u, u_eq, b_bar, &self.var);
+                .lumped_uncertainty(self.s, &self.x, u, u_eq, b_bar, &self.var);
         };
         // What the RK4 step's derivative computes first (see `advance`).
         let mut k1 = PlantAct::<P::State>::zero();
@@ -438,7 +439,7 @@ pub struct Stages {
 pub struct Simulation<P: Plant, C: Controller, R: Reference> {
     plant: P,
     reference: R,
-    unc: UncertaintySignal,
+    unc: Varying<P::Variation>,
     actuator: Actuator,
     sensor: Sensor,
     cfg: SimConfig,
@@ -505,12 +506,13 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             ));
         }
         let ctrl = SampledController::with_policy(ctrl, cfg.step, stages.policy)?;
-        let unc = UncertaintySignal::new(stages.uncertainty, plant.nominal().coeffs.as_array());
-        let per_hold = unc.steps_per_hold(Self::hs(&cfg));
+        let mut unc = Varying::new(&plant, stages.uncertainty);
+        let per_hold = unc.signal().steps_per_hold(Self::hs(&cfg));
+        let var0 = unc.at_step(&plant, 0, Self::hs(&cfg), per_hold);
         Ok(Self {
             y: Augmented {
                 pa: PlantAct {
-                    x: plant.initial_state(cfg.x0),
+                    x: plant.initial_state(cfg.x0, &var0),
                     a: stages.actuator.initial_state(),
                 },
                 xi,
@@ -606,8 +608,8 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             Mode::Sampled => (k * m, h / m as f64),
             Mode::Continuous => (k, h),
         };
-        let var = self.unc.at_step(j0, hs, self.per_hold);
-        let x = self.plant.measure(&self.y.pa.x);
+        let var = self.unc.at_step(&self.plant, j0, hs, self.per_hold);
+        let x = self.plant.measure(t, &self.y.pa.x, &var);
         let z = self.reference.z(t);
         match self.cfg.mode {
             Mode::Sampled => {
@@ -635,6 +637,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 };
                 let truth = TruthAt {
                     plant: &self.plant,
+                    s: &self.y.pa.x,
                     x,
                     var,
                     stage: Some(FirstStage {
@@ -679,11 +682,30 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     let v = if j == 0 {
                         var
                     } else {
-                        self.unc.at_step(j0 + j, hs, self.per_hold)
+                        self.unc.at_step(&self.plant, j0 + j, hs, self.per_hold)
                     };
                     // The same k1 = f(t, y) that rk4_step would compute.
                     let k1 = k1.as_ref().filter(|_| j == 0);
                     let y = &mut self.y.pa;
+                    // A stiff plant (Plant::stiffness) splits this step so
+                    // that RK4 stays stable; never for the paper's plants,
+                    // whose step is then the one below, untouched.
+                    let n = refinement(plant.stiffness(ts, &y.x, act.output(&y.a, u), &v), hs);
+                    if n > 1 {
+                        let hr = hs / f64::from(n);
+                        for i in 0..n {
+                            rk4_step(
+                                |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+                                    plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
+                                    act.deriv(&s.a, u, &mut ds.a);
+                                },
+                                ts + f64::from(i) * hr,
+                                y,
+                                hr,
+                            );
+                        }
+                        continue;
+                    }
                     match held {
                         // The valve's state has a zero derivative at every
                         // stage, so RK4 would leave it as it is (+0, its
@@ -720,6 +742,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 let mut dy = Augmented::<P::State, C::State>::zero();
                 let truth = TruthAt {
                     plant: &self.plant,
+                    s: &self.y.pa.x,
                     x,
                     var,
                     stage: None,
@@ -745,7 +768,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 let f = |tt: f64,
                          s: &Augmented<P::State, C::State>,
                          ds: &mut Augmented<P::State, C::State>| {
-                    let xs = sensor.measure(plant.measure(&s.pa.x));
+                    let xs = sensor.measure(plant.measure(tt, &s.pa.x, &var));
                     let meas = Measurement {
                         t: tt,
                         x: xs,
@@ -755,7 +778,16 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     plant.deriv(tt, &s.pa.x, act.output(&s.pa.a, o.u), &var, &mut ds.pa.x);
                     act.deriv(&s.pa.a, o.u, &mut ds.pa.a);
                 };
-                rk4_step_with_k1(f, t, &mut self.y, &dy, h);
+                let n = refinement(plant.stiffness(t, &self.y.pa.x, sample.u_plant, &var), h);
+                if n > 1 {
+                    let hr = h / f64::from(n);
+                    rk4_step_with_k1(f, t, &mut self.y, &dy, hr);
+                    for i in 1..n {
+                        rk4_step(f, t + f64::from(i) * hr, &mut self.y, hr);
+                    }
+                } else {
+                    rk4_step_with_k1(f, t, &mut self.y, &dy, h);
+                }
             }
         }
         self.k += 1;
@@ -766,7 +798,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         };
         if !finite {
             self.diverge(t_next, DivergenceReason::NonFiniteState);
-        } else if self.plant.measure(&self.y.pa.x)[0].abs() > self.cfg.theta_limit {
+        } else if self.plant.measure(t_next, &self.y.pa.x, &var)[0].abs() > self.cfg.theta_limit {
             self.diverge(t_next, DivergenceReason::ThetaLimit);
         }
         true
@@ -816,7 +848,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         sample.spool = self.actuator.spool(&self.y.pa.a, u_applied);
         sample.x_ctrl = x_ctrl;
         if self.log_states {
-            self.plant.states(&self.y.pa.x, &x, &mut sample.states);
+            self.plant.states(t, &self.y.pa.x, &x, &mut sample.states);
         }
         sample.e = z[0] - x[0];
         sample.flags = out.flags;
@@ -864,7 +896,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
 mod tests {
     use super::*;
     use crate::actuator::ActuatorConfig;
-    use crate::plant::ThirdOrderPlant;
+    use crate::plant::{Draw, ThirdOrderPlant, Variation};
     use ehservo_core::control::nnvsc::{NnVsc, NnVscParams};
     use ehservo_core::prelude::{Load, NominalModel, Rbf, ServoParams, Sine, SwitchingSurface};
 
@@ -1006,11 +1038,13 @@ mod tests {
 
     impl Plant for Plain {
         type State = [f64; 3];
-        fn initial_state(&self, x0: [f64; 3]) -> [f64; 3] {
-            self.0.initial_state(x0)
+        type Variation = Variation;
+        type Prepared = ();
+        fn initial_state(&self, x0: [f64; 3], v: &Variation) -> [f64; 3] {
+            self.0.initial_state(x0, v)
         }
-        fn measure(&self, s: &[f64; 3]) -> [f64; 3] {
-            self.0.measure(s)
+        fn measure(&self, t: f64, s: &[f64; 3], v: &Variation) -> [f64; 3] {
+            self.0.measure(t, s, v)
         }
         fn deriv(&self, t: f64, s: &[f64; 3], u: f64, v: &Variation, ds: &mut [f64; 3]) {
             self.0.deriv(t, s, u, v, ds)
@@ -1018,8 +1052,19 @@ mod tests {
         fn nominal(&self) -> &NominalModel {
             self.0.nominal()
         }
-        fn lumped_uncertainty(&self, x: &[f64; 3], u: f64, ue: f64, bb: f64, v: &Variation) -> f64 {
-            self.0.lumped_uncertainty(x, u, ue, bb, v)
+        fn variation(&self, spec: &UncertaintySpec, r: &Draw) -> Variation {
+            self.0.variation(spec, r)
+        }
+        fn lumped_uncertainty(
+            &self,
+            s: &[f64; 3],
+            x: &[f64; 3],
+            u: f64,
+            ue: f64,
+            bb: f64,
+            v: &Variation,
+        ) -> f64 {
+            self.0.lumped_uncertainty(s, x, u, ue, bb, v)
         }
     }
 
@@ -1156,7 +1201,7 @@ mod tests {
                 }
                 let u = smp.u;
                 for j in 0..m {
-                    let v = sim.unc.at_step(k * m + j, hs, sim.per_hold);
+                    let v = sim.unc.at_step(&plant, k * m + j, hs, sim.per_hold);
                     let f = |tt: f64, s: &PlantAct<[f64; 3]>, ds: &mut PlantAct<[f64; 3]>| {
                         plant.deriv(tt, &s.x, valve.output(&s.a, u), &v, &mut ds.x);
                         valve.deriv(&s.a, u, &mut ds.a);
@@ -1243,10 +1288,12 @@ mod tests {
 
     impl Plant for Spool {
         type State = [f64; 4];
-        fn initial_state(&self, x0: [f64; 3]) -> [f64; 4] {
+        type Variation = Variation;
+        type Prepared = ();
+        fn initial_state(&self, x0: [f64; 3], _v: &Variation) -> [f64; 4] {
             [x0[0], x0[1], 0.0, 0.0]
         }
-        fn measure(&self, s: &[f64; 4]) -> [f64; 3] {
+        fn measure(&self, _t: f64, s: &[f64; 4], _v: &Variation) -> [f64; 3] {
             [s[0], s[1], 50.0 * s[2] - 10.0 * s[1]]
         }
         fn deriv(&self, _t: f64, s: &[f64; 4], u: f64, _v: &Variation, ds: &mut [f64; 4]) {
@@ -1257,6 +1304,21 @@ mod tests {
         }
         fn nominal(&self) -> &NominalModel {
             &self.model
+        }
+        fn variation(&self, spec: &UncertaintySpec, r: &Draw) -> Variation {
+            Variation::of(spec, &self.model.coeffs.as_array(), r)
+        }
+        fn lumped_uncertainty(
+            &self,
+            _s: &[f64; 4],
+            x: &[f64; 3],
+            u: f64,
+            u_eq: f64,
+            b_bar: f64,
+            v: &Variation,
+        ) -> f64 {
+            let (b, d) = self.model.b_and_d(x, ehservo_core::math::sgn(u));
+            crate::plant::lumped(x, u_eq, b_bar, v, b, d)
         }
     }
 

@@ -507,7 +507,7 @@ pub fn base_values(
     kind: &str,
 ) -> Result<std::collections::BTreeMap<String, Option<f64>>, Vec<FieldError>> {
     let (scenario, _) = resolve(id, &[("controller.kind".into(), kind.into())])?;
-    let table = scenario.table().map_err(|e| vec![e.into()])?;
+    let table = scenario.resolved_table();
     let info = kinds()
         .into_iter()
         .find(|k| k.kind == kind)
@@ -615,13 +615,13 @@ mod tests {
         // θ in degrees, e = θd − θ.
         let i = 500;
         assert!((run.trace.e[i] - (run.trace.theta_d[i] - run.trace.theta[i])).abs() < 1e-9);
-        let e_max = run.metrics.e_max_deg.unwrap();
+        let e_max = run.metrics.e_max.unwrap();
         let moved = simulate("paper/fig2", &set(&[("controller.gamma1", "200")])).unwrap();
         assert_eq!(
             moved.metrics,
             cli_metrics("scenarios/paper/fig2.toml", &["controller.gamma1=200"])
         );
-        assert_ne!(moved.metrics.e_max_deg, Some(e_max));
+        assert_ne!(moved.metrics.e_max, Some(e_max));
         let pid = simulate(
             "realistic/base",
             &set(&[("controller.kind", "pid"), ("uncertainty.a_bias", "0.5")]),

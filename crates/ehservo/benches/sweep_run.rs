@@ -77,7 +77,7 @@ fn main() {
         let dt = t0.elapsed().as_secs_f64() / n as f64;
         for r in &rows {
             let m = r.metrics.as_ref().expect("a valid Fig. 2 run");
-            check += m.e_max_deg.unwrap_or(f64::NAN) + m.w_norm_final.unwrap_or(f64::NAN);
+            check += m.e_max.unwrap_or(f64::NAN) + m.w_norm_final.unwrap_or(f64::NAN);
         }
         best = best.min(dt);
         bestc = bestc.min(dc);

@@ -279,7 +279,7 @@ pub fn resource_toml(s: &Scenario, kind: FmuKind) -> Result<String> {
         .map_err(|e| anyhow::anyhow!("the filled-in scenario does not parse back: {e}"))?;
     let mut expected = s.clone();
     expected.base_dir = None;
-    if back != expected {
+    if back.resolved_table() != expected.resolved_table() {
         anyhow::bail!("the filled-in scenario does not read back as the same scenario");
     }
     Ok(text)
@@ -300,7 +300,7 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
             "The closed loop of scenario {:?} ({} controller, {} plant), sampled every {} s, horizon {} s",
             s.name,
             s.controller.kind(),
-            s.plant.model.as_str(),
+            s.plant.model(),
             cfg.step,
             horizon
         ),

@@ -34,6 +34,8 @@ pub mod stepper;
 pub mod study;
 pub mod tune;
 
-pub use ehservo_sim::{actuator, cylinder, metrics, plant, sensor, simulation};
+pub use ehservo_sim::{
+    actuator, axis, metrics, physical, plant, sensor, simulation, third_order, uncertainty,
+};
 
 pub use ehservo_core as core;

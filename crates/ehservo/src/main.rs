@@ -678,13 +678,14 @@ fn print_summary(
     secs: f64,
 ) -> Result<()> {
     let m = &r.metrics;
+    let unit = m.axis.suffix();
     let sim = &s.simulation;
     out!(
         w,
         "{}: {} on the {} plant, {} (h = {} s{}), horizon {} s",
         s.name,
         s.controller.kind(),
-        s.plant.model.as_str(),
+        s.plant.model(),
         sim.mode.as_str(),
         sim.step,
         if sim.mode == ehservo::simulation::Mode::Sampled {
@@ -713,18 +714,14 @@ fn print_summary(
         w,
         "  e_max   (t ≥ {} s)  {}",
         sim.settle,
-        fmt_opt(m.e_max_deg, 4, "°")
+        fmt_opt(m.e_max, 4, unit)
     );
-    out!(
-        w,
-        "  e_final (last period) {}",
-        fmt_opt(m.e_final_deg, 4, "°")
-    );
+    out!(w, "  e_final (last period) {}", fmt_opt(m.e_final, 4, unit));
     out!(
         w,
         "  e_rms   (t ≥ {} s)  {}",
         sim.settle,
-        fmt_opt(m.e_rms_deg, 4, "°")
+        fmt_opt(m.e_rms, 4, unit)
     );
     out!(w, "  u_max                 {}", fmt_opt(m.u_max, 3, " V"));
     out!(

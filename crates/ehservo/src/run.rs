@@ -3,10 +3,9 @@
 //! controller and runs the [`Simulation`], keeping the metrics (and the
 //! trace if asked).
 
-use crate::cylinder::CylinderPlant;
 use crate::metrics::{Metrics, MetricsAccumulator};
-use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant};
-use crate::scenario::{ControllerConfig, PlantModel, Scenario, ScenarioError, Setup, Visit};
+use crate::plant::Plant;
+use crate::scenario::{ControllerConfig, PlantVisit, Scenario, ScenarioError, Setup, Visit};
 use crate::simulation::{Outcome, Sample, Simulation};
 use ehservo_core::control::Controller;
 use ehservo_core::rk4::OdeState;
@@ -88,15 +87,6 @@ pub fn run_setup(setup: &Setup, observe: &mut dyn FnMut(&Sample)) -> (Outcome, M
     })
 }
 
-/// The physical states a plant model logs beside x ([`Plant::STATES`]).
-pub fn plant_states(model: PlantModel) -> &'static [ehservo_core::control::Signal] {
-    match model {
-        PlantModel::ThirdOrder => ThirdOrderPlant::STATES,
-        PlantModel::Physical => PhysicalPlant::STATES,
-        PlantModel::Cylinder => CylinderPlant::STATES,
-    }
-}
-
 /// Builds the plant and the controller of a [`Setup`] and runs them: the
 /// generic half of [`run_setup`], monomorphised per kind and plant.
 pub struct Runner<'a, 'b> {
@@ -111,36 +101,36 @@ impl Visit for Runner<'_, '_> {
         let ctrl = cfg
             .build(&self.setup.design)
             .expect("Setup::new built this controller once already");
-        let (p, l) = (self.setup.model.params, self.setup.model.load);
-        match self.setup.plant {
-            PlantModel::ThirdOrder => execute(
-                ThirdOrderPlant::new(p, l),
-                ctrl,
-                self.setup,
-                self.observe,
-                self.states,
-            ),
-            PlantModel::Physical => execute(
-                PhysicalPlant::new(p, l),
-                ctrl,
-                self.setup,
-                self.observe,
-                self.states,
-            ),
-            PlantModel::Cylinder => {
-                let c = self
-                    .setup
-                    .cylinder
-                    .expect("Setup::new keeps the cylinder of a cylinder scenario");
-                execute(
-                    CylinderPlant::new(c, l),
-                    ctrl,
-                    self.setup,
-                    self.observe,
-                    self.states,
-                )
-            }
-        }
+        self.setup.plant.visit(WithPlant {
+            ctrl,
+            setup: self.setup,
+            observe: self.observe,
+            states: self.states,
+        })
+    }
+}
+
+/// The second half of [`Runner`]: the controller built, the plant typed.
+struct WithPlant<'a, 'b, C> {
+    ctrl: C,
+    setup: &'a Setup,
+    observe: &'b mut dyn FnMut(&Sample),
+    states: bool,
+}
+
+impl<C: Controller> PlantVisit for WithPlant<'_, '_, C> {
+    type Out = (Outcome, Metrics);
+    fn visit<P: Plant + Clone + std::fmt::Debug + Send + Sync + 'static>(
+        self,
+        plant: &P,
+    ) -> Self::Out {
+        execute(
+            plant.clone(),
+            self.ctrl,
+            self.setup,
+            self.observe,
+            self.states,
+        )
     }
 }
 
@@ -152,7 +142,8 @@ fn execute<P: Plant, C: Controller>(
     states: bool,
 ) -> (Outcome, Metrics) {
     let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
-    let mut acc = MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network);
+    let mut acc =
+        MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network).on(setup.axis);
     let mut sim = Simulation::new(
         plant,
         ctrl,

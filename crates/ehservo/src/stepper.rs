@@ -12,10 +12,9 @@
 //! `[fault]` policy) at the scenario's step: fed the measurements a run's
 //! controller saw, it returns the run's commands to the bit.
 
-use crate::cylinder::CylinderPlant;
 use crate::metrics::{Metrics, MetricsAccumulator};
-use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant};
-use crate::scenario::{AnyReference, ControllerConfig, PlantModel, Scenario, ScenarioError};
+use crate::plant::Plant;
+use crate::scenario::{AnyReference, ControllerConfig, PlantVisit, Scenario, ScenarioError};
 use crate::scenario::{Setup, Visit};
 use crate::simulation::{Mode, Sample, Simulation, Stop};
 use ehservo_core::control::{Controller, Signal, Signals, Truth};
@@ -79,17 +78,23 @@ impl Visit for BuildLoop<'_> {
         let ctrl = cfg
             .build(&setup.design)
             .expect("Setup::new built this controller once already");
-        let (p, l) = (setup.model.params, setup.model.load);
-        match setup.plant {
-            PlantModel::ThirdOrder => looped(ThirdOrderPlant::new(p, l), ctrl, setup),
-            PlantModel::Physical => looped(PhysicalPlant::new(p, l), ctrl, setup),
-            PlantModel::Cylinder => {
-                let c = setup
-                    .cylinder
-                    .expect("Setup::new keeps the cylinder of a cylinder scenario");
-                looped(CylinderPlant::new(c, l), ctrl, setup)
-            }
-        }
+        setup.plant.visit(LoopOn { ctrl, setup })
+    }
+}
+
+/// [`BuildLoop`]'s second half: the plant typed.
+struct LoopOn<'a, C> {
+    ctrl: C,
+    setup: &'a Setup,
+}
+
+impl<C: Controller + 'static> PlantVisit for LoopOn<'_, C> {
+    type Out = Box<dyn LoopStep>;
+    fn visit<P: Plant + Clone + std::fmt::Debug + Send + Sync + 'static>(
+        self,
+        plant: &P,
+    ) -> Self::Out {
+        looped(plant.clone(), self.ctrl, self.setup)
     }
 }
 
@@ -100,7 +105,8 @@ where
     C: Controller + 'static,
 {
     let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
-    let acc = MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network);
+    let acc =
+        MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network).on(setup.axis);
     let sim = Simulation::new(
         plant,
         ctrl,
@@ -389,10 +395,7 @@ mod tests {
         assert_eq!(n, 301);
         assert_eq!(l.stopped(), Some(Stop::Horizon));
         let (a, b) = (l.metrics(), r.metrics);
-        assert_eq!(
-            a.e_max_deg.unwrap().to_bits(),
-            b.e_max_deg.unwrap().to_bits()
-        );
+        assert_eq!(a.e_max.unwrap().to_bits(), b.e_max.unwrap().to_bits());
         assert_eq!(a, b);
     }
 

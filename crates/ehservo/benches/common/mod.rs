@@ -1,6 +1,6 @@
 //! Shared by the benches: the Fig. 2 case and its recorded measurements.
 
-use ehservo::plant::{Plant, ThirdOrderPlant, UncertaintySignal};
+use ehservo::plant::{Plant, ThirdOrderPlant, Variation, Varying};
 use ehservo::scenario::Scenario;
 use ehservo_core::prelude::*;
 
@@ -15,7 +15,7 @@ pub struct Fig2 {
     /// θd = 5° sin 2πt.
     pub reference: Sine,
     /// The true variation (a_bias = 1, b_bias = 0.5).
-    pub unc: UncertaintySignal,
+    pub unc: Varying<Variation>,
 }
 
 /// The default scenario (the paper's Fig. 2 case), built as `run::run` does.
@@ -33,7 +33,7 @@ pub fn fig2() -> Fig2 {
     )
     .expect("paper gains");
     let vsc = Vsc::try_new(model, surface, gains.vsc(false)).expect("paper bounds");
-    let unc = UncertaintySignal::new(s.uncertainty_spec(), model.coeffs.as_array());
+    let unc = Varying::new(&plant, s.uncertainty_spec());
     Fig2 {
         plant,
         nn,
@@ -84,7 +84,7 @@ pub fn record() -> Recording {
         }
         measurements.push(m);
         let out = ctl.step(t, x, m.z);
-        let v = f.unc.at(t);
+        let v = f.unc.at(&f.plant, t);
         let plant = &f.plant;
         rk4_step(
             |tt, y: &[f64; 3], dy: &mut [f64; 3]| plant.deriv(tt, y, out.u, &v, dy),

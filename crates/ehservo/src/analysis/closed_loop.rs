@@ -73,9 +73,10 @@ fn not_applicable(s: &Scenario) -> LoopAnalysis {
         mode: s.simulation.mode.as_str().into(),
         step: s.simulation.step,
         substeps: s.simulation.substeps,
-        b_ratio: 1.0 + s.uncertainty.b_reference * s.uncertainty.b_bias,
+        b_ratio: 1.0 + s.uncertainty_spec().b_reference * s.uncertainty_spec().b_bias,
         b_ratio_worst: 1.0
-            + s.uncertainty.b_reference * (s.uncertainty.b_bias + s.uncertainty.b_random.abs()),
+            + s.uncertainty_spec().b_reference
+                * (s.uncertainty_spec().b_bias + s.uncertainty_spec().b_random.abs()),
         switching_slope: None,
         vsc_sat_kb: None,
         sigma_gain: None,
@@ -166,7 +167,7 @@ pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> 
         return not_applicable(s);
     };
     let abar = model.coeffs.as_array();
-    let u = &s.uncertainty;
+    let u = &s.uncertainty_spec();
     let h = sim.step;
     let r_of = |fb: f64| 1.0 + u.b_reference * fb;
     let a_of = |fa: f64| -> [f64; 3] { std::array::from_fn(|i| abar[i] + abar[i].abs() * fa) };
@@ -185,8 +186,9 @@ pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> 
     }
     let r_worst = r_of(u.b_bias + u.b_random.abs());
     // Load slopes at θ = 0 (module doc): sine load and the viscous friction.
-    let amp_k = s.load.amplitude * s.load.wavenumber;
-    let bv = s.load.friction.map(|f| f.viscous).unwrap_or(0.0);
+    let load = s.load_model();
+    let amp_k = load.amplitude * load.wavenumber;
+    let bv = load.friction.map(|f| f.viscous).unwrap_or(0.0);
     let kd = model.params.d_per_torque();
     let jt = model.params.jt;
     let dd = [kd * amp_k, amp_k / jt + kd * bv, bv / jt];

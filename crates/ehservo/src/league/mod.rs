@@ -633,7 +633,7 @@ impl Margin {
         };
         let m = crate::run::run_setup(&setup, &mut |_| {}).1;
         !m.diverged
-            && m.e_max_deg
+            && m.e_max
                 .is_some_and(|e| e.is_finite() && self.cfg.e_limit_deg.is_none_or(|l| e <= l))
     }
 
@@ -733,7 +733,7 @@ impl Cell {
     pub fn bounded(&self) -> bool {
         self.metrics
             .as_ref()
-            .is_some_and(|m| !m.diverged && m.e_max_deg.is_some())
+            .is_some_and(|m| !m.diverged && m.e_max.is_some())
     }
 }
 

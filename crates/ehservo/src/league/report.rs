@@ -65,7 +65,7 @@ pub fn rows(l: &League, r: &LeagueResult) -> Vec<Row> {
                     .filter(|v| v.is_finite())
                     .collect()
             };
-            let e_max = metric(&|m| m.e_max_deg);
+            let e_max = metric(&|m| m.e_max);
             let refused = cells.iter().filter(|c| c.refused.is_some()).count();
             let unbounded = cells.len() - ok.len() - refused;
             let low = l.margin.as_ref().map(|m| m.cfg.low).unwrap_or(0.0);
@@ -83,7 +83,7 @@ pub fn rows(l: &League, r: &LeagueResult) -> Vec<Row> {
                     None
                 },
                 e_max_mean_deg: mean(&e_max),
-                e_rms_mean_deg: mean(&metric(&|m| m.e_rms_deg)),
+                e_rms_mean_deg: mean(&metric(&|m| m.e_rms)),
                 chattering_mean: mean(&metric(&|m| m.chattering)),
                 energy_mean_v2s: mean(&ok.iter().filter_map(|c| c.energy).collect::<Vec<_>>()),
                 u_max_worst_v: max(&metric(&|m| m.u_max)),

@@ -7,7 +7,7 @@ use crate::run::RunResult;
 use crate::scenario::Scenario;
 use crate::simulation::{Divergence, Sample};
 use anyhow::{Context, Result};
-use ehservo_core::math::DR;
+use ehservo_sim::axis::Axis;
 use serde::Serialize;
 use std::fs;
 use std::io::Write;
@@ -32,7 +32,8 @@ pub const SOFTWARE: Software = Software {
     version: env!("CARGO_PKG_VERSION"),
 };
 
-/// The columns every trace starts with.
+/// The columns every trace of a rotary axis starts with (a linear axis's
+/// are `t_s, y_d_mm, y_mm, e_mm, u_V`: [`TraceLayout::prefix`]).
 pub const TRACE_PREFIX: [&str; 5] = ["t_s", "theta_d_deg", "theta_deg", "e_deg", "u_V"];
 
 /// The columns of a run's `trace.csv`: the prefix, the controller's
@@ -46,7 +47,9 @@ pub const TRACE_PREFIX: [&str; 5] = ["t_s", "theta_d_deg", "theta_deg", "e_deg",
 #[derive(Debug, Clone)]
 pub struct TraceLayout {
     /// Column names.
-    pub columns: Vec<&'static str>,
+    pub columns: Vec<String>,
+    /// The axis: the position columns are in its display unit.
+    pub axis: Axis,
     parts: Vec<usize>,
     actuator: bool,
     states: usize,
@@ -55,18 +58,16 @@ pub struct TraceLayout {
     estimated: bool,
 }
 
-/// The measured channels' columns.
-const MEASURED: [&str; 3] = [
-    "theta_meas_deg",
-    "theta_dot_meas_deg_s",
-    "theta_ddot_meas_deg_s2",
-];
-/// The estimate's columns.
-const ESTIMATED: [&str; 3] = [
-    "theta_est_deg",
-    "theta_dot_est_deg_s",
-    "theta_ddot_est_deg_s2",
-];
+/// The columns of the position, velocity and acceleration with the
+/// stem `stem` (`""`, `"_meas"`, `"_est"`): `theta_meas_deg`,
+/// `theta_dot_meas_deg_s`, … on a rotary axis, `y_meas_mm` … on a linear.
+fn channels(axis: Axis, stem: &str) -> [String; 3] {
+    [
+        axis.column(stem, ""),
+        axis.column(&format!("_dot{stem}"), "_s"),
+        axis.column(&format!("_ddot{stem}"), "_s2"),
+    ]
+}
 
 /// What a trace carries beside the controller's signals.
 #[derive(Debug, Clone, Copy, Default)]
@@ -81,31 +82,37 @@ pub struct TraceExtras {
     pub measured: Option<[bool; 3]>,
     /// An estimator runs.
     pub estimated: bool,
+    /// The plant's axis (rotary by default).
+    pub axis: Axis,
 }
 
 impl TraceLayout {
     /// The layout for samples carrying `signals`.
     pub fn new(signals: &[ehservo_core::control::Signal], x: TraceExtras) -> Self {
+        let axis = x.axis;
         let parts: Vec<usize> = (0..signals.len())
             .filter(|&i| !signals[i].column.is_empty())
             .collect();
-        let mut columns: Vec<&'static str> = TRACE_PREFIX.to_vec();
-        columns.extend(parts.iter().map(|&i| signals[i].column));
+        let mut columns: Vec<String> = Self::prefix(axis).to_vec();
+        columns.extend(parts.iter().map(|&i| axis.si_name(signals[i].column)));
         if x.actuator {
-            columns.push("u_plant_V");
+            columns.push("u_plant_V".into());
         }
-        columns.extend(["theta_dot_deg_s", "theta_ddot_deg_s2"]);
-        columns.extend(x.states.iter().map(|s| s.column));
+        let [_, dot, ddot] = channels(axis, "");
+        columns.extend([dot, ddot]);
+        columns.extend(x.states.iter().map(|s| s.column.to_string()));
         if x.spool {
-            columns.push("spool_V");
+            columns.push("spool_V".into());
         }
         let measured = x.measured.unwrap_or([false; 3]);
-        columns.extend((0..3).filter(|&i| measured[i]).map(|i| MEASURED[i]));
+        let meas = channels(axis, "_meas");
+        columns.extend((0..3).filter(|&i| measured[i]).map(|i| meas[i].clone()));
         if x.estimated {
-            columns.extend(ESTIMATED);
+            columns.extend(channels(axis, "_est"));
         }
         Self {
             columns,
+            axis,
             parts,
             actuator: x.actuator,
             states: x.states.len(),
@@ -113,6 +120,18 @@ impl TraceLayout {
             measured,
             estimated: x.estimated,
         }
+    }
+
+    /// The first five columns on `axis`: time, the reference, the
+    /// position, the error (in the axis's display unit) and the command.
+    pub fn prefix(axis: Axis) -> [String; 5] {
+        [
+            "t_s".into(),
+            axis.column("_d", ""),
+            axis.column("", ""),
+            format!("e_{}", axis.unit()),
+            "u_V".into(),
+        ]
     }
 
     /// The layout of a scenario's runs.
@@ -124,10 +143,11 @@ impl TraceLayout {
             signals,
             TraceExtras {
                 actuator: !s.actuator.is_identity(),
-                states: crate::run::plant_states(s.plant.model),
+                states: s.plant.states(),
                 spool: actuator.is_some_and(|a| a.has_lag()),
                 measured: (!exact || s.estimator.is_some()).then_some(s.sensor.measured.0),
                 estimated: s.estimator.is_some(),
+                axis: s.plant.axis(),
             },
         )
     }
@@ -137,12 +157,19 @@ impl TraceLayout {
     /// numpy column by column).
     pub fn row(&self, s: &Sample, out: &mut Vec<f64>) {
         out.clear();
-        out.extend([s.t, s.theta_d_deg(), s.theta_deg(), s.e_deg(), s.u]);
+        let a = self.axis;
+        out.extend([
+            s.t,
+            a.display(s.z[0]),
+            a.display(s.x[0]),
+            a.display(s.e),
+            s.u,
+        ]);
         out.extend(self.parts.iter().map(|&i| s.values[i]));
         if self.actuator {
             out.push(s.u_plant);
         }
-        out.extend([s.x[1] / DR, s.x[2] / DR]);
+        out.extend([a.display(s.x[1]), a.display(s.x[2])]);
         out.extend(&s.states[..self.states]);
         if self.spool {
             out.push(s.spool);
@@ -150,10 +177,10 @@ impl TraceLayout {
         out.extend(
             (0..3)
                 .filter(|&i| self.measured[i])
-                .map(|i| s.x_ctrl[i] / DR),
+                .map(|i| a.display(s.x_ctrl[i])),
         );
         if self.estimated {
-            out.extend(s.x_est.map(|v| v / DR));
+            out.extend(s.x_est.map(|v| a.display(v)));
         }
     }
 }
@@ -341,7 +368,7 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         "{} — {} on the {} plant, {} h = {} s",
         s.name,
         s.controller.kind(),
-        s.plant.model.as_str(),
+        s.plant.model(),
         s.simulation.mode.as_str(),
         s.simulation.step
     );
@@ -361,24 +388,40 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
     if !s.actuator.is_identity() {
         u_series.push(Series::new("valve", t.clone(), col(&|x| x.u_plant), 1).dash(Dash::Dashed));
     }
+    let ax = s.plant.axis();
+    let (sym, unit) = (ax.letter(), ax.unit());
     let theta = panel(
-        "(a) θd (dotted) and θ",
-        "angle (deg)",
+        &format!("(a) {sym}d (dotted) and {sym}"),
+        &format!(
+            "{} ({unit})",
+            if ax == Axis::Rotary {
+                "angle"
+            } else {
+                "position"
+            }
+        ),
         vec![
-            Series::new("θd", t.clone(), col(&|x| x.theta_d_deg()), 1).dash(Dash::Dotted),
-            Series::new("θ", t.clone(), col(&|x| x.theta_deg()), 0),
+            Series::new(
+                format!("{sym}d"),
+                t.clone(),
+                col(&|x| ax.display(x.z[0])),
+                1,
+            )
+            .dash(Dash::Dotted),
+            Series::new(sym, t.clone(), col(&|x| ax.display(x.x[0])), 0),
         ],
     );
     let mut e_panel = panel(
-        &match run.metrics.e_max_deg {
+        &match run.metrics.e_max {
             Some(e) => format!(
-                "(b) tracking error e = θd − θ; max |e| after {} s: {e:.4}°",
-                s.simulation.settle
+                "(b) tracking error e = {sym}d − {sym}; max |e| after {} s: {e:.4}{}",
+                s.simulation.settle,
+                ax.suffix()
             ),
-            None => "(b) tracking error e = θd − θ".into(),
+            None => format!("(b) tracking error e = {sym}d − {sym}"),
         },
-        "e (deg)",
-        vec![Series::new("", t.clone(), col(&|x| x.e_deg()), 0)],
+        &format!("e ({unit})"),
+        vec![Series::new("", t.clone(), col(&|x| ax.display(x.e)), 0)],
     );
     // The error after the transient is the headline (e_max): the y axis is
     // scaled to it and the transient clipped, with t_s marked.
@@ -387,7 +430,7 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         .trace
         .iter()
         .filter(|x| x.t >= settle - 1e-9)
-        .map(|x| x.e_deg())
+        .map(|x| ax.display(x.e))
         .filter(|v| v.is_finite())
         .collect();
     if run.outcome.diverged.is_none() && !after.is_empty() {
@@ -414,11 +457,12 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
             _ => "measured".to_string(),
         };
         panels.push(panel(
-            &format!("θ̈: true and {source}, as the controller saw it"),
-            "θ̈ (deg/s²)",
+            &format!("{sym}̈: true and {source}, as the controller saw it"),
+            &format!("{sym}̈ ({unit}/s²)"),
             vec![
-                Series::new("seen", t.clone(), col(&|x| x.x_ctrl[2] / DR), 1).dash(Dash::Dashed),
-                Series::new("true", t.clone(), col(&|x| x.x[2] / DR), 0),
+                Series::new("seen", t.clone(), col(&|x| ax.display(x.x_ctrl[2])), 1)
+                    .dash(Dash::Dashed),
+                Series::new("true", t.clone(), col(&|x| ax.display(x.x[2])), 0),
             ],
         ));
     }
@@ -438,12 +482,12 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         }
         panels.push(panel(
             "(d) switching function σ",
-            "σ (rad/s²)",
+            &format!("σ ({})", ax.si_name("rad/s²")),
             vec![Series::new("", t.clone(), col(&|x| x.part("sigma")), 0)],
         ));
         panels.push(panel(
             "(e) lumped uncertainty (19) and its estimate",
-            "(rad/s³)",
+            &format!("({})", ax.si_name("rad/s³")),
             d_series,
         ));
         if run.metrics.w_norm_max.is_some() {
@@ -478,11 +522,7 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         cols: 2,
         size: (1400, 500 * rows as u32),
         panels,
-        footer: format!(
-            "True variation: {}, {}",
-            crate::reproduce::figures::a_variation(&s.uncertainty),
-            crate::reproduce::figures::b_variation(&s.uncertainty)
-        ),
+        footer: variation_footer(s),
     }
 }
 
@@ -569,4 +609,44 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     }
     stage.commit()?;
     Ok((run, files.iter().map(|f| dir.join(f)).collect()))
+}
+
+/// A figure's footer: the true variation as the scenario sets it.
+pub fn variation_footer(s: &Scenario) -> String {
+    let u = s.uncertainty_spec();
+    let physical = physical_variation(&u.physical);
+    if s.plant.paper_uncertainty() {
+        let paper = format!(
+            "True variation: {}, {}",
+            crate::reproduce::figures::a_variation(&u),
+            crate::reproduce::figures::b_variation(&u)
+        );
+        match physical {
+            None => paper,
+            Some(p) => format!("{paper}; {p}"),
+        }
+    } else {
+        format!(
+            "True variation: {}",
+            physical.unwrap_or_else(|| "none (the plant is its nominal model's physics)".into())
+        )
+    }
+}
+
+/// The physical variation in words (None when none is set).
+fn physical_variation(p: &ehservo_sim::plant::PhysicalSpec) -> Option<String> {
+    let parts: Vec<String> = ehservo_sim::plant::PhysicalSpec::KEYS
+        .iter()
+        .zip(p.spreads())
+        .filter(|(_, s)| !s.is_none())
+        .map(|(k, s)| {
+            let mut t = format!("{k} ×(1 {:+.0} %", 100.0 * s.bias);
+            if s.random != 0.0 {
+                t.push_str(&format!(" ± {:.0} % random", 100.0 * s.random.abs()));
+            }
+            t.push(')');
+            t
+        })
+        .collect();
+    (!parts.is_empty()).then(|| parts.join(", "))
 }

@@ -37,7 +37,7 @@ fn e_max(rep: &Reproduction, reading: &str, case: &str) -> String {
         .iter()
         .find(|r| r.reading == reading && r.case == case)
         .map(
-            |r| match (r.metrics.base.diverged_at_s, r.metrics.base.e_max_deg) {
+            |r| match (r.metrics.base.diverged_at_s, r.metrics.base.e_max) {
                 (Some(t), _) => format!("unbounded at {t:.2} s"),
                 (None, Some(e)) => format!("{e:.4}°"),
                 _ => "—".into(),

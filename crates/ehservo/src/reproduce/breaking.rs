@@ -206,7 +206,7 @@ fn point(base: &Scenario, set: &[String], x: f64) -> Result<ScanPoint> {
     let m = run(&s, Keep::Nothing)?.metrics;
     Ok(ScanPoint {
         x,
-        e_max_deg: m.e_max_deg,
+        e_max_deg: m.e_max,
         diverged_at_s: m.diverged_at_s,
     })
 }

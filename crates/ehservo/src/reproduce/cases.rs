@@ -106,14 +106,14 @@ pub(super) fn sensitivity(
         let sv = &m.sensitivity[*si];
         let case = &sv.cases[*ci];
         match rows.iter_mut().find(|r| r.id == sv.id && &r.case == case) {
-            Some(row) => row.seeds_e_max_deg.push(cm.base.e_max_deg),
+            Some(row) => row.seeds_e_max_deg.push(cm.base.e_max),
             None => rows.push(SensitivityRow {
                 id: sv.id.clone(),
                 case: case.clone(),
                 baseline: base[case].0,
                 variant: cm,
                 seeds_e_max_deg: if seed.is_some() {
-                    vec![cm.base.e_max_deg]
+                    vec![cm.base.e_max]
                 } else {
                     Vec::new()
                 },
@@ -151,7 +151,7 @@ pub(super) fn boundaries(
     let results: Vec<Boundary> = tasks
         .par_iter()
         .map(|(rid, br, base)| {
-            let b_ref = base.uncertainty.b_reference;
+            let b_ref = base.uncertainty_spec().b_reference;
             let found = match br {
                 Some(b) => {
                     let (start, mut end, step) = VSC_SCAN;

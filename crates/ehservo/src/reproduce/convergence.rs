@@ -293,7 +293,7 @@ pub fn estimate(
 }
 
 fn outcome(c: &CaseMetrics) -> String {
-    match (c.base.diverged_at_s, c.base.e_max_deg) {
+    match (c.base.diverged_at_s, c.base.e_max) {
         (Some(t), _) => format!("unbounded at {t:.2} s"),
         (None, Some(e)) => format!("{e:.4}°"),
         (None, None) => "—".into(),
@@ -361,7 +361,7 @@ of {} case runs. {}",
             let reading = m.reading.iter().find(|x| x.id == r.reading);
             let key = reading.map(|x| x.refine.key.as_str()).unwrap_or("");
             let best = e.best();
-            let converged = match (best.base.e_max_deg, e.margin("e_max_deg")) {
+            let converged = match (best.base.e_max, e.margin("e_max_deg")) {
                 (Some(v), Some(dv)) => format!("{v:.4}° ± {dv:.4}"),
                 _ => outcome(best),
             };
@@ -416,9 +416,9 @@ mod tests {
 
     fn cm(e: Option<f64>, diverged_at: Option<f64>) -> CaseMetrics {
         let base = Metrics {
-            e_max_deg: e,
-            e_final_deg: None,
-            e_rms_deg: None,
+            e_max: e,
+            e_final: None,
+            e_rms: None,
             u_max: None,
             u_rms: None,
             chattering: None,
@@ -429,6 +429,7 @@ mod tests {
             diverged: diverged_at.is_some(),
             diverged_at_s: diverged_at,
             samples: 0,
+            axis: Default::default(),
         };
         CaseMetrics::from(base)
     }

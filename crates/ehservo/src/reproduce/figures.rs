@@ -114,10 +114,10 @@ impl FigureContext<'_> {
                 }
             }
         });
-        let b = per_case(&found, |s| b_size(&s.uncertainty));
+        let b = per_case(&found, |s| b_size(&s.uncertainty_spec()));
         let mut conventions: Vec<String> = Vec::new();
         for (_, s) in &found {
-            let conv = b_convention(&s.uncertainty);
+            let conv = b_convention(&s.uncertainty_spec());
             if !conventions.contains(&conv) {
                 conventions.push(conv);
             }
@@ -130,8 +130,8 @@ impl FigureContext<'_> {
         )
     }
 
-    fn uncertainty(&self, case: &str) -> Option<&UncertaintySpec> {
-        self.scenarios.get(case).map(|s| &s.uncertainty)
+    fn uncertainty(&self, case: &str) -> Option<UncertaintySpec> {
+        self.scenarios.get(case).map(|s| s.uncertainty_spec())
     }
 
     /// One reference period (s) of a case (1 s if unknown).
@@ -385,8 +385,18 @@ pub fn paper_figures(
     let mut out = Vec::new();
     let get = |id: &str| runs.get(id);
     let rid = &ctx.reading.id;
-    let b_of = |case: &str| ctx.uncertainty(case).map(b_size).unwrap_or_default();
-    let a_of = |case: &str| ctx.uncertainty(case).map(a_variation).unwrap_or_default();
+    let b_of = |case: &str| {
+        ctx.uncertainty(case)
+            .as_ref()
+            .map(b_size)
+            .unwrap_or_default()
+    };
+    let a_of = |case: &str| {
+        ctx.uncertainty(case)
+            .as_ref()
+            .map(a_variation)
+            .unwrap_or_default()
+    };
 
     if let Some(r) = get("fig2") {
         let t = &r.trace;

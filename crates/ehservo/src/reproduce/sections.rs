@@ -7,7 +7,7 @@ use super::manifest::Manifest;
 use super::Reproduction;
 
 fn e_max_text(c: &CaseMetrics) -> String {
-    match (c.base.e_max_deg, c.base.diverged_at_s) {
+    match (c.base.e_max, c.base.diverged_at_s) {
         (_, Some(t)) => format!("unbounded at {t:.2} s"),
         (Some(e), None) => format!("{e:.4}°"),
         (None, None) => "—".into(),
@@ -41,9 +41,9 @@ window. The discussion is in `docs/paper-notes.md`.",
                 .find(|s| s.id == r.id)
                 .map(|s| s.question.clone())
                 .unwrap_or_default();
-            let base = r.baseline.base.e_max_deg;
+            let base = r.baseline.base.e_max;
             let (variant, change) = if r.seeds_e_max_deg.is_empty() {
-                let change = match r.variant.base.e_max_deg {
+                let change = match r.variant.base.e_max {
                     Some(b) if !r.variant.base.diverged => rel(base, b),
                     _ => "—".into(),
                 };

@@ -45,7 +45,7 @@ pub const DEFAULT_SEEDS: u32 = 400;
 
 /// Whether a scenario's variation has a random part.
 pub fn is_random(s: &Scenario) -> bool {
-    s.uncertainty.a_random != 0.0 || s.uncertainty.b_random != 0.0
+    s.uncertainty_spec().paper_is_random()
 }
 
 /// The p-quantile (0 ≤ p ≤ 1) of an ascending sample, by linear
@@ -358,7 +358,7 @@ pub(super) fn run(
         let metrics: Vec<CaseMetrics> = measured[c * n..(c + 1) * n].to_vec();
         out.cases.push(SeededCase {
             case: id.clone(),
-            e_max_deg: metrics.iter().map(|x| x.base.e_max_deg).collect(),
+            e_max_deg: metrics.iter().map(|x| x.base.e_max).collect(),
             metrics,
         });
     }

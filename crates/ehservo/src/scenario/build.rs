@@ -5,17 +5,17 @@
 //! succeeds, so no key is checked in one place and used unchecked in another.
 
 use super::{
-    AnyReference, ControllerCfg, EstimatorCfg, PlantModel, SafeCommandCfg, Scenario, MAX_STEPS,
+    AnyPlant, AnyReference, ControllerCfg, EstimatorCfg, SafeCommandCfg, Scenario, MAX_STEPS,
 };
 use ehservo_core::control::Design;
-use ehservo_core::cylinder::CylinderParams;
 use ehservo_core::error::ParamError;
 use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
 use ehservo_core::surface::SwitchingSurface;
 use ehservo_sim::actuator::Actuator;
+use ehservo_sim::axis::Axis;
 use ehservo_sim::estimator::AnyEstimator;
-use ehservo_sim::plant::UncertaintySpec;
+use ehservo_sim::plant::{PlantContext, UncertaintySpec};
 use ehservo_sim::sensor::Sensor;
 use ehservo_sim::simulation::Mode;
 use ehservo_sim::simulation::{SimConfig, Stages};
@@ -30,11 +30,11 @@ pub const MAX_DRAWS: f64 = 1.0e8;
 /// A validated scenario, built.
 #[derive(Debug, Clone)]
 pub struct Setup {
-    /// Which true plant.
-    pub plant: PlantModel,
-    /// The cylinder's parameters, with `plant == Cylinder`.
-    pub cylinder: Option<CylinderParams>,
-    /// The nominal model (physical parameters and load).
+    /// The true plant, built.
+    pub plant: AnyPlant,
+    /// Its axis: what the position is and the unit it is shown in.
+    pub axis: Axis,
+    /// The nominal model (what the controller is designed on).
     pub model: NominalModel,
     /// What the controller is designed from.
     pub design: Design,
@@ -133,36 +133,57 @@ impl Setup {
                 format!("must be finite and >= 0 (got {:?})", sim.settle),
             );
         }
+        let axis = s.plant.axis();
         if !(sim.theta_limit.is_finite() && sim.theta_limit > 0.0) {
             return bad(
                 "simulation.theta_limit",
                 format!("must be finite and > 0 (got {:?})", sim.theta_limit),
             );
         }
+        // The default's bits exactly: the key was not set (or set to it).
+        let limit_set =
+            sim.theta_limit.to_bits() != super::SimulationCfg::default().theta_limit.to_bits();
+        if s.plant.end_stops() && limit_set {
+            return bad(
+                "simulation.theta_limit",
+                format!(
+                    "plant.model = \"{}\" has end stops and runs on at them: there is no position limit (a run diverges only when its state stops being finite)",
+                    s.plant.model()
+                ),
+            );
+        }
         if let Some(v) = sim.x0.iter().find(|v| !v.is_finite()) {
             return bad("simulation.x0", format!("must be finite (got {v})"));
         }
-        if sim.x0[0].abs() > sim.theta_limit {
+        if axis == Axis::Rotary && !s.plant.end_stops() && sim.x0[0].abs() > sim.theta_limit {
             return bad(
                 "simulation.x0",
                 "θ(0) is beyond simulation.theta_limit".into(),
             );
         }
 
-        s.plant
-            .params
-            .validate()
-            .map_err(|e| param_err("plant.params", e))?;
-        s.load_model().validate().map_err(|e| {
-            let prefix = if matches!(e.name, "amplitude" | "wavenumber") {
-                "load"
-            } else {
-                "load.friction"
-            };
-            param_err(prefix, e)
-        })?;
-
-        let u = &s.uncertainty;
+        if !s.plant.paper_uncertainty() {
+            if let Some((k, _)) = s.uncertainty.paper_keys().iter().find(|(_, v)| v.is_some()) {
+                return bad(
+                    &format!("uncertainty.{k}"),
+                    format!(
+                        "the paper's Δa_i/Δb form belongs to the third-order family: plant.model = \"{}\" varies by [uncertainty.physical] (mass, bulk_modulus, leakage, supply_pressure, friction, load: {{ bias, random }} fractions)",
+                        s.plant.model()
+                    ),
+                );
+            }
+        }
+        if s.load.is_some() && !s.plant.uses_load() {
+            return bad(
+                "load",
+                format!(
+                    "plant.model = \"{}\" takes its loads in [plant.load] (forces on the rod), not the rotary family's [load] torque: remove [load]",
+                    s.plant.model()
+                ),
+            );
+        }
+        let spec = s.uncertainty_spec();
+        let u = &spec;
         for (k, v) in [
             ("uncertainty.a_bias", u.a_bias),
             ("uncertainty.a_random", u.a_random),
@@ -179,8 +200,11 @@ impl Setup {
                 format!("must be finite and > 0 (got {:?})", u.hold),
             );
         }
+        u.physical
+            .validate()
+            .map_err(|(k, r)| (format!("uncertainty.physical.{k}"), r))?;
         let draws = sim.horizon / u.hold;
-        if (u.a_random != 0.0 || u.b_random != 0.0) && draws > MAX_DRAWS {
+        if u.is_random() && draws > MAX_DRAWS {
             return bad(
                 "uncertainty.hold",
                 format!(
@@ -205,8 +229,32 @@ impl Setup {
         }
 
         let reference = s.reference()?;
-
-        let cylinder = s.checked_cylinder()?;
+        // The reference's range is sampled only where something needs it: a
+        // linear axis's stroke, or a rotary reference with an offset (the
+        // kinds' own checks above cover the rest, and a sweep builds this
+        // for every run).
+        let reference_range =
+            (axis == Axis::Linear || s.plant.end_stops() || s.reference.offset_deg.is_some())
+                .then(|| range_of(&reference, s.simulation.horizon, s.simulation.step));
+        if reference_range
+            .filter(|_| axis == Axis::Rotary && !s.plant.end_stops())
+            .is_some_and(|(lo, hi)| lo.abs().max(hi.abs()) >= sim.theta_limit)
+        {
+            return bad(
+                "reference",
+                "the reference reaches simulation.theta_limit: every run would count as diverged"
+                    .into(),
+            );
+        }
+        let plant = s.plant.build(&PlantContext {
+            load: s.load,
+            load_given: s.load.is_some(),
+            uncertainty: spec,
+            x0: sim.x0,
+            base_dir: s.base_dir.clone(),
+            reference_range,
+        })?;
+        let model = *plant.nominal();
 
         let surface = s.surface()?;
         if !s.controller.uses_surface() && s.surface != Default::default() {
@@ -233,6 +281,8 @@ impl Setup {
         if rate * hs > 2.5 {
             let key = if s.actuator.bandwidth_hz.is_some() {
                 "actuator.bandwidth_hz"
+            } else if s.actuator.natural_frequency.is_some() {
+                "actuator.natural_frequency"
             } else {
                 "actuator.time_constant"
             };
@@ -253,7 +303,7 @@ impl Setup {
             );
         }
         let sensor = Sensor::try_new(&s.sensor).map_err(|e| param_err("sensor", e))?;
-        let estimator = s.estimator(sim_cfg_step(s))?;
+        let estimator = s.estimator_for(&model, sim_cfg_step(s))?;
         let policy = FaultPolicy {
             safe: match s.fault.safe_command {
                 SafeCommandCfg::HoldLast => SafeCommand::HoldLast,
@@ -268,7 +318,6 @@ impl Setup {
             let (_, r) = param_err("fault", e);
             ("fault.measurement_limit".to_string(), r)
         })?;
-        let model = NominalModel::new(s.servo(), s.load_model());
         let sim_cfg = s.sim_config();
         let design = Design {
             model,
@@ -277,13 +326,13 @@ impl Setup {
         };
         s.controller.visit(Check(&design))?;
         Ok(Setup {
-            plant: s.plant.model,
-            cylinder,
+            plant,
+            axis,
             model,
             design,
             controller: s.controller.clone(),
             stages: Stages {
-                uncertainty: s.uncertainty_spec(),
+                uncertainty: spec,
                 actuator,
                 sensor,
                 policy,
@@ -384,6 +433,15 @@ impl Scenario {
     /// noise and delay, an estimator, a computation delay — checked against
     /// the mode, and the estimator built for the sample period `h`.
     pub fn estimator(&self, h: f64) -> Result<Option<AnyEstimator>, (String, String)> {
+        self.estimator_for(&self.nominal_model(), h)
+    }
+
+    /// [`Scenario::estimator`] on the nominal model `model`.
+    pub fn estimator_for(
+        &self,
+        model: &NominalModel,
+        h: f64,
+    ) -> Result<Option<AnyEstimator>, (String, String)> {
         let bad = |k: &str, r: &str| Err((k.to_string(), r.to_string()));
         let sampled = self.simulation.mode == Mode::Sampled;
         let need =
@@ -419,96 +477,36 @@ impl Scenario {
             }
             return Ok(None);
         };
-        build_estimator(
-            cfg,
-            &NominalModel::new(self.servo(), self.load_model()),
-            h,
-            &self.sensor,
-        )
-        .map(Some)
+        build_estimator(cfg, model, h, &self.sensor).map(Some)
     }
 
-    /// The physical parameters: `[plant.params]`, or with a cylinder the
-    /// paper's parameters equal to its linearisation (docs/cylinder.md).
+    /// The nominal model a controller is designed on: the paper family's
+    /// `[plant.params]` and `[load]`, or the built plant's (a default one if
+    /// the scenario does not build: callers hold validated scenarios).
+    pub fn nominal_model(&self) -> NominalModel {
+        if let Some(p) = self.paper_params() {
+            return NominalModel::new(p, self.load_model());
+        }
+        self.setup()
+            .map(|s| s.model)
+            .unwrap_or_else(|_| NominalModel::new(ServoParams::paper(), Load::paper()))
+    }
+
+    /// The physical parameters of a plant of the third-order family
+    /// (`[plant.params]`).
+    pub fn paper_params(&self) -> Option<ServoParams> {
+        use ehservo_sim::physical::PhysicalCfg;
+        use ehservo_sim::third_order::ThirdOrderCfg;
+        self.plant
+            .get::<ThirdOrderCfg>()
+            .map(|c| c.params)
+            .or_else(|| self.plant.get::<PhysicalCfg>().map(|c| c.params))
+    }
+
+    /// The paper's parameters of the nominal model.
     pub fn servo(&self) -> ServoParams {
-        match self.plant.model {
-            PlantModel::Cylinder => self.cylinder().nominal_servo_params(),
-            _ => self.plant.params,
-        }
-    }
-
-    /// `[plant.cylinder]`, the documented typical set when absent.
-    pub fn cylinder(&self) -> CylinderParams {
-        self.plant.cylinder.unwrap_or_default()
-    }
-
-    /// The cylinder's checks (`Some` with `model = "cylinder"`): its
-    /// parameters, no `[plant.params]` beside it, the reference and x(0)
-    /// inside the stroke; and no `[plant.cylinder]` on another model.
-    fn checked_cylinder(&self) -> Result<Option<CylinderParams>, (String, String)> {
-        if self.plant.model != PlantModel::Cylinder {
-            return match self.plant.cylinder {
-                Some(_) => Err((
-                    "plant.cylinder".into(),
-                    format!(
-                        "given, but plant.model is \"{}\": set plant.model = \"cylinder\" or remove [plant.cylinder]",
-                        self.plant.model.as_str()
-                    ),
-                )),
-                None => Ok(None),
-            };
-        }
-        if self.plant.params != ServoParams::paper() {
-            return Err((
-                "plant.params".into(),
-                "not used with plant.model = \"cylinder\": the nominal model is derived from [plant.cylinder] (docs/cylinder.md); remove [plant.params]".into(),
-            ));
-        }
-        let c = self.cylinder();
-        c.validate().map_err(|e| {
-            let prefix = if c.friction.is_some()
-                && matches!(
-                    e.name,
-                    "coulomb" | "stiction" | "stribeck_velocity" | "viscous" | "smoothing"
-                ) {
-                "plant.cylinder.friction"
-            } else {
-                "plant.cylinder"
-            };
-            param_err(prefix, e)
-        })?;
-        let end = c.stroke_angle();
-        // The largest |θd| over the run, sampled at the loop's step (and at
-        // least 10 000 points).
-        use ehservo_core::reference::Reference;
-        let r = self.reference()?;
-        let n = ((self.simulation.horizon / self.simulation.step).ceil() as usize).max(10_000);
-        let peak = (0..=n)
-            .map(|i| r.z(self.simulation.horizon * i as f64 / n as f64)[0].abs())
-            .fold(0.0, f64::max);
-        if peak >= end {
-            return Err((
-                match self.reference.kind {
-                    super::ReferenceKind::Sine => "reference.amplitude_deg",
-                    _ => "reference",
-                }
-                .into(),
-                format!(
-                    "the reference reaches the end of the cylinder's stroke, ±{:.4}° (stroke/(2r))",
-                    end.to_degrees()
-                ),
-            ));
-        }
-        if self.simulation.x0[0].abs() >= end {
-            return Err((
-                "simulation.x0".into(),
-                format!(
-                    "θ(0) is beyond the cylinder's stroke, ±{:.4}° (stroke/(2r))",
-                    end.to_degrees()
-                ),
-            ));
-        }
-        Ok(Some(c))
+        self.paper_params()
+            .unwrap_or_else(|| self.nominal_model().params)
     }
 
     /// The switching surface from `poles` or `p` (the paper's by default).
@@ -537,16 +535,25 @@ impl Scenario {
         }
     }
 
-    /// The load model.
+    /// The load model of the third-order family: `[load]`, the paper's
+    /// `2·sin(4θ)` N·m when absent.
     pub fn load_model(&self) -> Load {
-        self.load
+        self.load.unwrap_or_else(Load::paper)
     }
 
-    /// The reference, checked and built (a CSV file is read).
+    /// The reference, checked and built (a CSV file is read), on the
+    /// plant's axis.
     pub fn reference(&self) -> Result<AnyReference, (String, String)> {
-        self.reference.build(
+        let axis = self.plant.axis();
+        let limit = if self.plant.end_stops() {
+            f64::INFINITY
+        } else {
+            self.simulation.theta_limit
+        };
+        self.reference.build_on(
+            axis,
             self.simulation.horizon,
-            self.simulation.theta_limit,
+            limit,
             self.base_dir.as_deref(),
         )
     }
@@ -560,9 +567,10 @@ impl Scenario {
         }
     }
 
-    /// The true variation.
+    /// The true variation, resolved for the plant (the paper's keys at
+    /// the Fig. 2 case for the third-order family, zero for another).
     pub fn uncertainty_spec(&self) -> UncertaintySpec {
-        self.uncertainty
+        self.uncertainty.resolve(self.plant.paper_uncertainty())
     }
 
     /// The loop's settings.
@@ -573,14 +581,27 @@ impl Scenario {
             step: s.step,
             mode: s.mode,
             substeps: s.substeps,
-            // A cylinder's run diverges when it reaches the end of its
-            // stroke (end stops are not modelled).
-            theta_limit: match self.plant.model {
-                PlantModel::Cylinder => s.theta_limit.min(self.cylinder().stroke_angle()),
-                _ => s.theta_limit,
+            // A linear axis runs on at its end stops: only a non-finite
+            // state ends it.
+            theta_limit: if self.plant.end_stops() {
+                f64::INFINITY
+            } else {
+                s.theta_limit
             },
             x0: s.x0,
             computation_delay: s.computation_delay,
         }
     }
+}
+
+/// The smallest and largest position of `r` over `[0, horizon]`, sampled
+/// at the loop's `step` (at least 10 000 points, at most 2·10⁶).
+fn range_of(r: &AnyReference, horizon: f64, step: f64) -> (f64, f64) {
+    use ehservo_core::reference::Reference;
+    let n = ((horizon / step).ceil() as usize).clamp(10_000, 2_000_000);
+    (0..=n)
+        .map(|i| r.z(horizon * i as f64 / n as f64)[0])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        })
 }

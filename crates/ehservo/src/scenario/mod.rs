@@ -14,24 +14,24 @@
 
 mod build;
 mod overrides;
+mod plants;
 mod reference;
 mod registry;
 mod sections;
 
 pub use build::Setup;
 pub use overrides::{apply_override, line_col, parse_value, set_path};
+pub use plants::{AnyPlant, PlantCfg, PlantVisit, DEFAULT_MODEL};
 pub use reference::{
     read_csv, AnyReference, ComponentCfg, ReferenceCfg, ReferenceKind, Table, DEFAULT_AMPLITUDE_DEG,
 };
 pub use registry::{ControllerCfg, ControllerConfig, Visit, DEFAULT_KIND};
 pub use sections::{
-    EstimatorCfg, FaultCfg, OutputCfg, PlantCfg, PlantModel, SafeCommandCfg, SimulationCfg,
-    SurfaceCfg,
+    EstimatorCfg, FaultCfg, OutputCfg, SafeCommandCfg, SimulationCfg, SurfaceCfg, UncertaintyCfg,
 };
 
 use ehservo_core::servo::Load;
 use ehservo_sim::actuator::ActuatorConfig;
-use ehservo_sim::plant::UncertaintySpec;
 use ehservo_sim::sensor::SensorConfig;
 use overrides::{clean_path, first_line, locate};
 use serde::{Deserialize, Serialize};
@@ -77,14 +77,18 @@ pub struct Scenario {
     pub description: String,
     /// Horizon, step, mode.
     pub simulation: SimulationCfg,
-    /// Model and physical parameters.
+    /// The plant: `model` (default `"third-order"`) and that model's keys.
     pub plant: PlantCfg,
-    /// Load torque: `Tl = amplitude·sin(wavenumber·θ)`, optional `[load.friction]`.
-    pub load: Load,
-    /// True parameter variation: Δa_i = |ā_i|·(a_bias + a_random·r_i),
-    /// Δb = b_reference·b̄·(b_bias + b_random·r_b), r uniform on [−1, 1]
-    /// held over `hold`.
-    pub uncertainty: UncertaintySpec,
+    /// The third-order family's load torque: `Tl = amplitude·sin(wavenumber·θ)`,
+    /// optional `[load.friction]` (the paper's `2·sin 4θ` N·m when absent).
+    /// A cylinder's loads are in `[plant.load]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load: Option<Load>,
+    /// True parameter variation: the paper's Δa_i = |ā_i|·(a_bias +
+    /// a_random·r_i), Δb = b_reference·b̄·(b_bias + b_random·r_b) (the
+    /// third-order family), and `[uncertainty.physical]` (any plant); r
+    /// uniform on [−1, 1] held over `hold`.
+    pub uncertainty: UncertaintyCfg,
     /// Desired trajectory: `kind` (default `"sine"`) and its keys.
     pub reference: ReferenceCfg,
     /// Switching surface.
@@ -178,6 +182,9 @@ impl Scenario {
             if key == "controller" {
                 return controller_error(text, file);
             }
+            if key == "plant" {
+                return plant_error(text, file);
+            }
             let lc = inner.span().map(|s| line_col(text, s.start));
             err(key, lc, first_line(inner.message()))
         })?;
@@ -213,12 +220,14 @@ impl Scenario {
             }
             let after = format!("{file} (after --set)");
             let controller = table.get("controller").cloned();
+            let plant = table.get("plant").cloned();
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
                 let key = clean_path(&e.path().to_string());
-                match (key.as_str(), controller) {
-                    ("controller", Some(toml::Value::Table(t))) => {
+                match (key.as_str(), controller, plant) {
+                    ("controller", Some(toml::Value::Table(t)), _) => {
                         controller_table_error(t, &after, None)
                     }
+                    ("plant", _, Some(toml::Value::Table(t))) => plant_table_error(t, &after, None),
                     _ => ScenarioError {
                         file: after.clone(),
                         key,
@@ -284,9 +293,53 @@ impl Scenario {
         Setup::new(self).map(|_| ())
     }
 
-    /// This scenario as TOML.
+    /// This scenario as TOML, with the plant family's defaults written
+    /// out (the third-order family's `[load]` and the paper's
+    /// `[uncertainty]` keys): what `ehservo check` prints, and a file that
+    /// reads back as the same scenario.
     pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).unwrap_or_default()
+        toml::to_string_pretty(&self.resolved_table()).unwrap_or_default()
+    }
+
+    /// [`Scenario::table`] with the family's defaults filled in (see
+    /// [`Scenario::to_toml`]).
+    pub fn resolved_table(&self) -> toml::Table {
+        let mut t = toml::Table::try_from(self).unwrap_or_default();
+        if self.plant.paper_uncertainty() {
+            if let Ok(u) = toml::Table::try_from(self.uncertainty_spec()) {
+                t.insert("uncertainty".into(), toml::Value::Table(u));
+            }
+        }
+        if self.plant.uses_load() {
+            if let Ok(l) = toml::Table::try_from(self.load_model()) {
+                t.insert("load".into(), toml::Value::Table(l));
+            }
+        }
+        // The keys in the order a reader expects: serde's struct order.
+        let order = [
+            "name",
+            "description",
+            "simulation",
+            "plant",
+            "load",
+            "uncertainty",
+            "reference",
+            "surface",
+            "controller",
+            "actuator",
+            "sensor",
+            "estimator",
+            "fault",
+            "output",
+        ];
+        let mut out = toml::Table::new();
+        for k in order {
+            if let Some(v) = t.remove(k) {
+                out.insert(k.into(), v);
+            }
+        }
+        out.extend(t);
+        out
     }
 }
 
@@ -365,12 +418,16 @@ impl Scenario {
             set_path(&mut table, k, v.clone()).map_err(|(k, r)| fail(k, r))?;
         }
         let controller = table.get("controller").cloned();
+        let plant = table.get("plant").cloned();
         let mut s: Scenario =
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
                 let key = clean_path(&e.path().to_string());
-                match (key.as_str(), controller) {
-                    ("controller", Some(toml::Value::Table(t))) => {
+                match (key.as_str(), controller, plant) {
+                    ("controller", Some(toml::Value::Table(t)), _) => {
                         controller_table_error(t, &self.name, None)
+                    }
+                    ("plant", _, Some(toml::Value::Table(t))) => {
+                        plant_table_error(t, &self.name, None)
                     }
                     _ => fail(key, first_line(&e.into_inner().to_string())),
                 }
@@ -419,6 +476,42 @@ fn controller_table_error(table: toml::Table, file: &str, text: Option<&str>) ->
     }
 }
 
+/// The precise error of a `[plant]` table that did not deserialise: the
+/// key inside it, with its position in `text` when there is one.
+fn plant_table_error(table: toml::Table, file: &str, text: Option<&str>) -> ScenarioError {
+    let (k, reason) = match PlantCfg::from_toml(table) {
+        Err(e) => e,
+        Ok(_) => (String::new(), "invalid plant table".into()),
+    };
+    let key = if k.is_empty() {
+        "plant".to_string()
+    } else {
+        format!("plant.{k}")
+    };
+    let line_col = text.and_then(|t| locate(t, &key).or_else(|| locate(t, "plant")));
+    ScenarioError {
+        file: file.to_string(),
+        key,
+        line_col,
+        reason,
+    }
+}
+
+fn plant_error(text: &str, file: &str) -> ScenarioError {
+    let table = toml::from_str::<toml::Table>(text)
+        .ok()
+        .and_then(|mut t| t.remove("plant"));
+    match table {
+        Some(toml::Value::Table(t)) => plant_table_error(t, file, Some(text)),
+        _ => ScenarioError {
+            file: file.to_string(),
+            key: "plant".into(),
+            line_col: locate(text, "plant"),
+            reason: "must be a table".into(),
+        },
+    }
+}
+
 fn controller_error(text: &str, file: &str) -> ScenarioError {
     let table = toml::from_str::<toml::Table>(text)
         .ok()
@@ -444,8 +537,8 @@ mod tests {
         let s = Scenario::parse("").unwrap();
         assert_eq!(s.controller.kind(), "nnvsc");
         assert_eq!(s.simulation.step, 0.01);
-        assert_eq!(s.uncertainty.a_bias, 1.0);
-        assert_eq!(s.uncertainty.b_bias, 0.5);
+        assert_eq!(s.uncertainty_spec().a_bias, 1.0);
+        assert_eq!(s.uncertainty_spec().b_bias, 0.5);
         assert_eq!(s.surface().unwrap().p(), [90.0, 2600.0, 24000.0]);
         assert_eq!(s.sim_config().steps, 1000);
     }

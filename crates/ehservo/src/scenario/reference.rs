@@ -13,10 +13,21 @@
 //!
 //! "Prefiltered" is [`Prefiltered`]: four identical first-order lags of
 //! time constant `prefilter_tau` (s), so that θd is C³ and θ⃛d exists; it
-//! delays a ramp by 4·τ. A CSV file has the header `t,theta_deg` and at
-//! least two rows with strictly increasing times (s); its path is relative
-//! to the scenario file's directory. Before its first row θd is the first
-//! row's value, after its last the last's.
+//! delays a ramp by 4·τ. `prefilter_tau = 0` is no prefilter: the pieces
+//! themselves, with their slopes as θ̇d and zero θ̈d, θ⃛d (a raw step, as a
+//! signal generator gives it; only a law without the reference's
+//! derivatives, a PI, follows it sensibly). A CSV file has the header
+//! `t,theta_deg` and at least two rows with strictly increasing times (s);
+//! its path is relative to the scenario file's directory. Before its first
+//! row θd is the first row's value, after its last the last's.
+//!
+//! **Units follow the plant's axis.** On a rotary axis the keys are in
+//! degrees (`amplitude_deg`, `slope_deg_per_s`, `offset_deg`, a CSV's
+//! `theta_deg`); on a linear axis (a cylinder) the same keys in
+//! millimetres (`amplitude_mm`, `slope_mm_per_s`, `offset_mm`, a CSV's
+//! `y_mm`), and a key of the other unit is refused. `offset_*` (default 0)
+//! is added to every kind: a step then goes from the offset to offset +
+//! amplitude.
 //!
 //! The window over which `e_final_deg` is measured ([`ReferenceCfg::period`]):
 //! 1/f for `sine` and `square`, the slowest component's period for
@@ -27,6 +38,7 @@ use ehservo_core::math::DR;
 use ehservo_core::reference::{
     Chirp, Component, Knot, LagState, Multisine, Prefiltered, Reference, Sine, MAX_COMPONENTS,
 };
+use ehservo_sim::axis::Axis;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -73,7 +85,8 @@ impl ReferenceKind {
         }
     }
 
-    /// The keys this kind uses (besides `kind`).
+    /// The keys this kind uses (besides `kind` and `offset_*`), with
+    /// their rotary unit (a linear axis's are the same in mm).
     pub fn keys(self) -> &'static [&'static str] {
         match self {
             Self::Sine => &["amplitude_deg", "frequency_hz"],
@@ -95,8 +108,12 @@ impl ReferenceKind {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ComponentCfg {
-    /// Amplitude (deg).
-    pub amplitude_deg: f64,
+    /// Amplitude (deg) on a rotary axis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitude_deg: Option<f64>,
+    /// Amplitude (mm) on a linear axis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitude_mm: Option<f64>,
     /// Frequency (Hz).
     pub frequency_hz: f64,
     /// Phase (deg). Default 0.
@@ -113,9 +130,18 @@ pub struct ReferenceCfg {
     /// Default `"sine"`.
     #[serde(skip_serializing_if = "ReferenceKind::is_sine")]
     pub kind: ReferenceKind,
-    /// Amplitude (deg): sine, step, square, chirp.
+    /// Amplitude (deg): sine, step, square, chirp (a rotary axis).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub amplitude_deg: Option<f64>,
+    /// Amplitude (mm): sine, step, square, chirp (a linear axis).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub amplitude_mm: Option<f64>,
+    /// Offset added to every kind (deg; a rotary axis). Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_deg: Option<f64>,
+    /// Offset added to every kind (mm; a linear axis). Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_mm: Option<f64>,
     /// Frequency (Hz): sine, square.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frequency_hz: Option<f64>,
@@ -125,9 +151,12 @@ pub struct ReferenceCfg {
     /// The prefilter's time constant τ (s): step, ramp, square, csv.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prefilter_tau: Option<f64>,
-    /// The ramp's slope (deg/s).
+    /// The ramp's slope (deg/s; a rotary axis).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub slope_deg_per_s: Option<f64>,
+    /// The ramp's slope (mm/s; a linear axis).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slope_mm_per_s: Option<f64>,
     /// The chirp's start frequency (Hz).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub f0_hz: Option<f64>,
@@ -152,10 +181,14 @@ pub struct ReferenceCfg {
 struct ReferenceRaw {
     kind: ReferenceKind,
     amplitude_deg: Option<f64>,
+    amplitude_mm: Option<f64>,
+    offset_deg: Option<f64>,
+    offset_mm: Option<f64>,
     frequency_hz: Option<f64>,
     start: Option<f64>,
     prefilter_tau: Option<f64>,
     slope_deg_per_s: Option<f64>,
+    slope_mm_per_s: Option<f64>,
     f0_hz: Option<f64>,
     f1_hz: Option<f64>,
     duration: Option<f64>,
@@ -167,13 +200,24 @@ impl From<ReferenceRaw> for ReferenceCfg {
     fn from(r: ReferenceRaw) -> Self {
         let sine = r.kind == ReferenceKind::Sine;
         let fill = |v: Option<f64>, d: f64| if sine { v.or(Some(d)) } else { v };
+        // The paper's 5° is a rotary default: a sine in millimetres keeps
+        // its own amplitude.
+        let amplitude_deg = if r.amplitude_mm.is_some() {
+            r.amplitude_deg
+        } else {
+            fill(r.amplitude_deg, DEFAULT_AMPLITUDE_DEG)
+        };
         Self {
             kind: r.kind,
-            amplitude_deg: fill(r.amplitude_deg, DEFAULT_AMPLITUDE_DEG),
+            amplitude_deg,
+            amplitude_mm: r.amplitude_mm,
+            offset_deg: r.offset_deg,
+            offset_mm: r.offset_mm,
             frequency_hz: fill(r.frequency_hz, DEFAULT_FREQUENCY_HZ),
             start: r.start,
             prefilter_tau: r.prefilter_tau,
             slope_deg_per_s: r.slope_deg_per_s,
+            slope_mm_per_s: r.slope_mm_per_s,
             f0_hz: r.f0_hz,
             f1_hz: r.f1_hz,
             duration: r.duration,
@@ -225,10 +269,12 @@ impl ReferenceCfg {
         let f = |k: &'static str, set: bool| set.then_some(k);
         [
             f("amplitude_deg", self.amplitude_deg.is_some()),
+            f("amplitude_deg", self.amplitude_mm.is_some()),
             f("frequency_hz", self.frequency_hz.is_some()),
             f("start", self.start.is_some()),
             f("prefilter_tau", self.prefilter_tau.is_some()),
             f("slope_deg_per_s", self.slope_deg_per_s.is_some()),
+            f("slope_deg_per_s", self.slope_mm_per_s.is_some()),
             f("f0_hz", self.f0_hz.is_some()),
             f("f1_hz", self.f1_hz.is_some()),
             f("duration", self.duration.is_some()),
@@ -243,6 +289,44 @@ impl ReferenceCfg {
     /// The sine's amplitude (deg), or the default.
     fn amplitude(&self) -> f64 {
         self.amplitude_deg.unwrap_or(DEFAULT_AMPLITUDE_DEG)
+    }
+
+    /// The keys set in the unit that is not `axis`'s: the first one.
+    fn foreign_key(&self, axis: Axis) -> Option<&'static str> {
+        let comps = self.components.iter().flatten();
+        match axis {
+            Axis::Rotary => [
+                ("amplitude_mm", self.amplitude_mm.is_some()),
+                ("offset_mm", self.offset_mm.is_some()),
+                ("slope_mm_per_s", self.slope_mm_per_s.is_some()),
+                (
+                    "components",
+                    comps.clone().any(|c| c.amplitude_mm.is_some()),
+                ),
+            ],
+            Axis::Linear => [
+                ("amplitude_deg", self.amplitude_deg.is_some()),
+                ("offset_deg", self.offset_deg.is_some()),
+                ("slope_deg_per_s", self.slope_deg_per_s.is_some()),
+                (
+                    "components",
+                    comps.clone().any(|c| c.amplitude_deg.is_some()),
+                ),
+            ],
+        }
+        .into_iter()
+        .find_map(|(k, set)| set.then_some(k))
+    }
+
+    /// A key's name in `axis`'s unit (`amplitude_deg` → `amplitude_mm`).
+    fn unit_key(axis: Axis, rotary: &'static str) -> &'static str {
+        match (axis, rotary) {
+            (Axis::Rotary, k) => k,
+            (Axis::Linear, "amplitude_deg") => "amplitude_mm",
+            (Axis::Linear, "slope_deg_per_s") => "slope_mm_per_s",
+            (Axis::Linear, "offset_deg") => "offset_mm",
+            (Axis::Linear, k) => k,
+        }
     }
 
     /// The sine's or square's frequency (Hz), or the default.
@@ -293,29 +377,219 @@ impl ReferenceCfg {
     }
 
     /// Checks every key and builds the reference for a run of `horizon` (s)
-    /// whose |θ| limit is `theta_limit` (rad); a CSV file is read from
-    /// `base_dir` (the scenario file's directory) when its path is relative.
+    /// on a rotary axis whose |θ| limit is `theta_limit` (rad); a CSV file
+    /// is read from `base_dir` (the scenario file's directory) when its
+    /// path is relative.
     pub fn build(
         &self,
         horizon: f64,
         theta_limit: f64,
         base_dir: Option<&Path>,
     ) -> Result<AnyReference, Bad> {
+        self.build_on(Axis::Rotary, horizon, theta_limit, base_dir)
+    }
+
+    /// [`ReferenceCfg::build`] on `axis`: its keys in the axis's unit, its
+    /// values in the axis's SI unit (rad or m).
+    pub fn build_on(
+        &self,
+        axis: Axis,
+        horizon: f64,
+        theta_limit: f64,
+        base_dir: Option<&Path>,
+    ) -> Result<AnyReference, Bad> {
         let kind = self.kind;
+        let keys = || -> Vec<&'static str> {
+            kind.keys()
+                .iter()
+                .map(|k| Self::unit_key(axis, k))
+                .collect()
+        };
         if let Some(k) = self
             .set_keys()
             .into_iter()
             .find(|k| !kind.keys().contains(k))
         {
             return bad(
-                k,
+                Self::unit_key(axis, k),
                 format!(
                     "not used by kind `{}` (its keys: {})",
                     kind.name(),
-                    kind.keys().join(", ")
+                    keys().join(", ")
                 ),
             );
         }
+        if let Some(k) = self.foreign_key(axis) {
+            let (this, other) = match axis {
+                Axis::Rotary => ("rotary (in degrees)", "_deg"),
+                Axis::Linear => ("linear (in millimetres)", "_mm"),
+            };
+            return bad(
+                k,
+                format!("the plant's axis is {this}: give the {other} form of this key"),
+            );
+        }
+        let offset = match axis {
+            Axis::Rotary => finite("offset_deg", self.offset_deg.unwrap_or(0.0))?,
+            Axis::Linear => finite("offset_mm", self.offset_mm.unwrap_or(0.0))?,
+        };
+        let built = match axis {
+            Axis::Rotary => self.build_rotary(horizon, theta_limit, base_dir)?,
+            Axis::Linear => self.build_linear(horizon, base_dir)?,
+        };
+        Ok(if offset == 0.0 {
+            built
+        } else {
+            built.shifted(axis.to_si(offset))
+        })
+    }
+
+    /// The kinds on a linear axis, in millimetres.
+    fn build_linear(&self, horizon: f64, base_dir: Option<&Path>) -> Result<AnyReference, Bad> {
+        let kind = self.kind;
+        let mm = |v: f64| v / 1e3;
+        let amplitude = || -> Result<f64, Bad> {
+            let a = required(kind, "amplitude_mm", self.amplitude_mm)?;
+            finite("amplitude_mm", a)
+        };
+        let tau = || {
+            let t = required(kind, "prefilter_tau", self.prefilter_tau)?;
+            if t.is_finite() && t >= 0.0 {
+                Ok(t)
+            } else {
+                bad(
+                    "prefilter_tau",
+                    format!("must be finite and >= 0 (got {t:?})"),
+                )
+            }
+        };
+        let start = || finite("start", self.start.unwrap_or(0.0));
+        match kind {
+            ReferenceKind::Sine => {
+                let a = amplitude()?;
+                let f = positive("frequency_hz", self.frequency())?;
+                let mut s = Sine::from_deg_hz(0.0, f);
+                s.amplitude = mm(a);
+                Ok(AnyReference::Sine(s))
+            }
+            ReferenceKind::Step => {
+                let (a, t0) = (amplitude()?, start()?);
+                Table::reference(
+                    vec![Knot { t: t0, v: 0.0 }, Knot { t: t0, v: mm(a) }],
+                    tau()?,
+                )
+            }
+            ReferenceKind::Ramp => {
+                let slope = finite(
+                    "slope_mm_per_s",
+                    required(kind, "slope_mm_per_s", self.slope_mm_per_s)?,
+                )?;
+                let t0 = start()?;
+                let end = horizon.max(t0) + 1.0;
+                Table::reference(
+                    vec![
+                        Knot { t: t0, v: 0.0 },
+                        Knot {
+                            t: end,
+                            v: mm(slope) * (end - t0),
+                        },
+                    ],
+                    tau()?,
+                )
+            }
+            ReferenceKind::Square => {
+                let a = amplitude()?;
+                let f = positive("frequency_hz", self.frequency())?;
+                Table::reference(square_knots(mm(a), f, horizon)?, tau()?)
+            }
+            ReferenceKind::Chirp => {
+                let a = amplitude()?;
+                let f0 = positive("f0_hz", required(kind, "f0_hz", self.f0_hz)?)?;
+                let f1 = positive("f1_hz", required(kind, "f1_hz", self.f1_hz)?)?;
+                let d = positive("duration", required(kind, "duration", self.duration)?)?;
+                let c = Chirp::try_new(mm(a), f0, f1, d)
+                    .map_err(|e| ("reference".to_string(), format!("{}: {}", e.name, e.reason)))?;
+                Ok(AnyReference::Chirp(c))
+            }
+            ReferenceKind::Multisine => {
+                let comps = self.components(Axis::Linear)?;
+                let m = Multisine::try_new(&comps)
+                    .map_err(|e| ("reference.components".to_string(), e.to_string()))?;
+                Ok(AnyReference::Multisine(m))
+            }
+            ReferenceKind::Csv => {
+                let Some(file) = &self.file else {
+                    return bad("file", "is required by kind `csv`");
+                };
+                let tau = tau()?;
+                let path = match base_dir {
+                    Some(d) if Path::new(file).is_relative() => d.join(file),
+                    _ => PathBuf::from(file),
+                };
+                let knots = read_csv_on(&path, Axis::Linear)
+                    .map_err(|r| ("reference.file".to_string(), r))?;
+                Table::reference(knots, tau)
+            }
+        }
+    }
+
+    /// The multisine's components on `axis`, checked, in SI.
+    fn components(&self, axis: Axis) -> Result<Vec<Component>, Bad> {
+        let Some(cs) = &self.components else {
+            return bad("components", "is required by kind `multisine`");
+        };
+        if cs.is_empty() || cs.len() > MAX_COMPONENTS {
+            return bad(
+                "components",
+                format!(
+                    "must hold 1 to {MAX_COMPONENTS} components (got {})",
+                    cs.len()
+                ),
+            );
+        }
+        let akey = Self::unit_key(axis, "amplitude_deg");
+        let mut comps = Vec::with_capacity(cs.len());
+        for (i, c) in cs.iter().enumerate() {
+            let n = i + 1;
+            let what = |k: &str, r: &str, v: f64| {
+                bad::<Component>("components", format!("component {n}: {k} {r} (got {v:?})"))
+            };
+            let a = match axis {
+                Axis::Rotary => c.amplitude_deg,
+                Axis::Linear => c.amplitude_mm,
+            };
+            let Some(a) = a else {
+                return bad("components", format!("component {n}: {akey} is required"));
+            };
+            if !a.is_finite() {
+                what(akey, "must be finite", a)?;
+            }
+            if !(c.frequency_hz.is_finite() && c.frequency_hz > 0.0) {
+                what("frequency_hz", "must be finite and > 0", c.frequency_hz)?;
+            }
+            if !c.phase_deg.is_finite() {
+                what("phase_deg", "must be finite", c.phase_deg)?;
+            }
+            comps.push(Component {
+                amplitude: match axis {
+                    Axis::Rotary => a * DR,
+                    Axis::Linear => a / 1e3,
+                },
+                frequency: c.frequency_hz,
+                phase: c.phase_deg * DR,
+            });
+        }
+        Ok(comps)
+    }
+
+    /// The paper's kinds, in degrees, with their checks in their order.
+    fn build_rotary(
+        &self,
+        horizon: f64,
+        theta_limit: f64,
+        base_dir: Option<&Path>,
+    ) -> Result<AnyReference, Bad> {
+        let kind = self.kind;
         // |θd| ≤ `peak` (rad) over the run, checked against the limit.
         let within = |key: &str, peak: f64| -> Result<(), Bad> {
             if peak >= theta_limit {
@@ -328,10 +602,15 @@ impl ReferenceCfg {
             }
         };
         let tau = || {
-            positive(
-                "prefilter_tau",
-                required(kind, "prefilter_tau", self.prefilter_tau)?,
-            )
+            let t = required(kind, "prefilter_tau", self.prefilter_tau)?;
+            if t.is_finite() && t >= 0.0 {
+                Ok(t)
+            } else {
+                bad(
+                    "prefilter_tau",
+                    format!("must be finite and >= 0 (got {t:?})"),
+                )
+            }
         };
         let start = || finite("start", self.start.unwrap_or(0.0));
         match kind {
@@ -386,26 +665,7 @@ impl ReferenceCfg {
                 let a = finite("amplitude_deg", self.amplitude())?;
                 within("amplitude_deg", a.abs().to_radians())?;
                 let f = positive("frequency_hz", self.frequency())?;
-                let edges = (2.0 * f * horizon).ceil() + 1.0;
-                if 2.0 * edges + 2.0 > MAX_KNOTS as f64 {
-                    return bad(
-                        "frequency_hz",
-                        format!(
-                            "{edges:.3e} edges over the horizon, more than the limit of {}",
-                            MAX_KNOTS / 2 - 1
-                        ),
-                    );
-                }
-                let v = a * DR;
-                let mut knots = vec![Knot { t: 0.0, v: 0.0 }, Knot { t: 0.0, v }];
-                let mut level = v;
-                for m in 1..=edges as u64 {
-                    let t = m as f64 / (2.0 * f);
-                    knots.push(Knot { t, v: level });
-                    level = -level;
-                    knots.push(Knot { t, v: level });
-                }
-                Table::reference(knots, tau()?)
+                Table::reference(square_knots(a * DR, f, horizon)?, tau()?)
             }
             ReferenceKind::Chirp => {
                 let a = finite("amplitude_deg", self.amplitude())?;
@@ -418,42 +678,7 @@ impl ReferenceCfg {
                 Ok(AnyReference::Chirp(c))
             }
             ReferenceKind::Multisine => {
-                let Some(cs) = &self.components else {
-                    return bad("components", "is required by kind `multisine`");
-                };
-                if cs.is_empty() || cs.len() > MAX_COMPONENTS {
-                    return bad(
-                        "components",
-                        format!(
-                            "must hold 1 to {MAX_COMPONENTS} components (got {})",
-                            cs.len()
-                        ),
-                    );
-                }
-                let mut comps = Vec::with_capacity(cs.len());
-                for (i, c) in cs.iter().enumerate() {
-                    let n = i + 1;
-                    let what = |k: &str, r: &str, v: f64| {
-                        bad::<Component>(
-                            "components",
-                            format!("component {n}: {k} {r} (got {v:?})"),
-                        )
-                    };
-                    if !c.amplitude_deg.is_finite() {
-                        what("amplitude_deg", "must be finite", c.amplitude_deg)?;
-                    }
-                    if !(c.frequency_hz.is_finite() && c.frequency_hz > 0.0) {
-                        what("frequency_hz", "must be finite and > 0", c.frequency_hz)?;
-                    }
-                    if !c.phase_deg.is_finite() {
-                        what("phase_deg", "must be finite", c.phase_deg)?;
-                    }
-                    comps.push(Component {
-                        amplitude: c.amplitude_deg * DR,
-                        frequency: c.frequency_hz,
-                        phase: c.phase_deg * DR,
-                    });
-                }
+                let comps = self.components(Axis::Rotary)?;
                 within(
                     "components",
                     comps.iter().map(|c| c.amplitude.abs()).sum::<f64>(),
@@ -480,9 +705,41 @@ impl ReferenceCfg {
     }
 }
 
+/// The knots of a square wave of amplitude `v` (SI) and frequency `f`
+/// over `horizon`: 0 before t = 0, then +v, −v each half period.
+fn square_knots(v: f64, f: f64, horizon: f64) -> Result<Vec<Knot>, Bad> {
+    let edges = (2.0 * f * horizon).ceil() + 1.0;
+    if 2.0 * edges + 2.0 > MAX_KNOTS as f64 {
+        return bad(
+            "frequency_hz",
+            format!(
+                "{edges:.3e} edges over the horizon, more than the limit of {}",
+                MAX_KNOTS / 2 - 1
+            ),
+        );
+    }
+    let mut knots = vec![Knot { t: 0.0, v: 0.0 }, Knot { t: 0.0, v }];
+    let mut level = v;
+    for m in 1..=edges as u64 {
+        let t = m as f64 / (2.0 * f);
+        knots.push(Knot { t, v: level });
+        level = -level;
+        knots.push(Knot { t, v: level });
+    }
+    Ok(knots)
+}
+
 /// The rows of a reference CSV (`t,theta_deg`) as knots (s, rad). The
 /// error names the file, the line and the data row.
 pub fn read_csv(path: &Path) -> Result<Vec<Knot>, String> {
+    read_csv_on(path, Axis::Rotary)
+}
+
+/// The rows of a reference CSV on `axis` (`t,theta_deg` or `t,y_mm`) as
+/// knots (s, SI).
+pub fn read_csv_on(path: &Path, axis: Axis) -> Result<Vec<Knot>, String> {
+    let col = axis.column("", "");
+    let col = col.as_str();
     let name = path.display();
     let text =
         crate::input::read_text(path).map_err(|r| format!("the reference file {name} {r}"))?;
@@ -493,13 +750,13 @@ pub fn read_csv(path: &Path) -> Result<Vec<Knot>, String> {
         .filter(|(_, l)| !l.is_empty());
     let Some((hl, header)) = lines.next() else {
         return Err(format!(
-            "{name}: is empty: expected the header `t,theta_deg` and at least two rows"
+            "{name}: is empty: expected the header `t,{col}` and at least two rows"
         ));
     };
     let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-    if cols != ["t", "theta_deg"] {
+    if cols != ["t", col] {
         return Err(format!(
-            "{name}: line {hl}: expected the header `t,theta_deg`, got `{header}`"
+            "{name}: line {hl}: expected the header `t,{col}`, got `{header}`"
         ));
     }
     let mut knots: Vec<Knot> = Vec::new();
@@ -512,12 +769,12 @@ pub fn read_csv(path: &Path) -> Result<Vec<Knot>, String> {
         let fields: Vec<&str> = l.split(',').map(str::trim).collect();
         if fields.len() != 2 {
             return Err(format!(
-                "{at}: expected 2 columns (t, theta_deg), got {}",
+                "{at}: expected 2 columns (t, {col}), got {}",
                 fields.len()
             ));
         }
         let mut v = [0.0; 2];
-        for (j, col) in ["t", "theta_deg"].iter().enumerate() {
+        for (j, col) in ["t", col].iter().enumerate() {
             let x: f64 = fields[j].parse().map_err(|_| {
                 format!(
                     "{at}: cannot read `{}` in column {col} as a number",
@@ -542,7 +799,10 @@ pub fn read_csv(path: &Path) -> Result<Vec<Knot>, String> {
         }
         knots.push(Knot {
             t: v[0],
-            v: v[1] * DR,
+            v: match axis {
+                Axis::Rotary => v[1] * DR,
+                Axis::Linear => v[1] / 1e3,
+            },
         });
     }
     match knots.len() {
@@ -568,6 +828,22 @@ pub struct Table {
 impl Table {
     /// The knots through four lags of `tau`, as a reference.
     fn reference(knots: Vec<Knot>, tau: f64) -> Result<AnyReference, Bad> {
+        if tau == 0.0 {
+            // No prefilter: the pieces' slopes are θ̇d, and must be numbers.
+            for w in knots.windows(2) {
+                let dt = w[1].t - w[0].t;
+                if dt > 0.0 && !(w[1].v / dt - w[0].v / dt).is_finite() {
+                    return Err((
+                        "reference".into(),
+                        format!(
+                            "the reference changes by more than a double can hold per second at t = {}",
+                            w[1].t
+                        ),
+                    ));
+                }
+            }
+            return Ok(AnyReference::Pieces(Arc::new(knots)));
+        }
         let mut states = vec![[0.0; 4]; knots.len()];
         Prefiltered::fill_states(&knots, tau, &mut states)
             .map_err(|e| ("reference".to_string(), e.to_string()))?;
@@ -598,6 +874,10 @@ pub enum AnyReference {
     /// Step, ramp, square and CSV: knots through the prefilter (shared, so
     /// that cloning a set-up is cheap).
     Table(Arc<Table>),
+    /// Piecewise-linear knots without a prefilter (`prefilter_tau = 0`).
+    Pieces(Arc<Vec<Knot>>),
+    /// Another reference plus a constant offset (`offset_deg`, `offset_mm`).
+    Shifted(Arc<AnyReference>, f64),
 }
 
 impl AnyReference {
@@ -636,8 +916,59 @@ impl AnyReference {
             Self::Chirp(c) => c.z(t),
             Self::Multisine(m) => m.z(t),
             Self::Table(tb) => tb.prefiltered().z(t),
+            Self::Pieces(k) => pieces(k, t),
+            Self::Shifted(r, offset) => {
+                let mut z = r.z(t);
+                z[0] += offset;
+                z
+            }
         }
     }
+
+    /// This reference plus a constant `offset` (SI). A table's knots take
+    /// it themselves (the same z to round-off, no cost per evaluation).
+    pub fn shifted(self, offset: f64) -> AnyReference {
+        match self {
+            Self::Table(tb) => {
+                let knots = tb.knots.iter().map(|k| Knot {
+                    t: k.t,
+                    v: k.v + offset,
+                });
+                Table::reference(knots.collect(), tb.tau)
+                    .unwrap_or_else(|_| Self::Shifted(Arc::new(Self::Table(tb.clone())), offset))
+            }
+            Self::Pieces(k) => Self::Pieces(Arc::new(
+                k.iter()
+                    .map(|k| Knot {
+                        t: k.t,
+                        v: k.v + offset,
+                    })
+                    .collect(),
+            )),
+            other => Self::Shifted(Arc::new(other), offset),
+        }
+    }
+}
+
+/// Linear interpolation of `k` at `t` (held before the first knot and
+/// after the last; at a repeated time, the later knot), with its slope.
+fn pieces(k: &[Knot], t: f64) -> [f64; 4] {
+    let i = k.partition_point(|p| p.t <= t);
+    if i == 0 {
+        return [k[0].v, 0.0, 0.0, 0.0];
+    }
+    if i == k.len() {
+        return [k[i - 1].v, 0.0, 0.0, 0.0];
+    }
+    let (a, b) = (k[i - 1], k[i]);
+    let dt = b.t - a.t;
+    if dt.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return [b.v, 0.0, 0.0, 0.0];
+    }
+    // (b.v − a.v)/dt as two divisions, so a span of ±1e308 cannot overflow.
+    let slope = b.v / dt - a.v / dt;
+    let w = (t - a.t) / dt;
+    [(1.0 - w) * a.v + w * b.v, slope, 0.0, 0.0]
 }
 
 #[cfg(test)]

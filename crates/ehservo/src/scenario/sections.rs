@@ -1,34 +1,9 @@
 //! The sections of a scenario file, one type each, every key at the
 //! paper's Fig. 2 value by default.
 
-use ehservo_core::cylinder::CylinderParams;
-use ehservo_core::servo::ServoParams;
+use ehservo_sim::plant::{PhysicalSpec, UncertaintySpec};
 use ehservo_sim::simulation::Mode;
 use serde::{Deserialize, Serialize};
-
-/// The paper's plant model choice.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum PlantModel {
-    /// Eq. (8)–(9) in (θ, θ̇, θ̈).
-    ThirdOrder,
-    /// Eqs. (1)–(6) in (θ, θ̇, Pl).
-    Physical,
-    /// A valve-controlled double-rod cylinder on a rack and pinion
-    /// (`[plant.cylinder]`, docs/cylinder.md), in (y, ẏ, P1, P2).
-    Cylinder,
-}
-
-impl PlantModel {
-    /// The scenario's name of the model.
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            PlantModel::ThirdOrder => "third-order",
-            PlantModel::Physical => "physical",
-            PlantModel::Cylinder => "cylinder",
-        }
-    }
-}
 
 /// `[simulation]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -71,28 +46,84 @@ impl Default for SimulationCfg {
     }
 }
 
-/// `[plant]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// `[uncertainty]`: the true variation. The paper's keys (`a_bias`,
+/// `a_random`, `b_bias`, `b_random`, `b_reference`) are the third-order
+/// family's, at the Fig. 2 case by default (`a_bias = 1`, `b_bias = 0.5`);
+/// another plant refuses them and varies by `[uncertainty.physical]` alone
+/// (`ehservo_sim::uncertainty`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct PlantCfg {
-    /// `"third-order"` (default), `"physical"` or `"cylinder"`.
-    pub model: PlantModel,
-    /// `[plant.params]`: the physical parameters, SI, by the paper's symbol
-    /// (`Ps`, `beta_e`, `Vt`, `Kce`, `Dm`, `Jt`, `Bm`, `Kv`, `G`, `rho`, `Cd`, `Ag`).
-    pub params: ServoParams,
-    /// `[plant.cylinder]`: the cylinder's parameters (`model = "cylinder"`
-    /// only; the documented typical set when absent). The nominal model is
-    /// then derived from them and `[plant.params]` must not be given.
+pub struct UncertaintyCfg {
+    /// Bias fraction of α_i = |ā_i| (default 1, the Fig. 2 case).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub cylinder: Option<CylinderParams>,
+    pub a_bias: Option<f64>,
+    /// Random fraction of α_i (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub a_random: Option<f64>,
+    /// Bias fraction of β = b_reference·|b̄| (default 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub b_bias: Option<f64>,
+    /// Random fraction of β (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub b_random: Option<f64>,
+    /// The size the b fractions refer to, as a multiple of b̄ (default 0.5: β).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub b_reference: Option<f64>,
+    /// Seed of the random signal. Default 0.
+    pub seed: u64,
+    /// Hold period of the random signal (s). Default 0.01.
+    pub hold: f64,
+    /// `[uncertainty.physical]`: bias and random fractions of mass, bulk
+    /// modulus, leakage, supply pressure, friction and load.
+    #[serde(skip_serializing_if = "PhysicalSpec::is_none")]
+    pub physical: PhysicalSpec,
 }
 
-impl Default for PlantCfg {
+impl Default for UncertaintyCfg {
     fn default() -> Self {
         Self {
-            model: PlantModel::ThirdOrder,
-            params: ServoParams::paper(),
-            cylinder: None,
+            a_bias: None,
+            a_random: None,
+            b_bias: None,
+            b_random: None,
+            b_reference: None,
+            seed: 0,
+            hold: 0.01,
+            physical: PhysicalSpec::default(),
+        }
+    }
+}
+
+impl UncertaintyCfg {
+    /// The paper's keys by name, with what the table gives of them.
+    pub fn paper_keys(&self) -> [(&'static str, Option<f64>); 5] {
+        [
+            ("a_bias", self.a_bias),
+            ("a_random", self.a_random),
+            ("b_bias", self.b_bias),
+            ("b_random", self.b_random),
+            ("b_reference", self.b_reference),
+        ]
+    }
+
+    /// The spec for a plant of the third-order family (`paper`: the Fig. 2
+    /// case where a key is not given) or of another (the paper's form all
+    /// zero).
+    pub fn resolve(&self, paper: bool) -> UncertaintySpec {
+        let d = if paper {
+            UncertaintySpec::default()
+        } else {
+            UncertaintySpec::NONE
+        };
+        UncertaintySpec {
+            a_bias: self.a_bias.unwrap_or(d.a_bias),
+            a_random: self.a_random.unwrap_or(d.a_random),
+            b_bias: self.b_bias.unwrap_or(d.b_bias),
+            b_random: self.b_random.unwrap_or(d.b_random),
+            b_reference: self.b_reference.unwrap_or(d.b_reference),
+            seed: self.seed,
+            hold: self.hold,
+            physical: self.physical,
         }
     }
 }

@@ -62,7 +62,7 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
     };
     let e = |r: &RunRow| {
         r.metrics
-            .and_then(|m| if m.diverged { None } else { m.e_max_deg })
+            .and_then(|m| if m.diverged { None } else { m.e_max })
     };
     let unbounded = |r: &RunRow| r.metrics.is_some_and(|m| m.diverged);
 

@@ -434,7 +434,7 @@ impl Tune {
         let Some(m) = m else {
             return f64::INFINITY;
         };
-        let (Some(e), false) = (m.e_max_deg, m.diverged) else {
+        let (Some(e), false) = (m.e_max, m.diverged) else {
             return f64::INFINITY;
         };
         let p = &self.file.penalty;

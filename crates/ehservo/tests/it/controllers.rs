@@ -30,7 +30,7 @@ fn pid_alone_tracks_the_fig2_case_in_both_modes() {
         let s = scenario("", &mode).unwrap();
         let r = run(&s, Keep::Every(1)).unwrap();
         assert!(r.outcome.diverged.is_none(), "{mode:?}");
-        let e = r.metrics.e_max_deg.unwrap();
+        let e = r.metrics.e_max.unwrap();
         assert!(e < 0.5, "{mode:?}: e_max {e}°");
         // Its own parts, named: u = ff + p + i + d without a limit.
         let smp = &r.trace[500];
@@ -125,7 +125,7 @@ fn readme_simulation_snippet() -> Result<(), Box<dyn std::error::Error>> {
         p_seen += usize::from(sample.get("p").is_some());
     });
     assert_eq!(p_seen as u64, outcome.samples);
-    assert!(metrics.e_max_deg.is_some());
+    assert!(metrics.e_max.is_some());
     Ok(())
 }
 
@@ -143,7 +143,7 @@ fn adrc_tracks_the_fig2_case() {
         let s = scenario(text, &set).unwrap();
         let r = run(&s, Keep::Every(1)).unwrap();
         assert!(r.outcome.diverged.is_none(), "{set:?}");
-        let e = r.metrics.e_max_deg.unwrap();
+        let e = r.metrics.e_max.unwrap();
         eprintln!("adrc {set:?}: e_max {e}°");
         assert!(e < 5.0, "{set:?}: e_max {e}°");
         let smp = &r.trace[r.trace.len() / 2];
@@ -166,7 +166,7 @@ fn sta_tracks_the_fig2_case() {
         let s = scenario(text, &set).unwrap();
         let r = run(&s, Keep::Every(1)).unwrap();
         assert!(r.outcome.diverged.is_none(), "{set:?}");
-        let e = r.metrics.e_max_deg.unwrap();
+        let e = r.metrics.e_max.unwrap();
         eprintln!("sta {set:?}: e_max {e}°");
         assert!(e < 0.5, "{set:?}: e_max {e}°");
         let smp = &r.trace[r.trace.len() / 2];
@@ -185,7 +185,7 @@ fn fig2(set: &[&str]) -> (f64, Vec<ehservo_sim::simulation::Sample>) {
     let s = scenario("", set).unwrap();
     let r = run(&s, Keep::Every(1)).unwrap();
     assert!(r.outcome.diverged.is_none(), "{set:?} diverged");
-    (r.metrics.e_max_deg.unwrap(), r.trace)
+    (r.metrics.e_max.unwrap(), r.trace)
 }
 
 /// `kind = "arc"` on the Fig. 2 case (a_i = 2ā_i, at the top of the

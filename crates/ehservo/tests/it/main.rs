@@ -13,7 +13,6 @@ mod breaking_scan;
 mod cli;
 mod cluster;
 mod controllers;
-mod cylinder;
 mod faults;
 mod golden;
 mod independent;

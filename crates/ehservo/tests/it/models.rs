@@ -2,17 +2,18 @@
 //! system written in two sets of coordinates: with the same input they must
 //! give the same θ(t), to integration accuracy.
 
-use ehservo::plant::{PhysicalPlant, Plant, ThirdOrderPlant, Variation};
+use ehservo::physical::PhysicalVariation;
+use ehservo::plant::{Factors, PhysicalPlant, Plant, ThirdOrderPlant, Variation};
 use ehservo::run::{run, Keep};
-use ehservo::scenario::{PlantModel, Scenario};
+use ehservo::scenario::{PlantCfg, Scenario};
 use ehservo_core::rk4::rk4_step;
 use ehservo_core::servo::{Load, ServoParams};
 
 /// θ(t) on a grid, for an open-loop input u(t) = 0.2·sin(2πt) V held over
 /// each step, integrated by RK4 with step h.
-fn open_loop<P: Plant>(plant: &P, h: f64, horizon: f64, v: &Variation) -> Vec<f64> {
+fn open_loop<P: Plant>(plant: &P, h: f64, horizon: f64, v: &P::Variation) -> Vec<f64> {
     let n = (horizon / h).round() as usize;
-    let mut s = plant.initial_state([0.0; 3]);
+    let mut s = plant.initial_state([0.0; 3], v);
     let mut out = vec![0.0];
     for k in 0..n {
         let t = k as f64 * h;
@@ -23,9 +24,17 @@ fn open_loop<P: Plant>(plant: &P, h: f64, horizon: f64, v: &Variation) -> Vec<f6
             &mut s,
             h,
         );
-        out.push(plant.measure(&s)[0]);
+        out.push(plant.measure(t + h, &s, v)[0]);
     }
     out
+}
+
+/// The physical plant's form of the paper's variation.
+fn phys(v: &Variation) -> PhysicalVariation {
+    PhysicalVariation {
+        paper: *v,
+        factors: Factors::ONE,
+    }
 }
 
 fn max_diff(a: &[f64], b: &[f64], every: usize) -> f64 {
@@ -44,7 +53,7 @@ fn same_theta_open_loop_without_variation() {
     let v = Variation::NONE;
     // Both at h = 1e-4 over 2 s.
     let a = open_loop(&third, 1e-4, 2.0, &v);
-    let b = open_loop(&phys, 1e-4, 2.0, &v);
+    let b = open_loop(&phys, 1e-4, 2.0, &self::phys(&v));
     let amp = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let d = max_diff(&a, &b, 1);
     // θ reaches ~0.3 rad; the two coordinate systems differ only by RK4's
@@ -62,7 +71,7 @@ fn same_theta_open_loop_without_variation() {
     // And the gap shrinks with the step, as integration error must:
     // h = 1e-3 vs the fine run of each model.
     let a3 = open_loop(&third, 1e-3, 2.0, &v);
-    let b3 = open_loop(&phys, 1e-3, 2.0, &v);
+    let b3 = open_loop(&phys, 1e-3, 2.0, &self::phys(&v));
     let err_third = max_diff(&a, &a3, 10);
     let err_phys = max_diff(&b, &b3, 10);
     let gap = max_diff(&a3, &b3, 1);
@@ -82,7 +91,7 @@ fn same_theta_open_loop_with_the_fig2_variation() {
         db_rel: 0.25,
     };
     let a = open_loop(&ThirdOrderPlant::new(p, Load::paper()), 1e-4, 1.0, &v);
-    let b = open_loop(&PhysicalPlant::new(p, Load::paper()), 1e-4, 1.0, &v);
+    let b = open_loop(&PhysicalPlant::new(p, Load::paper()), 1e-4, 1.0, &phys(&v));
     let amp = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let d = max_diff(&a, &b, 1);
     assert!(amp > 0.01);
@@ -96,7 +105,7 @@ fn same_closed_loop_fig2_on_both_models() {
         Scenario::parse("[simulation]\nmode = \"continuous\"\nstep = 1e-4\nhorizon = 3.0\n")
             .unwrap();
     let third = run(&s, Keep::Every(100)).unwrap();
-    s.plant.model = PlantModel::Physical;
+    s.plant = PlantCfg::default_of("physical").unwrap();
     let phys = run(&s, Keep::Every(100)).unwrap();
     assert!(!third.metrics.diverged && !phys.metrics.diverged);
     let d = third

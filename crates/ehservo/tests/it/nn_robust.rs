@@ -32,7 +32,7 @@ fn league_scenarios_track_the_fig2_case() {
     for law in ["sigma-mod", "e-mod", "projection"] {
         let r = run_file(&format!("scenarios/league/nn-robust-{law}-fig2.toml"), &[]);
         assert!(r.outcome.diverged.is_none(), "{law}");
-        let e = r.metrics.e_max_deg.unwrap();
+        let e = r.metrics.e_max.unwrap();
         assert!(e < 0.5, "{law}: e_max {e}°");
         let smp = &r.trace[500];
         assert!(smp.get("sigma_delta").is_some() && smp.get("leak").is_some());

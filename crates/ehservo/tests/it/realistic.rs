@@ -116,7 +116,7 @@ fn estimators_in_the_loop_track_the_true_rate() {
             .trace
             .iter()
             .all(|x| x.x_ctrl[1] == x.x_est[1] && x.x_ctrl[2] == x.x_est[2]));
-        assert!(r.metrics.e_max_deg.unwrap() < 1.0, "{est}");
+        assert!(r.metrics.e_max.unwrap() < 1.0, "{est}");
     }
 }
 
@@ -140,7 +140,7 @@ fn delays_of_whole_samples() {
     // Whatever they do to accuracy (docs/realistic.md), the loop stays
     // bounded at 1 ms with four samples of delay in all.
     assert!(r.outcome.diverged.is_none());
-    assert!(r.metrics.e_max_deg.is_some());
+    assert!(r.metrics.e_max.is_some());
 }
 
 /// The study of docs/realistic.md reproduces from the shipped files: the

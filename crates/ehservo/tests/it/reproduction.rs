@@ -60,42 +60,27 @@ const CHOSEN: [&str; 3] = [
 #[test]
 fn default_reading_figures() {
     // Sampled at 0.01 s, one RK4 step per sample, Δb = 0.5β (SPEC's reading).
-    within(
-        "fig2 e_max",
-        metrics("fig2.toml", &[]).e_max_deg,
-        0.2091,
-        0.01,
-    );
+    within("fig2 e_max", metrics("fig2.toml", &[]).e_max, 0.2091, 0.01);
     within(
         "γ1 = 200 e_max",
-        metrics("gamma1-200.toml", &[]).e_max_deg,
+        metrics("gamma1-200.toml", &[]).e_max,
         0.1070,
         0.01,
     );
-    within(
-        "η = 0 e_max",
-        metrics("eta0.toml", &[]).e_max_deg,
-        0.0191,
-        0.01,
-    );
+    within("η = 0 e_max", metrics("eta0.toml", &[]).e_max, 0.0191, 0.01);
     within(
         "(ε0, ε1) = (1, 0.5)",
-        metrics("eps-1-0.5.toml", &[]).e_max_deg,
+        metrics("eps-1-0.5.toml", &[]).e_max,
         0.2063,
         0.01,
     );
     within(
         "(ε0, ε1) = (5, 2)",
-        metrics("eps-5-2.toml", &[]).e_max_deg,
+        metrics("eps-5-2.toml", &[]).e_max,
         0.1939,
         0.01,
     );
-    within(
-        "fig8 e_max",
-        metrics("fig8.toml", &[]).e_max_deg,
-        0.2646,
-        0.01,
-    );
+    within("fig8 e_max", metrics("fig8.toml", &[]).e_max, 0.2646, 0.01);
     // The traditional VSC diverges: at 40 % bias after 1.77 s, on the Fig. 2
     // case after 0.09 s (the latter also in the independent implementation).
     assert_eq!(metrics("fig3.toml", &[]).diverged_at_s, Some(1.77));
@@ -105,7 +90,7 @@ fn default_reading_figures() {
 #[test]
 fn the_continuous_reading_with_db_beta_gives_the_papers_fig2_and_fig4_numbers() {
     // Paper: 0.08° and 0.05°. Measured 0.0757° and 0.0449°.
-    let f2 = metrics("fig2.toml", &CHOSEN).e_max_deg;
+    let f2 = metrics("fig2.toml", &CHOSEN).e_max;
     within("fig2 e_max (chosen reading)", f2, 0.0757, 0.01);
     within(
         "fig2 e_max against the paper's 0.08° ± 25 %",
@@ -113,13 +98,13 @@ fn the_continuous_reading_with_db_beta_gives_the_papers_fig2_and_fig4_numbers() 
         0.08,
         0.25,
     );
-    let g = metrics("gamma1-200.toml", &CHOSEN).e_max_deg;
+    let g = metrics("gamma1-200.toml", &CHOSEN).e_max;
     within("γ1 = 200 e_max (chosen reading)", g, 0.0449, 0.01);
     within("γ1 = 200 against the paper's 0.05° ± 25 %", g, 0.05, 0.25);
     // η = 0: smaller than Fig. 2 as the paper says, but not the paper's 0.05°.
     within(
         "η = 0 e_max (chosen reading)",
-        metrics("eta0.toml", &CHOSEN).e_max_deg,
+        metrics("eta0.toml", &CHOSEN).e_max,
         0.0115,
         0.01,
     );
@@ -128,10 +113,10 @@ fn the_continuous_reading_with_db_beta_gives_the_papers_fig2_and_fig4_numbers() 
 #[test]
 fn gains_and_variations_move_the_error_the_way_the_paper_says() {
     for reading in [&[][..], &CHOSEN[..]] {
-        let f2 = metrics("fig2.toml", reading).e_max_deg.unwrap();
-        let g = metrics("gamma1-200.toml", reading).e_max_deg.unwrap();
-        let e0 = metrics("eta0.toml", reading).e_max_deg.unwrap();
-        let f8 = metrics("fig8.toml", reading).e_max_deg.unwrap();
+        let f2 = metrics("fig2.toml", reading).e_max.unwrap();
+        let g = metrics("gamma1-200.toml", reading).e_max.unwrap();
+        let e0 = metrics("eta0.toml", reading).e_max.unwrap();
+        let f8 = metrics("fig8.toml", reading).e_max.unwrap();
         assert!(g < f2, "{reading:?}: γ1 = 200 gives {g} ≥ Fig. 2's {f2}");
         assert!(e0 < f2, "{reading:?}: η = 0 gives {e0} ≥ Fig. 2's {f2}");
         assert!(f8 > f2, "{reading:?}: Fig. 8 gives {f8} ≤ Fig. 2's {f2}");
@@ -149,7 +134,7 @@ fn the_printed_sampled_setup_is_not_converged() {
         .iter()
         .map(|n| {
             metrics("fig2.toml", &[&format!("simulation.substeps={n}")])
-                .e_max_deg
+                .e_max
                 .unwrap()
         })
         .collect();
@@ -172,8 +157,8 @@ fn the_traditional_vsc_sampled_with_a_converged_plant_is_bounded_but_does_not_tr
     for (file, want) in [("fig3.toml", 13.10), ("vsc-fig2.toml", 10.34)] {
         let m = metrics(file, &["simulation.substeps=8"]);
         assert!(!m.diverged, "{file}");
-        within(file, m.e_max_deg, want, 0.01);
-        assert!(m.e_max_deg.unwrap() > 5.0);
+        within(file, m.e_max, want, 0.01);
+        assert!(m.e_max.unwrap() > 5.0);
     }
 }
 
@@ -354,7 +339,7 @@ atol = { e_max_deg = 0.002, sigma_rms = 0.01, chattering = 0.01, w_drift = 0.001
         .unwrap()
         .metrics
         .base
-        .e_max_deg;
+        .e_max;
     assert_eq!(st.cases[0].e_max_deg[1], single);
     let ids: Vec<&str> = st.claims.iter().map(|c| c.claim.as_str()).collect();
     assert_eq!(ids, ["fig8-emax", "fig8-twice", "fig8-smooth"]);
@@ -377,7 +362,7 @@ fn the_continuous_vsc_is_an_ideal_sliding_mode() {
                 &format!("simulation.step={h:e}"),
             ],
         )
-        .e_max_deg
+        .e_max
         .unwrap()
     };
     let (a, b) = (at(0.01 / 128.0), at(0.01 / 256.0));

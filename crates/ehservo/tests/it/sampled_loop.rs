@@ -2,7 +2,7 @@
 //! `SampledController::step` once per sample, plant integrated under the
 //! held command. Same numbers, bit for bit.
 
-use ehservo::plant::{Plant, ThirdOrderPlant, UncertaintySignal, UncertaintySpec};
+use ehservo::plant::{Plant, ThirdOrderPlant, UncertaintySpec, Varying};
 use ehservo::run::{run, Keep};
 use ehservo::scenario::Scenario;
 use ehservo_core::prelude::*;
@@ -23,13 +23,13 @@ fn sampled_mode_equals_the_core_fixed_rate_loop() {
     .unwrap();
     let mut ctl = SampledController::new(nn, 0.01).unwrap();
     let reference = Sine::paper();
-    let mut unc = UncertaintySignal::new(
+    let mut unc = Varying::new(
+        &plant,
         UncertaintySpec {
             a_bias: 1.0,
             b_bias: 0.5,
             ..UncertaintySpec::NONE
         },
-        params.coefficients().as_array(),
     );
     let mut x = [0.0; 3];
     for (k, smp) in sim.trace.iter().enumerate() {
@@ -38,7 +38,7 @@ fn sampled_mode_equals_the_core_fixed_rate_loop() {
         assert_eq!(out.u.to_bits(), smp.u.to_bits(), "u differs at k = {k}");
         for j in 0..4 {
             let ts = t + j as f64 * 0.0025;
-            let v = unc.at(ts);
+            let v = unc.at(&plant, ts);
             rk4_step(
                 |tt, y: &[f64; 3], dy: &mut [f64; 3]| plant.deriv(tt, y, out.u, &v, dy),
                 ts,

@@ -74,7 +74,7 @@ fn a_quantised_sensor_changes_what_the_controller_sees() {
     .unwrap();
     assert!(coarse.outcome.diverged.is_none());
     assert_ne!(
-        exact.metrics.e_max_deg, coarse.metrics.e_max_deg,
+        exact.metrics.e_max, coarse.metrics.e_max,
         "quantisation changed nothing"
     );
     let off_grid = coarse

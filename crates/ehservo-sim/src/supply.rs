@@ -1,0 +1,346 @@
+//! The hydraulic supply: a fixed pressure, or a fixed-displacement pump
+//! into a line volume with a pressure-relief valve, and the tank.
+//!
+//! ```text
+//! fixed:  Ps = const
+//! pump:   (V_s/βe)·Ṗs = Q_pump − Q_P − Q_relief
+//!         Q_pump   = D·n/(2π) − C_lp·(Ps − Pt)
+//!         ẋr       = (clamp(x_s(Ps), 0, x_max) − xr)/τ
+//!         x_s(p)   = (p − p_max)/(C_s + C_f·(p − Pt)),  C_s = √p_nom/k_cs,  C_f = 1/(k_cf·√p_nom)
+//!         Q_relief = xr·√(Ps − Pt)  (Ps > Pt; a relief valve does not pass flow back)
+//!         x_max    = q_nom/√p_nom,  p_nom = 7 MPa
+//! ```
+//!
+//! Q_P is what the 4/3 valve draws ([`crate::valve::Flows::p`]). The pump
+//! and relief valve are Hopsan's `HydraulicFixedDisplacementPump` (its flow
+//! `dp·n/(2π) + Clp·(p1 − p2)` from the inlet p1 to the outlet p2) and
+//! `HydraulicPressureReliefValve` (its steady characteristic `b1 = Cs +
+//! (p1 − p2)·Cf`, `xs = (p1 − p_max)/b1`, the first-order filter of time
+//! constant `tao` limited to `[0, x0max]`, `x0max = q_nom/√p_nom`, `Cs =
+//! √p_nom/k_cs`, `Cf = 1/(k_cf·√p_nom)`, `p_nom = 7e6`, the turbulent flow
+//! `q = x0·√Δp`), read without their transmission-line terms (Hopsan/hopsan,
+//! componentLibraries/defaultLibrary/Hydraulic/Pumps&Motors/
+//! HydraulicFixedDisplacementPump.hpp and Valves/PressureControlValves/
+//! HydraulicPressureReliefValve.hpp; docs/hopsan/position-servo.md has the
+//! lines). Hopsan's relief hysteresis (`p_h`) is not modelled: the key is
+//! refused unless 0. The line volume is Hopsan's `HydraulicVolumeMultiPort`
+//! read the same way, `(V/βe)·ṗ = Σ q`.
+
+use serde::{Deserialize, Serialize};
+
+/// The rated pressure of Hopsan's relief characteristic, `mPnom = 7e6f`
+/// (HydraulicPressureReliefValve.hpp, `initialize`).
+pub const RELIEF_P_NOM: f64 = 7e6;
+
+/// `[plant.supply]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum SupplyCfg {
+    /// A constant supply pressure.
+    Fixed {
+        /// Ps (Pa).
+        pressure: f64,
+        /// Tank pressure Pt (Pa). Default 0.
+        #[serde(default)]
+        tank_pressure: f64,
+    },
+    /// A fixed-displacement pump, a line volume and a relief valve.
+    Pump {
+        /// Displacement D (m³/rev).
+        displacement: f64,
+        /// Shaft speed n (rad/s).
+        speed: f64,
+        /// Leakage coefficient C_lp (m³/(s·Pa)). Default 0.
+        #[serde(default)]
+        leakage: f64,
+        /// Line volume V_s (m³).
+        volume: f64,
+        /// The line's bulk modulus (Pa); default the fluid's.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bulk_modulus: Option<f64>,
+        /// Relief cracking pressure p_max (Pa).
+        relief_pressure: f64,
+        /// Relief spool time constant τ (s).
+        relief_time_constant: f64,
+        /// Relief characteristic due to the spring, k_cs ((m³/s)/Pa).
+        relief_k_cs: f64,
+        /// Relief characteristic due to flow forces, k_cf ((m³/s)/Pa).
+        relief_k_cf: f64,
+        /// Relief flow at full opening and 7 MPa, q_nom (m³/s).
+        relief_q_nom: f64,
+        /// Tank pressure Pt (Pa). Default 0.
+        #[serde(default)]
+        tank_pressure: f64,
+        /// Ps(0) (Pa); default the tank pressure.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        initial_pressure: Option<f64>,
+    },
+}
+
+impl Default for SupplyCfg {
+    fn default() -> Self {
+        SupplyCfg::Fixed {
+            pressure: 0.0,
+            tank_pressure: 0.0,
+        }
+    }
+}
+
+/// The validated supply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Supply {
+    /// Ps constant.
+    Fixed {
+        /// Ps (Pa).
+        ps: f64,
+    },
+    /// The pump, line and relief valve.
+    Pump(Pump),
+}
+
+/// A pump supply's constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pump {
+    /// D·n/(2π) (m³/s).
+    pub q_ideal: f64,
+    /// C_lp.
+    pub leakage: f64,
+    /// βe/V_s (Pa/m³).
+    pub stiffness: f64,
+    /// βe of the line (Pa).
+    pub beta: f64,
+    /// V_s (m³).
+    pub volume: f64,
+    /// p_max.
+    pub p_max: f64,
+    /// 1/τ.
+    pub rate: f64,
+    /// C_s.
+    pub cs: f64,
+    /// C_f.
+    pub cf: f64,
+    /// x_max of the relief.
+    pub x_max: f64,
+    /// Ps(0).
+    pub p0: f64,
+}
+
+impl Supply {
+    /// Validates `[plant.supply]` (the fluid's bulk modulus as the line's
+    /// default). Returns the supply and the tank pressure; the error is the
+    /// key inside `[plant.supply]` and the reason.
+    pub fn try_new(c: &SupplyCfg, beta: f64) -> Result<(Supply, f64), (String, String)> {
+        let pos = |k: &str, v: f64| -> Result<f64, (String, String)> {
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err((k.to_string(), format!("must be finite and > 0 (got {v:?})")))
+            }
+        };
+        let nonneg = |k: &str, v: f64| -> Result<f64, (String, String)> {
+            if v.is_finite() && v >= 0.0 {
+                Ok(v)
+            } else {
+                Err((
+                    k.to_string(),
+                    format!("must be finite and >= 0 (got {v:?})"),
+                ))
+            }
+        };
+        match *c {
+            SupplyCfg::Fixed {
+                pressure,
+                tank_pressure,
+            } => {
+                let ps = pos("pressure", pressure)?;
+                let pt = nonneg("tank_pressure", tank_pressure)?;
+                if pt >= ps {
+                    return Err((
+                        "tank_pressure".into(),
+                        format!("must be below the supply pressure {ps} Pa (got {pt})"),
+                    ));
+                }
+                Ok((Supply::Fixed { ps }, pt))
+            }
+            SupplyCfg::Pump {
+                displacement,
+                speed,
+                leakage,
+                volume,
+                bulk_modulus,
+                relief_pressure,
+                relief_time_constant,
+                relief_k_cs,
+                relief_k_cf,
+                relief_q_nom,
+                tank_pressure,
+                initial_pressure,
+            } => {
+                let d = pos("displacement", displacement)?;
+                let n = pos("speed", speed)?;
+                let cl = nonneg("leakage", leakage)?;
+                let v = pos("volume", volume)?;
+                let b = pos("bulk_modulus", bulk_modulus.unwrap_or(beta))?;
+                let p_max = pos("relief_pressure", relief_pressure)?;
+                let tau = pos("relief_time_constant", relief_time_constant)?;
+                let kcs = pos("relief_k_cs", relief_k_cs)?;
+                let kcf = pos("relief_k_cf", relief_k_cf)?;
+                let qn = pos("relief_q_nom", relief_q_nom)?;
+                let pt = nonneg("tank_pressure", tank_pressure)?;
+                if pt >= p_max {
+                    return Err((
+                        "tank_pressure".into(),
+                        format!("must be below the relief pressure {p_max} Pa (got {pt})"),
+                    ));
+                }
+                let p0 = match initial_pressure {
+                    None => pt,
+                    Some(p) => nonneg("initial_pressure", p)?,
+                };
+                let sq = RELIEF_P_NOM.sqrt();
+                Ok((
+                    Supply::Pump(Pump {
+                        q_ideal: d * n / (2.0 * core::f64::consts::PI),
+                        leakage: cl,
+                        stiffness: b / v,
+                        beta: b,
+                        volume: v,
+                        p_max,
+                        rate: 1.0 / tau,
+                        cs: sq / kcs,
+                        cf: 1.0 / (kcf * sq),
+                        x_max: qn / sq,
+                        p0,
+                    }),
+                    pt,
+                ))
+            }
+        }
+    }
+
+    /// The pressure the relief valve holds with the pump's whole flow
+    /// through it (Pa): the steady Ps with the 4/3 valve closed, found by
+    /// bisection; the fixed pressure for a fixed supply.
+    pub fn holding_pressure(&self, pt: f64) -> f64 {
+        match self {
+            Supply::Fixed { ps } => *ps,
+            Supply::Pump(p) => {
+                // Q_pump(Ps) = Q_relief(Ps) at the steady opening, both
+                // monotone in Ps: bisection over [p_max, p_max + 1e9 Pa],
+                // 200 halvings at most (far below the ulp of the bracket).
+                let f = |ps: f64| {
+                    let x = p.steady_opening(ps, pt);
+                    p.q_pump(ps, pt) - x * (ps - pt).max(0.0).sqrt()
+                };
+                let (mut lo, mut hi) = (p.p_max, p.p_max + 1e9);
+                if f(lo) <= 0.0 {
+                    return lo;
+                }
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        break;
+                    }
+                    if f(mid) > 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                0.5 * (lo + hi)
+            }
+        }
+    }
+}
+
+impl Pump {
+    /// The pump's delivery at Ps (m³/s).
+    #[inline]
+    pub fn q_pump(&self, ps: f64, pt: f64) -> f64 {
+        self.q_ideal - self.leakage * (ps - pt)
+    }
+
+    /// The relief's steady opening at Ps, limited to [0, x_max].
+    #[inline]
+    pub fn steady_opening(&self, ps: f64, pt: f64) -> f64 {
+        let dp = ps - pt;
+        let b1 = if dp * self.cf < 0.0 {
+            self.cs
+        } else {
+            self.cs + dp * self.cf
+        };
+        ((ps - self.p_max) / b1).clamp(0.0, self.x_max)
+    }
+
+    /// The relief's flow at Ps with the opening `x`.
+    #[inline]
+    pub fn q_relief(&self, x: f64, ps: f64, pt: f64) -> f64 {
+        x.max(0.0) * (ps - pt).max(0.0).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hopsan_pump() -> (Supply, f64) {
+        // The values of Hopsan's Position Servo (docs/hopsan/position-servo.md).
+        Supply::try_new(
+            &SupplyCfg::Pump {
+                displacement: 25e-5,
+                speed: 200.0,
+                leakage: 1e-12,
+                volume: 1e-3,
+                bulk_modulus: Some(1e9),
+                relief_pressure: 2e7,
+                relief_time_constant: 1e-3,
+                relief_k_cs: 1e-8,
+                relief_k_cf: 1e-8,
+                relief_q_nom: 0.01,
+                tank_pressure: 1e5,
+                initial_pressure: None,
+            },
+            1e9,
+        )
+        .unwrap()
+    }
+
+    /// The holding pressure balances the pump's flow against the relief's
+    /// steady flow, checked here by hand at the returned pressure.
+    #[test]
+    fn holding_pressure_balances_pump_and_relief() {
+        let (s, pt) = hopsan_pump();
+        let Supply::Pump(p) = s else { unreachable!() };
+        let ps = s.holding_pressure(pt);
+        assert!(ps > p.p_max);
+        // Q_pump = 25e-5·200/(2π) − 1e-12·(Ps − Pt).
+        let q = 25e-5 * 200.0 / (2.0 * core::f64::consts::PI) - 1e-12 * (ps - pt);
+        let sq = 7e6_f64.sqrt();
+        let b1 = sq / 1e-8 + (ps - pt) / (1e-8 * sq);
+        let x = ((ps - 2e7) / b1).min(0.01 / sq);
+        let qr = x * (ps - pt).sqrt();
+        assert!((q - qr).abs() <= 1e-9 * q, "{q} vs {qr}");
+    }
+
+    #[test]
+    fn bad_keys_are_named() {
+        let e = Supply::try_new(
+            &SupplyCfg::Fixed {
+                pressure: 1e7,
+                tank_pressure: 2e7,
+            },
+            1e9,
+        )
+        .unwrap_err();
+        assert_eq!(e.0, "tank_pressure");
+        let e = Supply::try_new(
+            &SupplyCfg::Fixed {
+                pressure: -1.0,
+                tank_pressure: 0.0,
+            },
+            1e9,
+        )
+        .unwrap_err();
+        assert_eq!(e.0, "pressure");
+    }
+}
