@@ -245,6 +245,27 @@ mod tests {
         assert!((hd - shifted).norm() / hc.norm() < 1e-4, "{hd} vs {shifted}");
     }
 
+    /// The frequency-domain start recovers the paper's coefficients from
+    /// their exact discrete response (coherence 1) to within the
+    /// half-sample approximation of the hold.
+    #[test]
+    fn frequency_fit_of_an_exact_response() {
+        let (a, b, h) = ([0.39982, 13000.2711, 169.98043], 17911.75, 1e-3);
+        let f: Vec<f64> = (1..200).map(|k| k as f64 * 0.25).collect();
+        let frf = Frf {
+            h: discrete_response(a, b, h, &f),
+            coherence: vec![1.0; f.len()],
+            f_hz: f,
+            segment: 4000,
+            averages: 1,
+            method: "H1",
+        };
+        let p = frequency_fit(&frf, h).expect("a fit");
+        assert!((p[1] / a[1] - 1.0).abs() < 0.01, "{p:?}");
+        assert!((p[2] / a[2] - 1.0).abs() < 0.01, "{p:?}");
+        assert!((p[3] / b - 1.0).abs() < 0.01, "{p:?}");
+    }
+
     /// (s + 2)(s² + 2·0.3·10·s + 100) = s³ + 8s² + 112s + 200.
     #[test]
     fn pair_of_a_known_cubic() {
