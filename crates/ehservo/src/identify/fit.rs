@@ -312,6 +312,7 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             .collect();
         let base: Vec<f64> = params.iter().map(|p| p.value).collect();
         let x0: Vec<f64> = free.iter().map(|&j| params[j].to_x(params[j].value)).collect();
+        let x_start = x0.clone();
         let mut r0 = Vec::new();
         let ok = problem.residuals(&base, &mut r0) && r0.iter().all(|v| v.is_finite());
         if !ok {
@@ -369,6 +370,11 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
                 .enumerate()
                 .fold((0, -1.0), |a, (i, v)| if v.abs() > a.1 { (i, v.abs()) } else { a });
             let j = free[k];
+            // Back to where the round started: along a direction the data
+            // do not fix, the others may have wandered with it.
+            for (i, &f) in free.iter().enumerate() {
+                params[f].value = params[f].from_x(x_start[i]);
+            }
             params[j].status = Status::Unidentifiable;
             params[j].value = params[j].prior;
             continue;

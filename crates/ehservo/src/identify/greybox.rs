@@ -9,16 +9,22 @@
 //! q̇ = (4βe/Vt)·(Dm·Kg·Kv/Jt)·u − (4βe/Vt)·(Dm²/Jt)·θ̇ − (4βe·Kce/Vt)·q
 //! ```
 //!
-//! so from (θ, u) alone only these groups are identifiable: Bm/Jt, G/Jt,
-//! 4βe·Dm²/(Vt·Jt) (ω_h²), 4βe·Kce/Vt, 4βe·Dm·Kg·Kv/(Vt·Jt) (b), and the load
-//! Tl/Jt. βe and Vt enter only as βe/Vt; Cd, Ag, Kv, √(Ps/ρ) only as their
-//! product (except through the valve root's √(1 − sgn(u)·P_l/Ps), which
-//! is weak unless P_l approaches Ps); Dm only with Jt. A known load
-//! (`[load]` of the prior: A·sin kθ with A in N·m) fixes the scale Jt, and
-//! with it Bm, G and the rest. Without a load, Jt is not identifiable from
-//! (θ, u) — but a load-pressure channel (P_l in Pa, `p_load_Pa`) measures
-//! q·Jt/Dm directly and makes Jt identifiable with Dm known. The default
-//! free set is `beta_e, Kce, Jt, Bm, Kv, G` (Vt, Dm, Ps, ρ, Cd, Ag and the
+//! With c1 = Bm/Jt, c2 = G/Jt, c4 = 4βe·Dm²/(Vt·Jt) (ω_h²), c5 = 4βe·Kce/Vt
+//! and b = 4βe·Dm·Kg·Kv/(Vt·Jt), the transfer function from u to θ without a
+//! load is b/(s³ + (c1 + c5)s² + (c2 + c4 + c1·c5)s + c2·c5): from (θ, u)
+//! alone the data fix its four coefficients (a3, a2, b, and a1 only when
+//! the spring is stiff enough), not the five groups, and not the physical
+//! parameters behind them. βe and Vt enter only as βe/Vt; Cd, Ag, Kv and
+//! √(Ps/ρ) only as their product (except through the valve root's
+//! √(1 − sgn(u)·P_l/Ps), which is weak unless P_l approaches Ps); Dm only
+//! with Jt; and the split of a3 between the damping c1 and the leakage c5
+//! is free. Two things fix more: a known load (`[load]` of the prior,
+//! A·sin kθ with A in N·m) enters as Tl/Jt and fixes the scale Jt, and
+//! through d's 4βe·Kce·Tl/(Vt·Jt) the leakage; a load-pressure channel
+//! (P_l in Pa, `p_load_Pa`) measures q·Jt/Dm directly, and with Dm known
+//! makes Jt, Bm, βe and Kce identifiable (the test
+//! `a_pressure_channel_makes_jt_identifiable` shows both). The default free
+//! set is `beta_e, Kce, Jt, Bm, Kv, G` (Vt, Dm, Ps, ρ, Cd, Ag and the
 //! load held at the prior); `--free` and `--fix` change it, and the
 //! identifiability test of [`super::fit`] names whatever the data cannot
 //! fix (e.g. the paper's G = 1.13·10⁻³ N·m/rad, 10⁻⁴ of its load's

@@ -16,6 +16,7 @@ mod controllers;
 mod cylinder;
 mod faults;
 mod golden;
+mod identify;
 mod independent;
 mod k1_closed_form;
 mod league;
