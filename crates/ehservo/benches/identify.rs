@@ -78,7 +78,11 @@ fn bench_identify(c: &mut Criterion) {
             .build()
             .expect("pool");
         grp.bench_function(format!("greybox_6_params_20s_1kHz_{threads}_thread"), |b| {
-            b.iter(|| pool.install(|| black_box(identify(&opts).expect("identify").linear.fit.residual_sd)))
+            b.iter(|| {
+                pool.install(|| {
+                    black_box(identify(&opts).expect("identify").linear.fit.residual_sd)
+                })
+            })
         });
     }
     grp.finish();

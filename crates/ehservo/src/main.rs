@@ -838,11 +838,20 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                 })?;
                 fix.push((k.trim().to_string(), v));
             }
-            if !(a.period_tolerance.is_finite() && a.period_tolerance > 0.0 && a.period_tolerance < 0.5) {
-                ehservo::bad_input!("--period-tolerance {}: must be in (0, 0.5)", a.period_tolerance);
+            if !(a.period_tolerance.is_finite()
+                && a.period_tolerance > 0.0
+                && a.period_tolerance < 0.5)
+            {
+                ehservo::bad_input!(
+                    "--period-tolerance {}: must be in (0, 0.5)",
+                    a.period_tolerance
+                );
             }
             if !(a.ident_threshold.is_finite() && a.ident_threshold > 0.0) {
-                ehservo::bad_input!("--ident-threshold {}: must be finite and > 0", a.ident_threshold);
+                ehservo::bad_input!(
+                    "--ident-threshold {}: must be finite and > 0",
+                    a.ident_threshold
+                );
             }
             if !(1..=10_000).contains(&a.lags) {
                 ehservo::bad_input!("--lags {}: must be 1 to 10000", a.lags);

@@ -53,11 +53,21 @@ pub struct Unit {
 /// Suffixes and their units, longest first so that `_rad_s` wins over `_s`.
 const SUFFIXES: &[(&str, &str, f64, Option<Axis>)] = &[
     ("_rad_s", "rad/s", 1.0, Some(Axis::Rotary)),
-    ("_deg_s", "rad/s", std::f64::consts::PI / 180.0, Some(Axis::Rotary)),
+    (
+        "_deg_s",
+        "rad/s",
+        std::f64::consts::PI / 180.0,
+        Some(Axis::Rotary),
+    ),
     ("_mm_s", "m/s", 1e-3, Some(Axis::Linear)),
     ("_m_s", "m/s", 1.0, Some(Axis::Linear)),
     ("_rad", "rad", 1.0, Some(Axis::Rotary)),
-    ("_deg", "rad", std::f64::consts::PI / 180.0, Some(Axis::Rotary)),
+    (
+        "_deg",
+        "rad",
+        std::f64::consts::PI / 180.0,
+        Some(Axis::Rotary),
+    ),
     ("_um", "m", 1e-6, Some(Axis::Linear)),
     ("_mm", "m", 1e-3, Some(Axis::Linear)),
     ("_m", "m", 1.0, Some(Axis::Linear)),
@@ -272,7 +282,16 @@ pub fn parse(
     }
     let ti = pick(&header, file, "time", "--time", &map.time, TIME, true)?.unwrap_or(0);
     let ui = pick(&header, file, "command", "--input", &map.input, INPUT, true)?.unwrap_or(0);
-    let yi = pick(&header, file, "position", "--output", &map.output, OUTPUT, true)?.unwrap_or(0);
+    let yi = pick(
+        &header,
+        file,
+        "position",
+        "--output",
+        &map.output,
+        OUTPUT,
+        true,
+    )?
+    .unwrap_or(0);
     let ri = pick(
         &header,
         file,
@@ -505,18 +524,33 @@ mod tests {
     #[test]
     fn bad_rows_are_named() {
         let head = "t_s,u_V,theta_rad\n";
-        let e = err(&format!("{head}0,0,0\n0.1,1,0\n0.1,0,0\n0.3,1,0\n0.4,0,0\n"));
-        assert!(e.contains("line 4 (row 3)") && e.contains("does not increase"), "{e}");
-        let e = err(&format!("{head}0,0,0\n0.1,1,0\n0.2,NaN,0\n0.3,1,0\n0.4,0,0\n"));
-        assert!(e.contains("row 3") && e.contains("`u_V`") && e.contains("NaN"), "{e}");
-        let e = err(&format!("{head}0,0,0\n0.1,1,0\n0.25,0,0\n0.3,1,0\n0.4,0,0\n"));
+        let e = err(&format!(
+            "{head}0,0,0\n0.1,1,0\n0.1,0,0\n0.3,1,0\n0.4,0,0\n"
+        ));
+        assert!(
+            e.contains("line 4 (row 3)") && e.contains("does not increase"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{head}0,0,0\n0.1,1,0\n0.2,NaN,0\n0.3,1,0\n0.4,0,0\n"
+        ));
+        assert!(
+            e.contains("row 3") && e.contains("`u_V`") && e.contains("NaN"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{head}0,0,0\n0.1,1,0\n0.25,0,0\n0.3,1,0\n0.4,0,0\n"
+        ));
         assert!(e.contains("row 3") && e.contains("non-uniform"), "{e}");
         let e = err(&format!("{head}0,1,0\n0.1,1,0\n0.2,1,0\n0.3,1,0\n"));
         assert!(e.contains("never moves"), "{e}");
         let e = err(&format!("{head}0,1,0\n0.1,0,0\n"));
         assert!(e.contains("2 data rows"), "{e}");
         let e = err(&format!("{head}0,1,x\n"));
-        assert!(e.contains("`x` is not a number") && e.contains("theta_rad"), "{e}");
+        assert!(
+            e.contains("`x` is not a number") && e.contains("theta_rad"),
+            "{e}"
+        );
         let e = err("t_s,u_V,v\n0,1,2\n");
         assert!(e.contains("no position column"), "{e}");
         let e = err("0,0,0\n1,1,1\n");
@@ -524,7 +558,11 @@ mod tests {
         // Times rounded to the printed digits stay within the tolerance.
         let t = format!(
             "{head}{}",
-            rows(2048, |k| format!("{:.4},{},0", 3.0 * k as f64 / 2047.0, k % 2))
+            rows(2048, |k| format!(
+                "{:.4},{},0",
+                3.0 * k as f64 / 2047.0,
+                k % 2
+            ))
         );
         assert!(parse(&t, "d.csv", &ColumnMap::default(), opts()).is_ok());
     }

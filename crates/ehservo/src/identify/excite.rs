@@ -195,7 +195,10 @@ pub fn check(s: &Spec) -> Result<usize> {
             )));
         }
         if s.f0 >= s.f1 {
-            return Err(bad(format!("--f0 {} Hz: must be below --f1 {} Hz", s.f0, s.f1)));
+            return Err(bad(format!(
+                "--f0 {} Hz: must be below --f1 {} Hz",
+                s.f0, s.f1
+            )));
         }
     }
     if s.signal == Signal::Multisine {
@@ -215,16 +218,25 @@ pub fn check(s: &Spec) -> Result<usize> {
     }
     if s.signal == Signal::Prbs {
         if !TAPS.iter().any(|t| t.0 == s.order) {
-            return Err(bad(format!("--order {}: a PRBS order must be 3 to 18", s.order)));
+            return Err(bad(format!(
+                "--order {}: a PRBS order must be 3 to 18",
+                s.order
+            )));
         }
         if s.clock == 0 || s.clock > n {
-            return Err(bad(format!("--clock {}: must be 1 to {n} samples", s.clock)));
+            return Err(bad(format!(
+                "--clock {}: must be 1 to {n} samples",
+                s.clock
+            )));
         }
     }
     if s.signal == Signal::Steps {
         pos("hold", s.hold)?;
         if s.hold < 1.0 / s.rate {
-            return Err(bad(format!("--hold {} s: shorter than a sample (1/{} s)", s.hold, s.rate)));
+            return Err(bad(format!(
+                "--hold {} s: shorter than a sample (1/{} s)",
+                s.hold, s.rate
+            )));
         }
     }
     if let Some(k) = s.kp {
@@ -252,7 +264,8 @@ fn period_of(l: usize, ks: &[usize], ph: &[f64]) -> Vec<f64> {
         spec[k] = Complex64::from_polar(0.5, p - std::f64::consts::FRAC_PI_2);
     }
     let mut out = inv.make_output_vec();
-    inv.process(&mut spec, &mut out).expect("buffers of the plan's length");
+    inv.process(&mut spec, &mut out)
+        .expect("buffers of the plan's length");
     out
 }
 
@@ -265,7 +278,12 @@ pub fn design(s: &Spec) -> Result<Design> {
             let c = ehservo_core::reference::Chirp::try_new(1.0, s.f0, s.f1, s.duration)
                 .map_err(|e| bad(format!("chirp: {e}")))?;
             use ehservo_core::reference::Reference;
-            ((0..n).map(|k| c.z(k as f64 * h)[0]).collect::<Vec<f64>>(), vec![], vec![], 0)
+            (
+                (0..n).map(|k| c.z(k as f64 * h)[0]).collect::<Vec<f64>>(),
+                vec![],
+                vec![],
+                0,
+            )
         }
         Signal::Multisine => {
             let l = s.period;
@@ -281,7 +299,10 @@ pub fn design(s: &Spec) -> Result<Design> {
             if s.phases == Phases::Crest {
                 let mut planner = RealFftPlanner::<f64>::new();
                 let fwd = planner.plan_fft_forward(l);
-                let mut best = (peak(&period_of(l, &ks, &ph)) / rms(&period_of(l, &ks, &ph)), ph.clone());
+                let mut best = (
+                    peak(&period_of(l, &ks, &ph)) / rms(&period_of(l, &ks, &ph)),
+                    ph.clone(),
+                );
                 for it in 0..200 {
                     iters = it + 1;
                     let mut x = period_of(l, &ks, &ph);
@@ -295,7 +316,8 @@ pub fn design(s: &Spec) -> Result<Design> {
                         *v = v.clamp(-c, c);
                     }
                     let mut spec = fwd.make_output_vec();
-                    fwd.process(&mut x, &mut spec).expect("buffers of the plan's length");
+                    fwd.process(&mut x, &mut spec)
+                        .expect("buffers of the plan's length");
                     for (i, &k) in ks.iter().enumerate() {
                         ph[i] = spec[k].arg() + std::f64::consts::FRAC_PI_2;
                     }
@@ -307,30 +329,54 @@ pub fn design(s: &Spec) -> Result<Design> {
                 ph = best.1;
             }
             let one = period_of(l, &ks, &ph);
-            ((0..n).map(|k| one[k % l]).collect(), ks.iter().map(|&k| k as f64 * fr).collect(), ph, iters)
+            (
+                (0..n).map(|k| one[k % l]).collect(),
+                ks.iter().map(|&k| k as f64 * fr).collect(),
+                ph,
+                iters,
+            )
         }
         Signal::Prbs => {
-            let taps = TAPS.iter().find(|t| t.0 == s.order).map(|t| t.1).unwrap_or(&[]);
+            let taps = TAPS
+                .iter()
+                .find(|t| t.0 == s.order)
+                .map(|t| t.1)
+                .unwrap_or(&[]);
             let mut reg: u32 = (1u32 << s.order) - 1;
             let mut bits = Vec::with_capacity(n / s.clock + 1);
             while bits.len() * s.clock < n {
                 bits.push(reg & 1);
                 // XOR of the taps (1-based from the output end), shifted in.
-                let fb = taps.iter().fold(0u32, |a, &t| a ^ ((reg >> (s.order - t)) & 1));
+                let fb = taps
+                    .iter()
+                    .fold(0u32, |a, &t| a ^ ((reg >> (s.order - t)) & 1));
                 reg = (reg >> 1) | (fb << (s.order - 1));
             }
-            ((0..n).map(|k| if bits[k / s.clock] == 1 { 1.0 } else { -1.0 }).collect(), vec![], vec![], 0)
+            (
+                (0..n)
+                    .map(|k| if bits[k / s.clock] == 1 { 1.0 } else { -1.0 })
+                    .collect(),
+                vec![],
+                vec![],
+                0,
+            )
         }
         Signal::Steps => {
             let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
             let per = (s.hold * s.rate).round().max(1.0) as usize;
-            let levels: Vec<f64> = (0..n / per + 1).map(|_| 2.0 * rng.random::<f64>() - 1.0).collect();
+            let levels: Vec<f64> = (0..n / per + 1)
+                .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+                .collect();
             ((0..n).map(|k| levels[k / per]).collect(), vec![], vec![], 0)
         }
     };
     // Scaled to the peak A (a chirp is A·sin φ as its reference kind is).
-    let pk = if s.signal == Signal::Chirp { 1.0 } else { peak(&values) };
-    if !(pk > 0.0) {
+    let pk = if s.signal == Signal::Chirp {
+        1.0
+    } else {
+        peak(&values)
+    };
+    if pk.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(bad("the designed signal is zero everywhere".into()));
     }
     for v in values.iter_mut() {
@@ -367,7 +413,9 @@ pub fn predicted_peak(a: [f64; 3], b: f64, values: &[f64], h: f64, kp: Option<f6
             None => v,
         };
         for _ in 0..m {
-            x = rk4(&x, hs, |s| [s[1], s[2], -a[0] * s[0] - a[1] * s[1] - a[2] * s[2] + b * u]);
+            x = rk4(&x, hs, |s| {
+                [s[1], s[2], -a[0] * s[0] - a[1] * s[1] - a[2] * s[2] + b * u]
+            });
         }
         if !x[0].is_finite() {
             return f64::INFINITY;
@@ -391,7 +439,12 @@ pub struct Written {
 }
 
 /// Designs the experiment and writes it into `out` (staged).
-pub fn excite_to_dir(spec: &Spec, prior_path: Option<&Path>, set: &[String], out: &Path) -> Result<Written> {
+pub fn excite_to_dir(
+    spec: &Spec,
+    prior_path: Option<&Path>,
+    set: &[String],
+    out: &Path,
+) -> Result<Written> {
     let prior = match prior_path {
         Some(p) => Scenario::load(p, set)?,
         None => Scenario::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", set)?,
@@ -452,7 +505,11 @@ pub fn excite_to_dir(spec: &Spec, prior_path: Option<&Path>, set: &[String], out
             let last = k + 1 == n || d.values[k + 1].to_bits() != d.values[k].to_bits();
             if !piecewise || first || last {
                 let tk = k as f64 * h;
-                let tk = if piecewise && last && !first && k + 1 < n { tk + 0.999 * h } else { tk };
+                let tk = if piecewise && last && !first && k + 1 < n {
+                    tk + 0.999 * h
+                } else {
+                    tk
+                };
                 let _ = writeln!(t, "{},{}", tk, to_deg(d.values[k]));
             }
         }
@@ -510,14 +567,21 @@ pub fn excite_to_dir(spec: &Spec, prior_path: Option<&Path>, set: &[String], out
         sim.insert("horizon".into(), ((d.values.len() - 1) as f64 * h).into());
         sim.insert("mode".into(), "sampled".into());
         sim.insert("settle".into(), 0.0.into());
-        let lim = sim.get("theta_limit").and_then(|v| v.as_float()).unwrap_or(1.0);
+        let lim = sim
+            .get("theta_limit")
+            .and_then(|v| v.as_float())
+            .unwrap_or(1.0);
         sim.insert("theta_limit".into(), lim.max(3.0 * pk).into());
     }
     // The plant as it is (no parameter variation) unless the prior's --set says otherwise.
-    if !set.iter().any(|s| s.trim_start().starts_with("uncertainty")) {
+    if !set
+        .iter()
+        .any(|s| s.trim_start().starts_with("uncertainty"))
+    {
         table.insert(
             "uncertainty".into(),
-            toml::Value::try_from(ehservo_sim::plant::UncertaintySpec::NONE).context("uncertainty table")?,
+            toml::Value::try_from(ehservo_sim::plant::UncertaintySpec::NONE)
+                .context("uncertainty table")?,
         );
     }
     let text = toml::to_string_pretty(&table).context("the scenario as TOML")?;
@@ -541,7 +605,11 @@ pub fn excite_to_dir(spec: &Spec, prior_path: Option<&Path>, set: &[String], out
         "set": set,
         "files": ["excitation.csv", "scenario.toml"],
     });
-    std::fs::write(dir.join("excite.json"), serde_json::to_string_pretty(&json)? + "\n").context("writing excite.json")?;
+    std::fs::write(
+        dir.join("excite.json"),
+        serde_json::to_string_pretty(&json)? + "\n",
+    )
+    .context("writing excite.json")?;
     let mut w = w;
     w.files.push(out.join("excite.json"));
     stage.commit()?;
@@ -598,17 +666,34 @@ mod tests {
             }
         }
         let kk = (k1 - k0 + 1) as f64;
-        assert!(d.crest_factor < 0.5 * (2.0 * kk).sqrt(), "{}", d.crest_factor);
+        assert!(
+            d.crest_factor < 0.5 * (2.0 * kk).sqrt(),
+            "{}",
+            d.crest_factor
+        );
         assert!((d.peak - 0.1).abs() < 1e-12);
-        let c = design(&Spec { phases: Phases::Crest, ..s }).unwrap();
-        assert!(c.crest_factor <= d.crest_factor + 1e-12, "{} vs {}", c.crest_factor, d.crest_factor);
+        let c = design(&Spec {
+            phases: Phases::Crest,
+            ..s
+        })
+        .unwrap();
+        assert!(
+            c.crest_factor <= d.crest_factor + 1e-12,
+            "{} vs {}",
+            c.crest_factor,
+            d.crest_factor
+        );
     }
 
     /// An order-7 maximum-length sequence repeats after 2⁷ − 1 = 127 bits
     /// and has 64 ones and 63 zeros per period.
     #[test]
     fn prbs_is_maximum_length() {
-        let s = Spec { clock: 1, duration: 0.253, ..spec(Signal::Prbs) };
+        let s = Spec {
+            clock: 1,
+            duration: 0.253,
+            ..spec(Signal::Prbs)
+        };
         let d = design(&s).unwrap();
         let v = &d.values;
         assert!(v.len() >= 254);
@@ -619,17 +704,35 @@ mod tests {
         assert_eq!(ones, 64);
         // No shorter period.
         for p in 1..127 {
-            assert!((0..127).any(|k| v[k].to_bits() != v[k + p].to_bits()), "period {p}");
+            assert!(
+                (0..127).any(|k| v[k].to_bits() != v[k + p].to_bits()),
+                "period {p}"
+            );
         }
     }
 
     #[test]
     fn bad_bands_are_refused() {
-        let e = design(&Spec { f1: 600.0, ..spec(Signal::Chirp) }).unwrap_err().to_string();
+        let e = design(&Spec {
+            f1: 600.0,
+            ..spec(Signal::Chirp)
+        })
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("Nyquist"), "{e}");
-        let e = design(&Spec { f0: 30.0, ..spec(Signal::Chirp) }).unwrap_err().to_string();
+        let e = design(&Spec {
+            f0: 30.0,
+            ..spec(Signal::Chirp)
+        })
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("below --f1"), "{e}");
-        let e = design(&Spec { order: 40, ..spec(Signal::Prbs) }).unwrap_err().to_string();
+        let e = design(&Spec {
+            order: 40,
+            ..spec(Signal::Prbs)
+        })
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("order"), "{e}");
     }
 

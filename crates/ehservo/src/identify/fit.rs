@@ -111,7 +111,7 @@ impl Param {
         }
     }
 
-    fn from_x(&self, x: f64) -> f64 {
+    fn value_at(&self, x: f64) -> f64 {
         match self.scale {
             Scale::Log => x.exp(),
             Scale::Linear(s) => x * s,
@@ -222,7 +222,7 @@ impl Round<'_> {
     fn full(&self, x: &[f64]) -> Vec<f64> {
         let mut p = self.base.clone();
         for (i, &j) in self.free.iter().enumerate() {
-            p[j] = self.params[j].from_x(x[i]);
+            p[j] = self.params[j].value_at(x[i]);
         }
         p
     }
@@ -254,7 +254,11 @@ impl Round<'_> {
                 xp[j] += STEP;
                 xm[j] -= STEP;
                 match (self.eval(&xp), self.eval(&xm)) {
-                    (Some(a), Some(b)) => a.iter().zip(&b).map(|(a, b)| (a - b) / (2.0 * STEP)).collect(),
+                    (Some(a), Some(b)) => a
+                        .iter()
+                        .zip(&b)
+                        .map(|(a, b)| (a - b) / (2.0 * STEP))
+                        .collect(),
                     (Some(a), None) => a.iter().zip(&r0).map(|(a, b)| (a - b) / STEP).collect(),
                     (None, Some(b)) => r0.iter().zip(&b).map(|(a, b)| (a - b) / STEP).collect(),
                     (None, None) => vec![0.0; m],
@@ -311,15 +315,34 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             .filter(|&j| params[j].status == Status::Free)
             .collect();
         let base: Vec<f64> = params.iter().map(|p| p.value).collect();
-        let x0: Vec<f64> = free.iter().map(|&j| params[j].to_x(params[j].value)).collect();
+        let x0: Vec<f64> = free
+            .iter()
+            .map(|&j| params[j].to_x(params[j].value))
+            .collect();
         let x_start = x0.clone();
         let mut r0 = Vec::new();
         let ok = problem.residuals(&base, &mut r0) && r0.iter().all(|v| v.is_finite());
         if !ok {
-            return report(problem, params, &[], None, evaluations, "the model diverged at the start".into(), true);
+            return report(
+                problem,
+                params,
+                &[],
+                None,
+                evaluations,
+                "the model diverged at the start".into(),
+                true,
+            );
         }
         if free.is_empty() {
-            return report(problem, params, &free, None, evaluations, termination, false);
+            return report(
+                problem,
+                params,
+                &free,
+                None,
+                evaluations,
+                termination,
+                false,
+            );
         }
         let norm0 = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
         let m = r0.len();
@@ -346,45 +369,73 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
         drop(done);
         if r_opt.is_some() {
             for (i, &j) in free.iter().enumerate() {
-                params[j].value = params[j].from_x(xs[i]);
+                params[j].value = params[j].value_at(xs[i]);
             }
         }
         let (Some(r), Some(jac)) = (r_opt, jac_opt) else {
-            return report(problem, params, &free, None, evaluations, termination, false);
+            return report(
+                problem,
+                params,
+                &free,
+                None,
+                evaluations,
+                termination,
+                false,
+            );
         };
         let dof = (r.len().saturating_sub(free.len())).max(1) as f64;
         let s_hat = (r.iter().map(|v| v * v).sum::<f64>() / dof).sqrt();
         let svd = jac.clone().svd(false, true);
         let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
-        let (imin, smin) = sv
-            .iter()
-            .enumerate()
-            .fold((0, f64::INFINITY), |a, (i, &s)| if s < a.1 { (i, s) } else { a });
+        let (imin, smin) =
+            sv.iter().enumerate().fold(
+                (0, f64::INFINITY),
+                |a, (i, &s)| if s < a.1 { (i, s) } else { a },
+            );
         let smax = sv.iter().fold(0.0f64, |a, &s| a.max(s));
         let weak = smin <= 1e-9 * smax || s_hat / smin > opts.ident_threshold;
         if weak {
             let vt = svd.v_t.as_ref().expect("V asked for");
             let row = vt.row(imin);
-            let (k, _) = row
-                .iter()
-                .enumerate()
-                .fold((0, -1.0), |a, (i, v)| if v.abs() > a.1 { (i, v.abs()) } else { a });
+            let (k, _) = row.iter().enumerate().fold((0, -1.0), |a, (i, v)| {
+                if v.abs() > a.1 {
+                    (i, v.abs())
+                } else {
+                    a
+                }
+            });
             let j = free[k];
             // Back to where the round started: along a direction the data
             // do not fix, the others may have wandered with it.
             for (i, &f) in free.iter().enumerate() {
-                params[f].value = params[f].from_x(x_start[i]);
+                params[f].value = params[f].value_at(x_start[i]);
             }
             params[j].status = Status::Unidentifiable;
             params[j].value = params[j].prior;
             continue;
         }
-        return report(problem, params, &free, Some((jac, s_hat)), evaluations, termination, false);
+        return report(
+            problem,
+            params,
+            &free,
+            Some((jac, s_hat)),
+            evaluations,
+            termination,
+            false,
+        );
     }
     let free: Vec<usize> = (0..n_all)
         .filter(|&j| params[j].status == Status::Free)
         .collect();
-    report(problem, params, &free, None, evaluations, termination, false)
+    report(
+        problem,
+        params,
+        &free,
+        None,
+        evaluations,
+        termination,
+        false,
+    )
 }
 
 /// The report at the final values, with the covariance from `jac`.
@@ -470,7 +521,10 @@ fn report(
                             let se = s * sx;
                             (
                                 Some(se),
-                                Some([q.value - super::stats::Z95 * se, q.value + super::stats::Z95 * se]),
+                                Some([
+                                    q.value - super::stats::Z95 * se,
+                                    q.value + super::stats::Z95 * se,
+                                ]),
                                 (q.value != 0.0).then(|| se / q.value.abs()),
                             )
                         }

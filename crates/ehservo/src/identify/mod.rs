@@ -213,14 +213,21 @@ pub fn linear_keys(load_terms: bool) -> Vec<&'static str> {
 /// each experiment (`theta0` for one, `theta0_1`, … for several).
 fn nuisance(experiments: &[Experiment], unit: &str) -> Vec<Param> {
     let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
-    let u_rms = experiments.iter().map(|e| rms(&e.u.values)).fold(0.0f64, f64::max);
+    let u_rms = experiments
+        .iter()
+        .map(|e| rms(&e.u.values))
+        .fold(0.0f64, f64::max);
     let mut v = vec![Param {
         nuisance: true,
         ..Param::signed("u_offset", "V", 0.0, u_rms.max(1e-9))
     }];
     for (i, e) in experiments.iter().enumerate() {
         let y = &e.y.values;
-        let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        let (lo, hi) = y
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
         let key = if experiments.len() == 1 {
             "theta0".to_string()
         } else {
@@ -239,7 +246,14 @@ fn apply_fix(params: &mut [Param], fix: &[(String, f64)], other: &[&str]) -> any
     for (k, v) in fix {
         if let Some(p) = params.iter_mut().find(|p| &p.key == k) {
             if !v.is_finite() || (matches!(p.scale, fit::Scale::Log) && *v <= 0.0) {
-                return Err(bad(format!("--fix {k}={v}: must be finite{}", if matches!(p.scale, fit::Scale::Log) { " and > 0" } else { "" })));
+                return Err(bad(format!(
+                    "--fix {k}={v}: must be finite{}",
+                    if matches!(p.scale, fit::Scale::Log) {
+                        " and > 0"
+                    } else {
+                        ""
+                    }
+                )));
             }
             p.value = *v;
             p.prior = *v;
@@ -247,7 +261,10 @@ fn apply_fix(params: &mut [Param], fix: &[(String, f64)], other: &[&str]) -> any
         } else if !other.contains(&k.as_str()) {
             let mut known: Vec<String> = params.iter().map(|p| p.key.clone()).collect();
             known.extend(other.iter().map(|s| s.to_string()));
-            return Err(bad(format!("--fix {k}: no such parameter (known: {})", known.join(", "))));
+            return Err(bad(format!(
+                "--fix {k}: no such parameter (known: {})",
+                known.join(", ")
+            )));
         }
     }
     Ok(())
@@ -263,14 +280,22 @@ fn fit_weighted<M: Model>(
     opts: &FitOptions,
 ) -> (FitReport, Weights, Vec<Param>) {
     let w0 = OutputError::initial_weights(model, experiments);
-    let prob = OutputError { model, experiments, weights: w0 };
+    let prob = OutputError {
+        model,
+        experiments,
+        weights: w0,
+    };
     let rep = fit::fit(&prob, params.clone(), opts);
     let multi = w0.v > 0.0 || w0.p > 0.0;
     let after = |rep: &FitReport| -> Vec<Param> {
         params
             .iter()
             .zip(&rep.estimates)
-            .map(|(p, e)| Param { value: e.value, status: e.status, ..p.clone() })
+            .map(|(p, e)| Param {
+                value: e.value,
+                status: e.status,
+                ..p.clone()
+            })
             .collect()
     };
     if !multi || rep.diverged {
@@ -285,11 +310,19 @@ fn fit_weighted<M: Model>(
         .iter()
         .zip(&rep.estimates)
         .map(|(p, e)| Param {
-            value: if e.status == Status::Free { e.value } else { p.value },
+            value: if e.status == Status::Free {
+                e.value
+            } else {
+                p.value
+            },
             ..p.clone()
         })
         .collect();
-    let prob1 = OutputError { model, experiments, weights: w1 };
+    let prob1 = OutputError {
+        model,
+        experiments,
+        weights: w1,
+    };
     let rep1 = fit::fit(&prob1, start, opts);
     let p = after(&rep1);
     (rep1, w1, p)
@@ -298,6 +331,7 @@ fn fit_weighted<M: Model>(
 /// Simulates `model` on `exps` with every parameter at `values` but the
 /// initial positions, which are fitted (one parameter each, the rest
 /// held): the validation of a fitted model.
+#[allow(clippy::too_many_arguments)]
 fn validate<M: Model>(
     model: &M,
     values: &[f64],
@@ -314,11 +348,22 @@ fn validate<M: Model>(
             let mut ps: Vec<Param> = values[..=n_model]
                 .iter()
                 .enumerate()
-                .map(|(i, &v)| Param { status: Status::Fixed, ..Param::signed(&format!("p{i}"), "", v, 1.0) })
+                .map(|(i, &v)| Param {
+                    status: Status::Fixed,
+                    ..Param::signed(&format!("p{i}"), "", v, 1.0)
+                })
                 .collect();
             ps.extend(nuisance(std::slice::from_ref(e), unit).into_iter().skip(1));
             let one = std::slice::from_ref(e);
-            let prob = OutputError { model, experiments: one, weights: Weights { v: 0.0, p: 0.0, ..weights } };
+            let prob = OutputError {
+                model,
+                experiments: one,
+                weights: Weights {
+                    v: 0.0,
+                    p: 0.0,
+                    ..weights
+                },
+            };
             let rep = fit::fit(&prob, ps, opts);
             let v = rep.values();
             experiment_fit(model, &v, 0, e, lags)
@@ -327,7 +372,13 @@ fn validate<M: Model>(
 }
 
 /// The fit of experiment `i` at the parameter values `v`.
-fn experiment_fit<M: Model>(model: &M, v: &[f64], i: usize, e: &Experiment, lags: usize) -> ExperimentFit {
+fn experiment_fit<M: Model>(
+    model: &M,
+    v: &[f64],
+    i: usize,
+    e: &Experiment,
+    lags: usize,
+) -> ExperimentFit {
     let mut sim = SimOut::default();
     let ok = model.simulate(v, i, e, &mut sim);
     if !ok || sim.y.len() != e.len() {
@@ -335,7 +386,11 @@ fn experiment_fit<M: Model>(model: &M, v: &[f64], i: usize, e: &Experiment, lags
     }
     let y = &e.y.values;
     let res: Vec<f64> = y.iter().zip(&sim.y).map(|(a, b)| a - b).collect();
-    let nrmse = if ok { stats::nrmse_pct(y, &sim.y) } else { f64::INFINITY };
+    let nrmse = if ok {
+        stats::nrmse_pct(y, &sim.y)
+    } else {
+        f64::INFINITY
+    };
     let rms = (res.iter().map(|r| r * r).sum::<f64>() / res.len().max(1) as f64).sqrt();
     let tests = stats::residual_tests(if ok { &res } else { &[] }, &e.u.values, lags);
     ExperimentFit {
@@ -365,7 +420,11 @@ fn delta(rep: &FitReport, keys: &[(&str, &str)], f: &dyn Fn(&[f64]) -> Vec<f64>)
             let (mut a, mut b) = (v.clone(), v.clone());
             a[j] += h;
             b[j] -= h;
-            f(&a).iter().zip(f(&b)).map(|(x, y)| (x - y) / (2.0 * h)).collect()
+            f(&a)
+                .iter()
+                .zip(f(&b))
+                .map(|(x, y)| (x - y) / (2.0 * h))
+                .collect()
         })
         .collect();
     let ok = !rep.covariance.is_empty() && rep.covariance.iter().flatten().all(|c| c.is_finite());
@@ -387,7 +446,9 @@ fn delta(rep: &FitReport, keys: &[(&str, &str)], f: &dyn Fn(&[f64]) -> Vec<f64>)
                 unit: unit.into(),
                 value,
                 se: se.filter(|s| s.is_finite()),
-                ci95: se.filter(|s| s.is_finite()).map(|s| [value - stats::Z95 * s, value + stats::Z95 * s]),
+                ci95: se
+                    .filter(|s| s.is_finite())
+                    .map(|s| [value - stats::Z95 * s, value + stats::Z95 * s]),
             }
         })
         .collect()
@@ -461,8 +522,16 @@ fn read_all(opts: &Options) -> anyhow::Result<(Vec<Experiment>, Vec<Experiment>)
         return Err(bad("identify: no data file given".into()));
     }
     let read = |p: &PathBuf| data::read(p, &opts.map, opts.read);
-    let exps = opts.files.iter().map(read).collect::<anyhow::Result<Vec<_>>>()?;
-    let vals = opts.validate.iter().map(read).collect::<anyhow::Result<Vec<_>>>()?;
+    let exps = opts
+        .files
+        .iter()
+        .map(read)
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let vals = opts
+        .validate
+        .iter()
+        .map(read)
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let axis = exps[0].axis;
     if let Some(e) = exps.iter().chain(&vals).find(|e| e.axis != axis) {
         return Err(bad(format!(
@@ -476,10 +545,15 @@ fn read_all(opts: &Options) -> anyhow::Result<(Vec<Experiment>, Vec<Experiment>)
     }
     let total: usize = exps.iter().chain(&vals).map(Experiment::len).sum();
     if total > MAX_SAMPLES {
-        return Err(bad(format!("identify: {total} samples over all files, more than the limit of {MAX_SAMPLES}")));
+        return Err(bad(format!(
+            "identify: {total} samples over all files, more than the limit of {MAX_SAMPLES}"
+        )));
     }
     if opts.bootstrap > MAX_BOOTSTRAP {
-        return Err(bad(format!("--bootstrap {}: at most {MAX_BOOTSTRAP}", opts.bootstrap)));
+        return Err(bad(format!(
+            "--bootstrap {}: at most {MAX_BOOTSTRAP}",
+            opts.bootstrap
+        )));
     }
     Ok((exps, vals))
 }
@@ -502,7 +576,9 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let min_n = exps.iter().map(Experiment::len).min().unwrap_or(0);
     let seg = opts.segment.unwrap_or_else(|| frf::default_segment(min_n));
     if !(16..=1 << 20).contains(&seg) {
-        return Err(bad(format!("--segment {seg}: must be between 16 and 1048576 samples")));
+        return Err(bad(format!(
+            "--segment {seg}: must be between 16 and 1048576 samples"
+        )));
     }
     if let Some(e) = exps.iter().find(|e| e.len() < seg) {
         return Err(bad(format!(
@@ -516,7 +592,11 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         .iter()
         .map(|e| {
             let h1 = frf::h1(&e.u.values, &e.y.values, e.h, seg);
-            let ind = e.reference.as_ref().filter(|r| moves(&r.values)).map(|r| frf::indirect(&r.values, &e.u.values, &e.y.values, e.h, seg));
+            let ind = e
+                .reference
+                .as_ref()
+                .filter(|r| moves(&r.values))
+                .map(|r| frf::indirect(&r.values, &e.u.values, &e.y.values, e.h, seg));
             (h1, ind)
         })
         .collect();
@@ -532,7 +612,10 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let pl = prior.load;
     let pm = ehservo_core::servo::NominalModel::new(pp, pl);
     let prior_eff = greybox::effective(&pp, &pl);
-    let prior_d = [pp.d_per_torque() * pl.amplitude, pl.amplitude * pl.wavenumber / pp.jt];
+    let prior_d = [
+        pp.d_per_torque() * pl.amplitude,
+        pl.amplitude * pl.wavenumber / pp.jt,
+    ];
     let prior_lin: [f64; 4] = if load_terms {
         let c = pp.coefficients();
         [c.a1, c.a2, c.a3, pm.b_at_rest()]
@@ -550,14 +633,33 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let lin_params = |start: [f64; 4]| -> Vec<Param> {
         let [a1, a2, a3, b] = start;
         let mut v = vec![
-            Param { prior: 0.0, ..Param::signed("a1", "1/s^3", a1, a1.abs().max(1e-9 * a2.abs().max(1.0))) },
+            Param {
+                prior: 0.0,
+                ..Param::signed("a1", "1/s^3", a1, a1.abs().max(1e-9 * a2.abs().max(1.0)))
+            },
             Param::new("a2", "1/s^2", a2.max(1e-9), 1.0),
             Param::new("a3", "1/s", a3.max(1e-9), 1.0),
             Param::signed("b", &format!("{unit}/(V*s^3)"), b, b.abs().max(1e-300)),
         ];
         if load_terms {
-            v.push(Param { prior: 0.0, ..Param::signed("d1", &format!("{unit}/s^3"), prior_d[0], prior_d[0].abs().max(1e-6 * a2.abs())) });
-            v.push(Param { prior: 0.0, ..Param::signed("d2", "1/s^2", prior_d[1], prior_d[1].abs().max(1e-3 * a2.abs())) });
+            v.push(Param {
+                prior: 0.0,
+                ..Param::signed(
+                    "d1",
+                    &format!("{unit}/s^3"),
+                    prior_d[0],
+                    prior_d[0].abs().max(1e-6 * a2.abs()),
+                )
+            });
+            v.push(Param {
+                prior: 0.0,
+                ..Param::signed(
+                    "d2",
+                    "1/s^2",
+                    prior_d[1],
+                    prior_d[1].abs().max(1e-3 * a2.abs()),
+                )
+            });
         }
         v.extend(nuisance(&exps, unit));
         v
@@ -566,9 +668,18 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     if let Some(l) = levy {
         candidates.insert(0, ("the frequency-domain fit (Levy/Sanathanan-Koerner)", l));
     }
-    let linear = oe::Linear::new(&exps, load_terms, k, [prior_lin[0], prior_lin[1], prior_lin[2]]);
+    let linear = oe::Linear::new(
+        &exps,
+        load_terms,
+        k,
+        [prior_lin[0], prior_lin[1], prior_lin[2]],
+    );
     // The work, checked before any fit: one evaluation's RK4 steps.
-    let steps: usize = exps.iter().zip(&linear.substeps).map(|(e, m)| e.len() * m).sum();
+    let steps: usize = exps
+        .iter()
+        .zip(&linear.substeps)
+        .map(|(e, m)| e.len() * m)
+        .sum();
     if steps > MAX_STEPS_PER_EVALUATION {
         return Err(bad(format!(
             "identify: {steps} RK4 steps per evaluation ({} substeps a sample for the prior's dynamics), more than the limit of {MAX_STEPS_PER_EVALUATION}",
@@ -577,7 +688,11 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     }
     let w0 = OutputError::initial_weights(&linear, &exps);
     let cost = |ps: &[Param]| -> f64 {
-        let prob = OutputError { model: &linear, experiments: &exps, weights: w0 };
+        let prob = OutputError {
+            model: &linear,
+            experiments: &exps,
+            weights: w0,
+        };
         let mut r = Vec::new();
         let v: Vec<f64> = ps.iter().map(|p| p.value).collect();
         if prob.residuals(&v, &mut r) {
@@ -602,7 +717,11 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let linear_result = ModelResult {
         model: "linear",
         derived: linear_derived(&lrep, load_terms, k),
-        estimation: exps.iter().enumerate().map(|(i, e)| experiment_fit(&linear, &lv, i, e, opts.lags)).collect(),
+        estimation: exps
+            .iter()
+            .enumerate()
+            .map(|(i, e)| experiment_fit(&linear, &lv, i, e, opts.lags))
+            .collect(),
         validation: validate(&linear, &lv, nl, &vals, lw, &opts.fit, opts.lags, unit),
         weights: lw,
         start: start_name.into(),
@@ -614,19 +733,27 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     if axis == Axis::Linear {
         notes.push("linear-axis data: the grey-box fit and the scenario need the plant family's linear axis (not in this build); the linear model is fitted".into());
     } else if !opts.no_greybox {
-        let free: Vec<String> = opts
-            .free
-            .clone()
-            .unwrap_or_else(|| greybox::DEFAULT_FREE.iter().map(|s| s.to_string()).collect());
+        let free: Vec<String> = opts.free.clone().unwrap_or_else(|| {
+            greybox::DEFAULT_FREE
+                .iter()
+                .map(|s| s.to_string())
+                .collect()
+        });
         for f in &free {
             if !greybox::KEYS.iter().any(|k| k.0 == f) {
                 return Err(bad(format!(
                     "--free {f}: no such grey-box parameter (known: {})",
-                    greybox::KEYS.iter().map(|k| k.0).collect::<Vec<_>>().join(", ")
+                    greybox::KEYS
+                        .iter()
+                        .map(|k| k.0)
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 )));
             }
             if f.starts_with("friction.") && pl.friction.is_none() {
-                return Err(bad(format!("--free {f}: the prior's load has no [load.friction] table")));
+                return Err(bad(format!(
+                    "--free {f}: the prior's load has no [load.friction] table"
+                )));
             }
             if f == "load.amplitude" && pl.amplitude == 0.0 {
                 return Err(bad("--free load.amplitude: the prior's load amplitude is 0; give a nonzero start with --set load.amplitude=A".into()));
@@ -651,8 +778,13 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         for j in 0..=exps.len() {
             gp[nk + j].value = lv[nl + j];
         }
-        let model = greybox::Physical::new(&exps, pl, &gp.iter().map(|p| p.value).collect::<Vec<_>>());
-        let steps: usize = exps.iter().zip(&model.substeps).map(|(e, m)| e.len() * m).sum();
+        let model =
+            greybox::Physical::new(&exps, pl, &gp.iter().map(|p| p.value).collect::<Vec<_>>());
+        let steps: usize = exps
+            .iter()
+            .zip(&model.substeps)
+            .map(|(e, m)| e.len() * m)
+            .sum();
         if steps > MAX_STEPS_PER_EVALUATION {
             return Err(bad(format!(
                 "identify: {steps} RK4 steps per evaluation of the grey-box, more than the limit of {MAX_STEPS_PER_EVALUATION}"
@@ -666,7 +798,11 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         greybox_result = Some(ModelResult {
             model: "greybox",
             derived: greybox_derived(&grep, &pl),
-            estimation: exps.iter().enumerate().map(|(i, e)| experiment_fit(&model, &gv, i, e, opts.lags)).collect(),
+            estimation: exps
+                .iter()
+                .enumerate()
+                .map(|(i, e)| experiment_fit(&model, &gv, i, e, opts.lags))
+                .collect(),
             validation: validate(&model, &gv, nk, &vals, gw, &opts.fit, opts.lags, unit),
             weights: gw,
             start: "the prior scenario, moved to the linear fit's coefficients".into(),
@@ -675,10 +811,25 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         gb_model = Some(model);
     }
     // 4. The spread and the bounds.
-    let bounds = spread(opts, &exps, &linear, &linear_result, gb_model.as_ref(), greybox_result.as_ref(), &pl, load_terms, k)?;
+    let bounds = spread(
+        opts,
+        &exps,
+        &linear,
+        &linear_result,
+        gb_model.as_ref(),
+        greybox_result.as_ref(),
+        &pl,
+        load_terms,
+        k,
+    )?;
     // 5. The scenario.
     let scenario = match &greybox_result {
-        Some(g) if !g.fit.diverged => Some(identified_scenario(&prior, g, bounds.as_ref(), &opts.files)?),
+        Some(g) if !g.fit.diverged => Some(identified_scenario(
+            &prior,
+            g,
+            bounds.as_ref(),
+            &opts.files,
+        )?),
         _ => None,
     };
     Ok(Outcome {
@@ -696,7 +847,11 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
 }
 
 fn moves(v: &[f64]) -> bool {
-    let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     hi > lo
 }
 
@@ -743,14 +898,26 @@ fn match_coefficients(gp: &[Param], load: &Load, target: [f64; 4], opts: &FitOpt
     let prob = Coeffs { load, target };
     let only_model: Vec<Param> = gp
         .iter()
-        .map(|p| if p.nuisance { Param { status: Status::Fixed, ..p.clone() } } else { p.clone() })
+        .map(|p| {
+            if p.nuisance {
+                Param {
+                    status: Status::Fixed,
+                    ..p.clone()
+                }
+            } else {
+                p.clone()
+            }
+        })
         .collect();
     let mut r = Vec::new();
     let start: Vec<f64> = gp.iter().map(|p| p.value).collect();
     if !prob.residuals(&start, &mut r) {
         return start;
     }
-    let o = FitOptions { ident_threshold: f64::INFINITY, ..*opts };
+    let o = FitOptions {
+        ident_threshold: f64::INFINITY,
+        ..*opts
+    };
     let rep = fit::fit(&prob, only_model, &o);
     if rep.diverged {
         start
@@ -786,7 +953,12 @@ fn spread(
             let nk = greybox::KEYS.len();
             let (p, l) = greybox::from_vec(&v[..nk], load);
             let c = p.coefficients();
-            [c.a1, c.a2, c.a3, ehservo_core::servo::NominalModel::new(p, l).b_at_rest()]
+            [
+                c.a1,
+                c.a2,
+                c.a3,
+                ehservo_core::servo::NominalModel::new(p, l).b_at_rest(),
+            ]
         } else if load_terms {
             [v[0] + v[4] * k, v[1] + v[5], v[2], v[3]]
         } else {
@@ -801,17 +973,30 @@ fn spread(
         .iter()
         .map(|e| {
             let mut p = if e.nuisance || matches!(e.key.as_str(), "a1" | "b" | "d1" | "d2") {
-                Param::signed(&e.key, &e.unit, e.value, e.se.unwrap_or(e.value.abs()).max(e.value.abs()).max(1e-12))
+                Param::signed(
+                    &e.key,
+                    &e.unit,
+                    e.value,
+                    e.se.unwrap_or(e.value.abs()).max(e.value.abs()).max(1e-12),
+                )
             } else {
                 Param::new(&e.key, &e.unit, e.value, e.value.abs().max(1.0))
             };
             p.nuisance = e.nuisance;
             p.prior = e.prior;
-            p.status = if e.status == Status::Free { Status::Free } else { Status::Fixed };
+            p.status = if e.status == Status::Free {
+                Status::Free
+            } else {
+                Status::Fixed
+            };
             p
         })
         .collect();
-    let nm = if name == "greybox" { greybox::KEYS.len() } else { linear.n_model() };
+    let nm = if name == "greybox" {
+        greybox::KEYS.len()
+    } else {
+        linear.n_model()
+    };
     let (method, samples): (String, Vec<[f64; 4]>) = if exps.len() >= 2 {
         // Each experiment alone: its own u_offset and θ0.
         let s = (0..exps.len())
@@ -846,8 +1031,18 @@ fn spread(
         // colour), refit; seeded ChaCha8, one stream per resample.
         let v = rep.values();
         let sims: Vec<SimOut> = match (name, gb) {
-            ("greybox", Some(m)) => OutputError { model: m, experiments: exps, weights: gbr.map(|g| g.weights).unwrap_or(lin.weights) }.simulate_all(&v),
-            _ => OutputError { model: linear, experiments: exps, weights: lin.weights }.simulate_all(&v),
+            ("greybox", Some(m)) => OutputError {
+                model: m,
+                experiments: exps,
+                weights: gbr.map(|g| g.weights).unwrap_or(lin.weights),
+            }
+            .simulate_all(&v),
+            _ => OutputError {
+                model: linear,
+                experiments: exps,
+                weights: lin.weights,
+            }
+            .simulate_all(&v),
         }
         .unwrap_or_default();
         if sims.len() != exps.len() {
@@ -862,14 +1057,15 @@ fn spread(
                     .zip(&sims)
                     .map(|(e, s)| {
                         let n = e.len();
-                        let res: Vec<f64> = e.y.values.iter().zip(&s.y).map(|(a, b)| a - b).collect();
+                        let res: Vec<f64> =
+                            e.y.values.iter().zip(&s.y).map(|(a, b)| a - b).collect();
                         let block = 50.min(n);
                         let mut y = Vec::with_capacity(n);
                         while y.len() < n {
                             let start = (rng.next_u64() % (n - block + 1) as u64) as usize;
-                            for j in start..start + block {
+                            for r in &res[start..start + block] {
                                 if y.len() < n {
-                                    y.push(s.y[y.len()] + res[j]);
+                                    y.push(s.y[y.len()] + r);
                                 }
                             }
                         }
@@ -878,21 +1074,36 @@ fn spread(
                         // Other channels keep their measured values around the model's.
                         if let Some(p) = &mut e2.pressure {
                             if s.p.len() == n {
-                                let r: Vec<f64> = p.values.iter().zip(&s.p).map(|(a, b)| a - b).collect();
-                                p.values = (0..n).map(|j| s.p[j] + r[(j + (rng.next_u64() % n as u64) as usize) % n]).collect();
+                                let r: Vec<f64> =
+                                    p.values.iter().zip(&s.p).map(|(a, b)| a - b).collect();
+                                p.values = (0..n)
+                                    .map(|j| {
+                                        s.p[j] + r[(j + (rng.next_u64() % n as u64) as usize) % n]
+                                    })
+                                    .collect();
                             }
                         }
                         e2
                     })
                     .collect();
                 let v = match (name, gb) {
-                    ("greybox", Some(m)) => fit_weighted(m, &resampled, base.clone(), &opts.fit).0.values(),
-                    _ => fit_weighted(linear, &resampled, base.clone(), &opts.fit).0.values(),
+                    ("greybox", Some(m)) => fit_weighted(m, &resampled, base.clone(), &opts.fit)
+                        .0
+                        .values(),
+                    _ => fit_weighted(linear, &resampled, base.clone(), &opts.fit)
+                        .0
+                        .values(),
                 };
                 coeffs(&v)
             })
             .collect();
-        (format!("bootstrap ({} resamples, blocks of 50 samples, seed {})", opts.bootstrap, opts.seed), s)
+        (
+            format!(
+                "bootstrap ({} resamples, blocks of 50 samples, seed {})",
+                opts.bootstrap, opts.seed
+            ),
+            s,
+        )
     };
     // The pooled fit's own 95 % half-widths, relative.
     let half = |key: &str, idx: usize| -> f64 {
@@ -914,13 +1125,24 @@ fn spread(
     let counted: [bool; 3] = std::array::from_fn(|i| {
         let key = ["a1", "a2", "a3"][i];
         let rel = if name == "greybox" {
-            gbr.and_then(|g| g.derived(key)).and_then(|d| d.se).map(|s| s / nominal[i].abs())
+            gbr.and_then(|g| g.derived(key))
+                .and_then(|d| d.se)
+                .map(|s| s / nominal[i].abs())
         } else {
-            rep.get(key).and_then(|e| if e.status == Status::Free { e.relative_se } else { None })
+            rep.get(key).and_then(|e| {
+                if e.status == Status::Free {
+                    e.relative_se
+                } else {
+                    None
+                }
+            })
         };
         rel.is_some_and(|r| r <= opts.fit.ident_threshold)
     });
-    let bound_a = (0..3).filter(|&i| counted[i]).map(|i| fractions[i]).fold(0.0f64, f64::max);
+    let bound_a = (0..3)
+        .filter(|&i| counted[i])
+        .map(|i| fractions[i])
+        .fold(0.0f64, f64::max);
     Ok(Some(Bounds {
         method,
         model: name,
@@ -935,7 +1157,12 @@ fn spread(
 
 /// The prior scenario with the grey-box's parameters, no variation, and
 /// the controller told the bounds.
-fn identified_scenario(prior: &Scenario, g: &ModelResult, bounds: Option<&Bounds>, files: &[PathBuf]) -> anyhow::Result<Scenario> {
+fn identified_scenario(
+    prior: &Scenario,
+    g: &ModelResult,
+    bounds: Option<&Bounds>,
+    files: &[PathBuf],
+) -> anyhow::Result<Scenario> {
     let nk = greybox::KEYS.len();
     let (p, l): (ServoParams, Load) = greybox::from_vec(&g.fit.values()[..nk], &prior.load);
     let mut s = prior.clone();
@@ -953,8 +1180,14 @@ fn identified_scenario(prior: &Scenario, g: &ModelResult, bounds: Option<&Bounds
         let t = s.controller.to_table();
         if t.contains_key("bound_a") && t.contains_key("bound_b") {
             // The sliding laws need bound_b < 1 (their 1/(1 − bound_b)).
-            values.push(("controller.bound_a".into(), toml::Value::Float(round6(b.bound_a))));
-            values.push(("controller.bound_b".into(), toml::Value::Float(round6(b.bound_b.min(0.99)))));
+            values.push((
+                "controller.bound_a".into(),
+                toml::Value::Float(round6(b.bound_a)),
+            ));
+            values.push((
+                "controller.bound_b".into(),
+                toml::Value::Float(round6(b.bound_b.min(0.99))),
+            ));
         }
     }
     let (s, _) = s.with_values_built(&values).map_err(anyhow::Error::from)?;

@@ -159,13 +159,20 @@ pub fn frequency_fit(frf: &Frf, h: f64) -> Option<[f64; 4]> {
         }
         // Columns scaled to unit norm before the solve (a1 and a3 differ by
         // ω² in size).
-        let norms: Vec<f64> = (0..4).map(|c| a.column(c).norm().max(f64::MIN_POSITIVE)).collect();
+        let norms: Vec<f64> = (0..4)
+            .map(|c| a.column(c).norm().max(f64::MIN_POSITIVE))
+            .collect();
         for (c, nc) in norms.iter().enumerate() {
             let mut col = a.column_mut(c);
             col /= *nc;
         }
         let x = a.svd(true, true).solve(&rhs, 1e-12).ok()?;
-        let p = [x[0] / norms[0], x[1] / norms[1], x[2] / norms[2], x[3] / norms[3]];
+        let p = [
+            x[0] / norms[0],
+            x[1] / norms[1],
+            x[2] / norms[2],
+            x[3] / norms[3],
+        ];
         if !p.iter().all(|v| v.is_finite()) {
             return None;
         }
@@ -242,7 +249,10 @@ mod tests {
         let hc = b / (jw * jw * jw + a[2] * jw * jw + a[1] * jw + a[0]);
         let hd = discrete_response(a, b, h, &[f])[0];
         let shifted = hc * Complex64::from_polar(1.0, -w * h / 2.0);
-        assert!((hd - shifted).norm() / hc.norm() < 1e-4, "{hd} vs {shifted}");
+        assert!(
+            (hd - shifted).norm() / hc.norm() < 1e-4,
+            "{hd} vs {shifted}"
+        );
     }
 
     /// The frequency-domain start recovers the paper's coefficients from

@@ -36,8 +36,15 @@ fn cell(v: f64) -> String {
 fn model_responses(o: &Outcome, i: usize, f: &[f64]) -> Vec<(&'static str, Vec<Complex64>)> {
     let h = o.experiments[i].h;
     let mut out = Vec::new();
-    let a = super::effective_linear(&o.linear, o.linear_model.load_terms, o.linear_model.wavenumber);
-    out.push(("linear", oe::discrete_response([a[0], a[1], a[2]], a[3], h, f)));
+    let a = super::effective_linear(
+        &o.linear,
+        o.linear_model.load_terms,
+        o.linear_model.wavenumber,
+    );
+    out.push((
+        "linear",
+        oe::discrete_response([a[0], a[1], a[2]], a[3], h, f),
+    ));
     if let Some(g) = &o.greybox {
         let nk = super::greybox::KEYS.len();
         let (p, l) = super::greybox::from_vec(&g.fit.values()[..nk], &o.prior.load);
@@ -52,9 +59,19 @@ fn frf_csv(o: &Outcome) -> String {
     let unit = o.experiments[0].axis.unit();
     let mut s = String::new();
     let has_ind = o.frf.iter().any(|f| f.1.is_some());
-    let mut head = vec!["experiment", "f_Hz", "h1_gain_dB", "h1_phase_deg", "h1_coherence"];
+    let mut head = vec![
+        "experiment",
+        "f_Hz",
+        "h1_gain_dB",
+        "h1_phase_deg",
+        "h1_coherence",
+    ];
     if has_ind {
-        head.extend(["indirect_gain_dB", "indirect_phase_deg", "indirect_coherence"]);
+        head.extend([
+            "indirect_gain_dB",
+            "indirect_phase_deg",
+            "indirect_coherence",
+        ]);
     }
     head.extend(["linear_gain_dB", "linear_phase_deg"]);
     if o.greybox.is_some() {
@@ -65,12 +82,23 @@ fn frf_csv(o: &Outcome) -> String {
     for (i, (h1, ind)) in o.frf.iter().enumerate() {
         let (g1, p1) = bode(&h1.h);
         let ib = ind.as_ref().map(|f| bode(&f.h));
-        let models: Vec<(Vec<f64>, Vec<f64>)> = model_responses(o, i, &h1.f_hz).iter().map(|(_, r)| bode(r)).collect();
+        let models: Vec<(Vec<f64>, Vec<f64>)> = model_responses(o, i, &h1.f_hz)
+            .iter()
+            .map(|(_, r)| bode(r))
+            .collect();
         for k in 0..h1.f_hz.len() {
-            let mut row = vec![format!("{}", i + 1), cell(h1.f_hz[k]), cell(g1[k]), cell(p1[k]), cell(h1.coherence[k])];
+            let mut row = vec![
+                format!("{}", i + 1),
+                cell(h1.f_hz[k]),
+                cell(g1[k]),
+                cell(p1[k]),
+                cell(h1.coherence[k]),
+            ];
             if has_ind {
                 match (&ib, ind) {
-                    (Some((g, p)), Some(f)) => row.extend([cell(g[k]), cell(p[k]), cell(f.coherence[k])]),
+                    (Some((g, p)), Some(f)) => {
+                        row.extend([cell(g[k]), cell(p[k]), cell(f.coherence[k])])
+                    }
                     _ => row.extend([String::new(), String::new(), String::new()]),
                 }
             }
@@ -98,10 +126,19 @@ fn fit_csv(o: &Outcome) -> String {
         head.push(format!("y_greybox_{unit}"));
     }
     let _ = writeln!(s, "{}", head.join(","));
-    let groups = [("estimation", &o.experiments, &o.linear.estimation), ("validation", &o.validation, &o.linear.validation)];
+    let groups = [
+        ("estimation", &o.experiments, &o.linear.estimation),
+        ("validation", &o.validation, &o.linear.validation),
+    ];
     for (gi, (role, exps, lin)) in groups.iter().enumerate() {
         for (i, e) in exps.iter().enumerate() {
-            let g = o.greybox.as_ref().map(|g| if gi == 0 { &g.estimation[i] } else { &g.validation[i] });
+            let g = o.greybox.as_ref().map(|g| {
+                if gi == 0 {
+                    &g.estimation[i]
+                } else {
+                    &g.validation[i]
+                }
+            });
             for k in 0..e.len() {
                 let mut row = vec![
                     format!("{}", i + 1),
@@ -219,9 +256,28 @@ fn frf_figure(o: &Outcome) -> Figure {
         cols: 1,
         size: (1100, 1000),
         panels: vec![
-            Panel { title: "gain".into(), x_label: "log10 f (Hz)".into(), y_label: format!("gain (dB re 1 {unit}/V)"), series: gain, ..Default::default() },
-            Panel { title: "phase".into(), x_label: "log10 f (Hz)".into(), y_label: "phase (deg)".into(), series: phase, ..Default::default() },
-            Panel { title: "coherence".into(), x_label: "log10 f (Hz)".into(), y_label: "γ² (–)".into(), series: coh, y_range: Some((0.0, 1.05)), ..Default::default() },
+            Panel {
+                title: "gain".into(),
+                x_label: "log10 f (Hz)".into(),
+                y_label: format!("gain (dB re 1 {unit}/V)"),
+                series: gain,
+                ..Default::default()
+            },
+            Panel {
+                title: "phase".into(),
+                x_label: "log10 f (Hz)".into(),
+                y_label: "phase (deg)".into(),
+                series: phase,
+                ..Default::default()
+            },
+            Panel {
+                title: "coherence".into(),
+                x_label: "log10 f (Hz)".into(),
+                y_label: "γ² (–)".into(),
+                series: coh,
+                y_range: Some((0.0, 1.05)),
+                ..Default::default()
+            },
         ],
         footer: String::new(),
     }
@@ -230,16 +286,39 @@ fn frf_figure(o: &Outcome) -> Figure {
 fn fit_figure(o: &Outcome) -> Figure {
     let unit = o.experiments[0].axis.unit();
     let mut panels = Vec::new();
-    let mut add = |title: String, e: &super::data::Experiment, lin: &super::ExperimentFit, g: Option<&super::ExperimentFit>| {
+    let mut add = |title: String,
+                   e: &super::data::Experiment,
+                   lin: &super::ExperimentFit,
+                   g: Option<&super::ExperimentFit>| {
         let t = e.times();
         let mut s = vec![
             Series::new("measured", t.clone(), e.y.values.clone(), 9),
-            Series::new(format!("linear ({:.1} % fit)", lin.fit_pct), t.clone(), lin.sim.y.clone(), 1).dash(Dash::Dashed),
+            Series::new(
+                format!("linear ({:.1} % fit)", lin.fit_pct),
+                t.clone(),
+                lin.sim.y.clone(),
+                1,
+            )
+            .dash(Dash::Dashed),
         ];
         if let Some(g) = g {
-            s.push(Series::new(format!("grey-box ({:.1} % fit)", g.fit_pct), t, g.sim.y.clone(), 2).dash(Dash::DashDot));
+            s.push(
+                Series::new(
+                    format!("grey-box ({:.1} % fit)", g.fit_pct),
+                    t,
+                    g.sim.y.clone(),
+                    2,
+                )
+                .dash(Dash::DashDot),
+            );
         }
-        panels.push(Panel { title, x_label: "t (s)".into(), y_label: format!("y ({unit})"), series: s, ..Default::default() });
+        panels.push(Panel {
+            title,
+            x_label: "t (s)".into(),
+            y_label: format!("y ({unit})"),
+            series: s,
+            ..Default::default()
+        });
     };
     add(
         format!("estimation: {}", o.experiments[0].file),
@@ -248,7 +327,12 @@ fn fit_figure(o: &Outcome) -> Figure {
         o.greybox.as_ref().map(|g| &g.estimation[0]),
     );
     if let Some(v) = o.validation.first() {
-        add(format!("validation: {}", v.file), v, &o.linear.validation[0], o.greybox.as_ref().map(|g| &g.validation[0]));
+        add(
+            format!("validation: {}", v.file),
+            v,
+            &o.linear.validation[0],
+            o.greybox.as_ref().map(|g| &g.validation[0]),
+        );
     }
     let rows = panels.len();
     Figure {
@@ -266,10 +350,23 @@ fn residual_figure(o: &Outcome) -> Figure {
     let t = &best.estimation[0].residual_tests;
     let m = t.lags as f64;
     let lags: Vec<f64> = (1..=t.lags).map(|k| k as f64).collect();
-    let cl: Vec<f64> = (-(t.lags as isize)..=t.lags as isize).map(|k| k as f64).collect();
-    let band = |x: &[f64]| Series::band("99 % band", x.to_vec(), vec![-t.band_99; x.len()], vec![t.band_99; x.len()], 7);
+    let cl: Vec<f64> = (-(t.lags as isize)..=t.lags as isize)
+        .map(|k| k as f64)
+        .collect();
+    let band = |x: &[f64]| {
+        Series::band(
+            "99 % band",
+            x.to_vec(),
+            vec![-t.band_99; x.len()],
+            vec![t.band_99; x.len()],
+            7,
+        )
+    };
     Figure {
-        title: format!("{} model residuals on {}", best.model, o.experiments[0].file),
+        title: format!(
+            "{} model residuals on {}",
+            best.model, o.experiments[0].file
+        ),
         rows: 2,
         cols: 1,
         size: (1000, 800),
@@ -284,18 +381,30 @@ fn residual_figure(o: &Outcome) -> Figure {
                 ),
                 x_label: "lag (samples)".into(),
                 y_label: "r_e (–)".into(),
-                series: vec![band(&lags), Series::new("r_e(τ)", lags.clone(), t.autocorrelation.clone(), 0).dash(Dash::Points)],
+                series: vec![
+                    band(&lags),
+                    Series::new("r_e(τ)", lags.clone(), t.autocorrelation.clone(), 0)
+                        .dash(Dash::Points),
+                ],
                 x_range: Some((0.0, m + 1.0)),
                 ..Default::default()
             },
             Panel {
                 title: format!(
                     "cross-correlation with the input ({})",
-                    if t.independent_of_input { "inside the band" } else { "outside the band" }
+                    if t.independent_of_input {
+                        "inside the band"
+                    } else {
+                        "outside the band"
+                    }
                 ),
                 x_label: "lag (samples, > 0: input leads)".into(),
                 y_label: "r_eu (–)".into(),
-                series: vec![band(&cl), Series::new("r_eu(τ)", cl.clone(), t.cross_correlation.clone(), 1).dash(Dash::Points)],
+                series: vec![
+                    band(&cl),
+                    Series::new("r_eu(τ)", cl.clone(), t.cross_correlation.clone(), 1)
+                        .dash(Dash::Points),
+                ],
                 ..Default::default()
             },
         ],
@@ -317,11 +426,18 @@ pub fn write(o: &Outcome, opts: &super::Options, out: &Path, plots: bool) -> Res
     if let Some(s) = &o.scenario {
         put("identified.toml", &s.to_toml())?;
     }
-    put("identify.json", &(serde_json::to_string_pretty(&json(o, opts))? + "\n"))?;
+    put(
+        "identify.json",
+        &(serde_json::to_string_pretty(&json(o, opts))? + "\n"),
+    )?;
     put("frf.csv", &frf_csv(o))?;
     put("fit.csv", &fit_csv(o))?;
     if plots {
-        for (name, fig) in [("frf", frf_figure(o)), ("fit", fit_figure(o)), ("residuals", residual_figure(o))] {
+        for (name, fig) in [
+            ("frf", frf_figure(o)),
+            ("fit", fit_figure(o)),
+            ("residuals", residual_figure(o)),
+        ] {
             fig.png(&dir.join(format!("{name}.png")))?;
             fig.svg(&dir.join(format!("{name}.svg")))?;
             files.push(out.join(format!("{name}.png")));
@@ -337,7 +453,11 @@ pub fn summary(o: &Outcome) -> String {
     let mut s = String::new();
     let unit = o.experiments[0].axis.unit();
     for r in std::iter::once(&o.linear).chain(o.greybox.as_ref()) {
-        let _ = writeln!(s, "{} model ({} evaluations, start: {}):", r.model, r.fit.evaluations, r.start);
+        let _ = writeln!(
+            s,
+            "{} model ({} evaluations, start: {}):",
+            r.model, r.fit.evaluations, r.start
+        );
         for e in &r.fit.estimates {
             let status = match e.status {
                 super::fit::Status::Free => match (e.se, e.relative_se) {
@@ -352,7 +472,11 @@ pub fn summary(o: &Outcome) -> String {
                 if e.status == super::fit::Status::Fixed && r.model == "greybox" {
                     continue;
                 }
-                let _ = writeln!(s, "  {:<16} {:>14.6e} {:<12} {status}", e.key, e.value, e.unit);
+                let _ = writeln!(
+                    s,
+                    "  {:<16} {:>14.6e} {:<12} {status}",
+                    e.key, e.value, e.unit
+                );
             }
         }
         for d in &r.derived {

@@ -156,7 +156,7 @@ pub fn residual_tests(e: &[f64], u: &[f64], lags: usize) -> ResidualTests {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{Rng, RngExt, SeedableRng};
+    use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
     /// Published χ² 95 % quantiles (NIST/SEMATECH e-Handbook, Table 1.3.6.7.4):

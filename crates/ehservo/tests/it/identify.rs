@@ -40,7 +40,12 @@ fn linear_truth() -> [f64; 4] {
     p.ag *= (p.ps / 1e13).sqrt();
     p.ps = 1e13;
     let c = p.coefficients();
-    [c.a1, c.a2, c.a3, NominalModel::new(p, Load::none()).b_at_rest()]
+    [
+        c.a1,
+        c.a2,
+        c.a3,
+        NominalModel::new(p, Load::none()).b_at_rest(),
+    ]
 }
 
 fn multisine(duration: f64, amplitude: f64) -> Spec {
@@ -100,7 +105,11 @@ fn check_linear(o: &Outcome, truth: [f64; 4], rel: f64, ci: bool) {
     for (key, t) in [("a2", truth[1]), ("a3", truth[2]), ("b", truth[3])] {
         let e = o.linear.fit.get(key).unwrap();
         assert_eq!(e.status, Status::Free, "{key}");
-        assert!((e.value / t - 1.0).abs() < rel, "{key}: {} vs {t} (within {rel})", e.value);
+        assert!(
+            (e.value / t - 1.0).abs() < rel,
+            "{key}: {} vs {t} (within {rel})",
+            e.value
+        );
         if ci {
             let [lo, hi] = e.ci95.unwrap();
             assert!(lo <= t && t <= hi, "{key}: {t} outside [{lo}, {hi}]");
@@ -131,9 +140,20 @@ fn open_loop_linear_model_within_two_percent() {
     opts.no_greybox = true;
     let o = identify(&opts).unwrap();
     check_linear(&o, linear_truth(), 0.02, true);
-    assert_eq!(o.linear.fit.get("a1").unwrap().status, Status::Unidentifiable);
-    assert!(o.linear.estimation[0].nrmse_pct < 5.0, "{}", o.linear.estimation[0].nrmse_pct);
-    assert!(o.linear.validation[0].nrmse_pct < 5.0, "{}", o.linear.validation[0].nrmse_pct);
+    assert_eq!(
+        o.linear.fit.get("a1").unwrap().status,
+        Status::Unidentifiable
+    );
+    assert!(
+        o.linear.estimation[0].nrmse_pct < 5.0,
+        "{}",
+        o.linear.estimation[0].nrmse_pct
+    );
+    assert!(
+        o.linear.validation[0].nrmse_pct < 5.0,
+        "{}",
+        o.linear.validation[0].nrmse_pct
+    );
     // The hydraulic pair: ω_n² ≈ a2 for the tiny a1.
     let wn = o.linear.derived("omega_n_rad_s").unwrap().value;
     assert!((wn / linear_truth()[1].sqrt() - 1.0).abs() < 0.02, "{wn}");
@@ -156,7 +176,10 @@ fn closed_loop_experiment() {
     let mut opts = options(vec![est], linear_valve());
     opts.no_greybox = true;
     let o = identify(&opts).unwrap();
-    assert!(o.frf[0].1.is_some(), "the indirect estimate from the reference");
+    assert!(
+        o.frf[0].1.is_some(),
+        "the indirect estimate from the reference"
+    );
     check_linear(&o, linear_truth(), 0.02, true);
 }
 
@@ -175,11 +198,17 @@ fn an_unidentifiable_parameter_is_named() {
     let o = identify(&opts).unwrap();
     let g = o.greybox.as_ref().unwrap();
     let (be, vt) = (g.fit.get("beta_e").unwrap(), g.fit.get("Vt").unwrap());
-    let flagged = [be.status, vt.status].iter().filter(|s| **s == Status::Unidentifiable).count();
+    let flagged = [be.status, vt.status]
+        .iter()
+        .filter(|s| **s == Status::Unidentifiable)
+        .count();
     assert_eq!(flagged, 1, "{:?} {:?}", be.status, vt.status);
     let p = ServoParams::paper();
     let ratio = be.value / vt.value;
-    assert!((ratio / (p.beta_e / p.vt) - 1.0).abs() < 0.02, "βe/Vt = {ratio}");
+    assert!(
+        (ratio / (p.beta_e / p.vt) - 1.0).abs() < 0.02,
+        "βe/Vt = {ratio}"
+    );
 }
 
 /// Without a load and with a linear valve, (θ, u) fix only the transfer
@@ -195,7 +224,10 @@ fn a_pressure_channel_makes_jt_identifiable() {
     set.extend(sensor(0.0, 3));
     set.push("plant.model=physical".into());
     let est = experiment(dir.path(), "p", &multisine(4.0, 0.05), &set);
-    let free: Vec<String> = ["beta_e", "Kce", "Jt", "Bm", "Kv"].iter().map(|s| s.to_string()).collect();
+    let free: Vec<String> = ["beta_e", "Kce", "Jt", "Bm", "Kv"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     let mut opts = options(vec![est.clone()], linear_valve());
     opts.free = Some(free.clone());
     let o = identify(&opts).unwrap();
@@ -208,7 +240,11 @@ fn a_pressure_channel_makes_jt_identifiable() {
         .map(|e| e.key.as_str())
         .collect();
     assert!(!unid.is_empty(), "{unid:?}");
-    assert!(unid.iter().all(|k| ["beta_e", "Kce", "Jt", "Bm"].contains(k)), "{unid:?}");
+    assert!(
+        unid.iter()
+            .all(|k| ["beta_e", "Kce", "Jt", "Bm"].contains(k)),
+        "{unid:?}"
+    );
     // The pressure, logged with seeded noise.
     let text = std::fs::read_to_string(&est).unwrap();
     let mut lines = text.lines();
@@ -236,7 +272,11 @@ fn a_pressure_channel_makes_jt_identifiable() {
     let jt = g.fit.get("Jt").unwrap();
     let [lo, hi] = jt.ci95.unwrap();
     let t = ServoParams::paper().jt;
-    assert!(lo <= t && t <= hi, "Jt {t} outside [{lo}, {hi}] ({})", jt.value);
+    assert!(
+        lo <= t && t <= hi,
+        "Jt {t} outside [{lo}, {hi}] ({})",
+        jt.value
+    );
 }
 
 /// One seed of the coverage experiment: whether each of a2, a3, b is
@@ -299,14 +339,25 @@ fn two_experiments_give_the_bounds_and_a_scenario_that_runs() {
     let o = identify(&opts).unwrap();
     let bounds = o.bounds.as_ref().expect("bounds from two experiments");
     assert_eq!(bounds.samples.len(), 2);
-    assert!(bounds.bound_b > 0.0 && bounds.bound_b < 0.5, "{}", bounds.bound_b);
-    assert!(bounds.bound_a > 0.0 && bounds.bound_a < 0.5, "{}", bounds.bound_a);
+    assert!(
+        bounds.bound_b > 0.0 && bounds.bound_b < 0.5,
+        "{}",
+        bounds.bound_b
+    );
+    assert!(
+        bounds.bound_a > 0.0 && bounds.bound_a < 0.5,
+        "{}",
+        bounds.bound_a
+    );
     let out = dir.path().join("id");
     report::write(&o, &opts, &out, false).unwrap();
     let s = Scenario::load(&out.join("identified.toml"), &[]).unwrap();
     let c = s.controller.to_table();
     let ba = c.get("bound_a").and_then(|v| v.as_float()).unwrap();
-    assert!((ba - bounds.bound_a).abs() <= 1e-5 * bounds.bound_a.max(1e-9) + 1e-12, "{ba}");
+    assert!(
+        (ba - bounds.bound_a).abs() <= 1e-5 * bounds.bound_a.max(1e-9) + 1e-12,
+        "{ba}"
+    );
     let r = ehservo::run::run(&s, ehservo::run::Keep::Every(1000)).unwrap();
     assert!(r.outcome.diverged.is_none());
     for f in ["identify.json", "frf.csv", "fit.csv"] {
@@ -320,22 +371,75 @@ fn two_experiments_give_the_bounds_and_a_scenario_that_runs() {
 #[test]
 fn bad_data_is_refused_whole() {
     let dir = tempfile::tempdir().unwrap();
-    let good = |k: usize| format!("{},{},{}\n", k as f64 * 0.001, (k % 7) as f64 * 0.01, 1e-4 * k as f64);
+    let good = |k: usize| {
+        format!(
+            "{},{},{}\n",
+            k as f64 * 0.001,
+            (k % 7) as f64 * 0.01,
+            1e-4 * k as f64
+        )
+    };
     let rows = |f: &dyn Fn(usize) -> String| -> String {
-        std::iter::once("t_s,u_V,theta_rad\n".to_string()).chain((0..200).map(f)).collect()
+        std::iter::once("t_s,u_V,theta_rad\n".to_string())
+            .chain((0..200).map(f))
+            .collect()
     };
     let cases: Vec<(&str, String, &str)> = vec![
-        ("time.csv", rows(&|k| if k == 50 { "0.001,0,0\n".into() } else { good(k) }), "row 51), column `t_s`: time does not increase"),
-        ("nan.csv", rows(&|k| if k == 10 { "0.01,NaN,0\n".into() } else { good(k) }), "row 11), column `u_V`: NaN"),
-        ("grid.csv", rows(&|k| if k == 30 { format!("{},0,0\n", 0.0304) } else { good(k) }), "row 31), column `t_s`: non-uniform"),
-        ("few.csv", "t_s,u_V,theta_rad\n0,0,0\n0.001,1,0\n".into(), "2 data rows"),
-        ("still.csv", rows(&|k| format!("{},0.5,0\n", k as f64 * 0.001)), "never moves"),
+        (
+            "time.csv",
+            rows(&|k| {
+                if k == 50 {
+                    "0.001,0,0\n".into()
+                } else {
+                    good(k)
+                }
+            }),
+            "row 51), column `t_s`: time does not increase",
+        ),
+        (
+            "nan.csv",
+            rows(&|k| {
+                if k == 10 {
+                    "0.01,NaN,0\n".into()
+                } else {
+                    good(k)
+                }
+            }),
+            "row 11), column `u_V`: NaN",
+        ),
+        (
+            "grid.csv",
+            rows(&|k| {
+                if k == 30 {
+                    format!("{},0,0\n", 0.0304)
+                } else {
+                    good(k)
+                }
+            }),
+            "row 31), column `t_s`: non-uniform",
+        ),
+        (
+            "few.csv",
+            "t_s,u_V,theta_rad\n0,0,0\n0.001,1,0\n".into(),
+            "2 data rows",
+        ),
+        (
+            "still.csv",
+            rows(&|k| format!("{},0.5,0\n", k as f64 * 0.001)),
+            "never moves",
+        ),
     ];
     for (name, text, expect) in cases {
         let f = dir.path().join(name);
         std::fs::write(&f, text).unwrap();
         let out = dir.path().join(format!("out-{name}"));
-        let o = ehservo().arg("identify").arg(&f).arg("--out").arg(&out).output().unwrap();
+        let o = ehservo()
+            .arg("identify")
+            .arg(&f)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
         crate::common::rejected_naming(name, &o, expect);
         assert!(!out.exists(), "{name}: nothing written");
     }
@@ -356,13 +460,33 @@ fn excite_run_identify_on_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
     let ex = dir.path().join("ex");
     let o = ehservo()
-        .args(["excite", "--signal", "prbs", "--loop", "closed", "--amplitude", "0.02", "--duration", "4", "--set", "load.amplitude=0", "--out"])
+        .args([
+            "excite",
+            "--signal",
+            "prbs",
+            "--loop",
+            "closed",
+            "--amplitude",
+            "0.02",
+            "--duration",
+            "4",
+            "--set",
+            "load.amplitude=0",
+            "--out",
+        ])
         .arg(&ex)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let run = dir.path().join("run");
-    let o = ehservo().arg("run").arg(ex.join("scenario.toml")).arg("--out").arg(&run).arg("--no-plot").output().unwrap();
+    let o = ehservo()
+        .arg("run")
+        .arg(ex.join("scenario.toml"))
+        .arg("--out")
+        .arg(&run)
+        .arg("--no-plot")
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let id = dir.path().join("id");
     let o = ehservo()
@@ -373,11 +497,27 @@ fn excite_run_identify_on_the_command_line() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in ["identify.json", "frf.csv", "fit.csv", "frf.png", "fit.svg", "residuals.png"] {
+    for f in [
+        "identify.json",
+        "frf.csv",
+        "fit.csv",
+        "frf.png",
+        "fit.svg",
+        "residuals.png",
+    ] {
         assert!(id.join(f).is_file(), "{f}");
     }
-    let j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(id.join("identify.json")).unwrap()).unwrap();
-    let b = j["linear"]["fit"]["estimates"].as_array().unwrap().iter().find(|e| e["key"] == "b").unwrap();
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(id.join("identify.json")).unwrap()).unwrap();
+    let b = j["linear"]["fit"]["estimates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["key"] == "b")
+        .unwrap();
     let truth = NominalModel::new(ServoParams::paper(), Load::none()).b_at_rest();
-    assert!((b["value"].as_f64().unwrap() / truth - 1.0).abs() < 0.05, "{b}");
+    assert!(
+        (b["value"].as_f64().unwrap() / truth - 1.0).abs() < 0.05,
+        "{b}"
+    );
 }
