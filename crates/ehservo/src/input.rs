@@ -12,22 +12,33 @@ pub const MAX_INPUT_BYTES: u64 = 1 << 20;
 /// The text of `path`, refused (with the reason) when it is not a regular
 /// file, is larger than [`MAX_INPUT_BYTES`], or is not UTF-8.
 pub fn read_text(path: &Path) -> Result<String, String> {
+    read_text_at_most(path, MAX_INPUT_BYTES)
+}
+
+/// Largest logged data file `ehservo identify` reads (bytes): 256 MiB,
+/// some minutes of a rig's log at 1 kHz with a dozen columns.
+pub const MAX_DATA_BYTES: u64 = 256 << 20;
+
+/// [`read_text`] with another bound (a logged data file is larger than a
+/// scenario).
+pub fn read_text_at_most(path: &Path, limit: u64) -> Result<String, String> {
+    let max = limit;
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot be read: {e}"))?;
     if !meta.is_file() {
         return Err("is not a regular file".into());
     }
-    if meta.len() > MAX_INPUT_BYTES {
+    if meta.len() > max {
         return Err(format!(
-            "is {} bytes; an input file is at most {MAX_INPUT_BYTES} bytes",
+            "is {} bytes; an input file is at most {max} bytes",
             meta.len()
         ));
     }
     let mut bytes = Vec::new();
     std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes))
+        .and_then(|f| f.take(max + 1).read_to_end(&mut bytes))
         .map_err(|e| format!("cannot be read: {e}"))?;
-    if bytes.len() as u64 > MAX_INPUT_BYTES {
-        return Err(format!("is larger than {MAX_INPUT_BYTES} bytes"));
+    if bytes.len() as u64 > max {
+        return Err(format!("is larger than {max} bytes"));
     }
     String::from_utf8(bytes).map_err(|e| format!("is not UTF-8 text: {e}"))
 }

@@ -17,11 +17,13 @@
 //! | [`tune`], [`league`] | controller tuning by particle swarm; every controller of a suite, tuned alike, on every scenario |
 //! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
 //! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
+//! | [`identify`] | `ehservo excite` and `ehservo identify`: experiments designed, logged data turned into a scenario (docs/identification.md) |
 
 pub mod analysis;
 pub mod error;
 pub mod estimation;
 pub mod fmu;
+pub mod identify;
 pub mod input;
 pub mod league;
 pub mod output;

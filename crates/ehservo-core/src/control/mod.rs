@@ -65,6 +65,7 @@ macro_rules! serde_by_name {
 
 pub mod nn_robust;
 pub mod nnvsc;
+pub mod open_loop;
 pub mod pid;
 pub mod sliding;
 pub mod sta;

@@ -8,7 +8,14 @@ use std::path::{Path, PathBuf};
 
 /// The files that mark a folder as an ehservo output (of `run`, `sweep` or
 /// `merge`, `reproduce`): only such a folder, or an empty one, is replaced.
-pub const OUTPUT_MARKERS: [&str; 4] = ["summary.json", "study.json", "report.md", "claims.csv"];
+pub const OUTPUT_MARKERS: [&str; 6] = [
+    "summary.json",
+    "study.json",
+    "report.md",
+    "claims.csv",
+    "identify.json",
+    "excite.json",
+];
 
 /// Checks that `dest` may receive an output, which replaces it whole: it
 /// does not exist yet (and names a folder), or it is a directory that is

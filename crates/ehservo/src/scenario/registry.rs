@@ -144,6 +144,7 @@ registry! {
     Sta => ehservo_core::control::sta::StaConfig,
     Arc => ehservo_core::control::arc::ArcConfig,
     Backstepping => ehservo_core::control::backstepping::BacksteppingConfig,
+    OpenLoop => ehservo_core::control::open_loop::OpenLoopConfig,
 }
 
 impl Default for ControllerCfg {

@@ -1,0 +1,569 @@
+//! Logged experiments: a CSV file with one header row of named columns,
+//! read into SI units and checked before any work.
+//!
+//! The columns are found by name (`--time`, `--input`, `--output`,
+//! `--reference`, `--pressure`, `--velocity` choose others); a name's unit
+//! is its suffix (`theta_rad`, `theta_deg`, `y_m`, `y_mm`, `u_V`, `p_load_Pa`,
+//! `p_load_bar`, `theta_dot_rad_s`, …) and every value is converted to SI:
+//! rad, m, V, Pa, rad/s, m/s, s. ehservo's own `trace.csv` is read as it is:
+//! its measured angle `theta_meas_deg` when the sensors were not exact,
+//! else `theta_deg`; its command `u_V`; its reference `theta_d_deg`; its
+//! load pressure `p_load_Pa`.
+//!
+//! Refused, with the file, the line and row, the column and the reason
+//! (exit code 2): a missing column, a field that is not a number, NaN or
+//! infinity, time that does not increase, a sample period that is not
+//! uniform (beyond `tolerance` of a period: loggers that print rounded
+//! times stay within it), too few rows, a command that never moves.
+
+use crate::error::InputError;
+use std::path::Path;
+
+/// Which kind of motion the output measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Axis {
+    /// An angle (rad): the paper's rotary servo.
+    Rotary,
+    /// A displacement (m): a cylinder.
+    Linear,
+}
+
+impl Axis {
+    /// The SI unit of a position on this axis.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Axis::Rotary => "rad",
+            Axis::Linear => "m",
+        }
+    }
+}
+
+/// What a column measures, from its name's suffix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unit {
+    /// The SI unit the values are converted to.
+    pub si: &'static str,
+    /// The factor from the logged unit to SI.
+    pub factor: f64,
+    /// The axis a position column implies.
+    pub axis: Option<Axis>,
+}
+
+/// Suffixes and their units, longest first so that `_rad_s` wins over `_s`.
+const SUFFIXES: &[(&str, &str, f64, Option<Axis>)] = &[
+    ("_rad_s", "rad/s", 1.0, Some(Axis::Rotary)),
+    (
+        "_deg_s",
+        "rad/s",
+        std::f64::consts::PI / 180.0,
+        Some(Axis::Rotary),
+    ),
+    ("_mm_s", "m/s", 1e-3, Some(Axis::Linear)),
+    ("_m_s", "m/s", 1.0, Some(Axis::Linear)),
+    ("_rad", "rad", 1.0, Some(Axis::Rotary)),
+    (
+        "_deg",
+        "rad",
+        std::f64::consts::PI / 180.0,
+        Some(Axis::Rotary),
+    ),
+    ("_um", "m", 1e-6, Some(Axis::Linear)),
+    ("_mm", "m", 1e-3, Some(Axis::Linear)),
+    ("_m", "m", 1.0, Some(Axis::Linear)),
+    ("_mV", "V", 1e-3, None),
+    ("_V", "V", 1.0, None),
+    ("_mA", "A", 1e-3, None),
+    ("_A", "A", 1.0, None),
+    ("_MPa", "Pa", 1e6, None),
+    ("_kPa", "Pa", 1e3, None),
+    ("_bar", "Pa", 1e5, None),
+    ("_Pa", "Pa", 1.0, None),
+    ("_ms", "s", 1e-3, None),
+    ("_s", "s", 1.0, None),
+];
+
+/// The unit of a column from its name; `None` when the name carries none
+/// (the values are then taken as SI).
+pub fn unit_of(name: &str) -> Option<Unit> {
+    SUFFIXES
+        .iter()
+        .find(|(s, ..)| name.ends_with(s) && name.len() > s.len())
+        .map(|&(_, si, factor, axis)| Unit { si, factor, axis })
+}
+
+/// Which columns hold what. `None`: the first of the defaults that the
+/// file has; `Some("none")`: do not use that channel.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct ColumnMap {
+    /// Time (default `t_s`, `t`, `time_s`, `time`).
+    pub time: Option<String>,
+    /// The command (default `u_V`, `u`).
+    pub input: Option<String>,
+    /// The measured position (default `theta_meas_rad`, `theta_meas_deg`,
+    /// `theta_rad`, `theta_deg`, `y_m`, `y_mm`, `position_m`).
+    pub output: Option<String>,
+    /// The reference of a closed-loop experiment (default `reference_rad`,
+    /// `reference_deg`, `theta_d_rad`, `theta_d_deg`, `reference_m`, `r_m`).
+    pub reference: Option<String>,
+    /// The load pressure (default `p_load_Pa`, `p_load_bar`, `p_load_MPa`).
+    pub pressure: Option<String>,
+    /// A measured velocity (none by default: `trace.csv`'s `theta_dot_deg_s`
+    /// is the true one, not a sensor's).
+    pub velocity: Option<String>,
+}
+
+const TIME: &[&str] = &["t_s", "t", "time_s", "time"];
+const INPUT: &[&str] = &["u_V", "u"];
+const OUTPUT: &[&str] = &[
+    "theta_meas_rad",
+    "theta_meas_deg",
+    "theta_rad",
+    "theta_deg",
+    "y_m",
+    "y_mm",
+    "position_m",
+    "position_mm",
+];
+const REFERENCE: &[&str] = &[
+    "reference_rad",
+    "reference_deg",
+    "theta_d_rad",
+    "theta_d_deg",
+    "reference_m",
+    "reference_mm",
+    "r_m",
+];
+const PRESSURE: &[&str] = &["p_load_Pa", "p_load_bar", "p_load_MPa"];
+
+/// One channel of an experiment, in SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    /// The column it was read from.
+    pub column: String,
+    /// Its SI unit (empty when the name carried none).
+    pub unit: &'static str,
+    /// The values, one per sample.
+    pub values: Vec<f64>,
+}
+
+/// A logged experiment on a uniform time grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Experiment {
+    /// The file (as given).
+    pub file: String,
+    /// The first sample's time (s).
+    pub t0: f64,
+    /// The sample period h (s), from the first and last times.
+    pub h: f64,
+    /// The command, held over each period (zero-order hold).
+    pub u: Channel,
+    /// The measured position.
+    pub y: Channel,
+    /// The reference (closed loop).
+    pub reference: Option<Channel>,
+    /// The load pressure.
+    pub pressure: Option<Channel>,
+    /// A measured velocity.
+    pub velocity: Option<Channel>,
+    /// Rotary or linear, from the output's unit.
+    pub axis: Axis,
+}
+
+impl Experiment {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.y.values.len()
+    }
+
+    /// Whether there are no samples (never, once read).
+    pub fn is_empty(&self) -> bool {
+        self.y.values.is_empty()
+    }
+
+    /// The sample times t0 + k·h (s).
+    pub fn times(&self) -> Vec<f64> {
+        (0..self.len())
+            .map(|k| self.t0 + k as f64 * self.h)
+            .collect()
+    }
+}
+
+fn bad(msg: String) -> anyhow::Error {
+    anyhow::Error::from(InputError(msg))
+}
+
+/// Reading options beside the column map.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReadOptions {
+    /// Largest |t_k − (t0 + k·h)| accepted, as a fraction of h.
+    pub tolerance: f64,
+    /// Fewest rows accepted.
+    pub min_rows: usize,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: 0.05,
+            min_rows: 64,
+        }
+    }
+}
+
+/// Most rows read from one file.
+pub const MAX_ROWS: usize = 5_000_000;
+
+/// Reads and checks one experiment.
+pub fn read(path: &Path, map: &ColumnMap, opts: ReadOptions) -> anyhow::Result<Experiment> {
+    let file = path.display().to_string();
+    let text = crate::input::read_text_at_most(path, crate::input::MAX_DATA_BYTES)
+        .map_err(|r| bad(format!("{file}: the data file {r}")))?;
+    parse(&text, &file, map, opts)
+}
+
+/// Finds a column: the one asked for, or the first default present.
+fn pick(
+    header: &[&str],
+    file: &str,
+    what: &str,
+    flag: &str,
+    asked: &Option<String>,
+    defaults: &[&str],
+    required: bool,
+) -> anyhow::Result<Option<usize>> {
+    match asked.as_deref() {
+        Some("none") if !required => Ok(None),
+        Some(name) => match header.iter().position(|h| *h == name) {
+            Some(i) => Ok(Some(i)),
+            None => Err(bad(format!(
+                "{file}: line 1: no column `{name}` ({flag}); the header has: {}",
+                header.join(", ")
+            ))),
+        },
+        None => {
+            let found = defaults
+                .iter()
+                .find_map(|d| header.iter().position(|h| h == d));
+            if found.is_none() && required {
+                return Err(bad(format!(
+                    "{file}: line 1: no {what} column: expected one of {} (or name it with {flag}); the header has: {}",
+                    defaults.join(", "),
+                    header.join(", ")
+                )));
+            }
+            Ok(found)
+        }
+    }
+}
+
+/// Parses and checks the text of one experiment.
+pub fn parse(
+    text: &str,
+    file: &str,
+    map: &ColumnMap,
+    opts: ReadOptions,
+) -> anyhow::Result<Experiment> {
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let Some((hl, header_line)) = lines.next() else {
+        return Err(bad(format!(
+            "{file}: is empty: expected a header row of named columns (t_s, u_V, theta_rad, …)"
+        )));
+    };
+    let header: Vec<&str> = header_line.split(',').map(str::trim).collect();
+    if header.iter().all(|h| h.parse::<f64>().is_ok()) {
+        return Err(bad(format!(
+            "{file}: line {hl}: the first row is numbers, not a header: name the columns (t_s, u_V, theta_rad, …)"
+        )));
+    }
+    let ti = pick(&header, file, "time", "--time", &map.time, TIME, true)?.unwrap_or(0);
+    let ui = pick(&header, file, "command", "--input", &map.input, INPUT, true)?.unwrap_or(0);
+    let yi = pick(
+        &header,
+        file,
+        "position",
+        "--output",
+        &map.output,
+        OUTPUT,
+        true,
+    )?
+    .unwrap_or(0);
+    let ri = pick(
+        &header,
+        file,
+        "reference",
+        "--reference",
+        &map.reference,
+        REFERENCE,
+        false,
+    )?;
+    let pi = pick(
+        &header,
+        file,
+        "pressure",
+        "--pressure",
+        &map.pressure,
+        PRESSURE,
+        false,
+    )?;
+    let vi = match &map.velocity {
+        None => None,
+        v => pick(&header, file, "velocity", "--velocity", v, &[], false)?,
+    };
+    let y_unit = unit_of(header[yi]);
+    let axis = y_unit.and_then(|u| u.axis).unwrap_or(Axis::Rotary);
+    if let Some(u) = y_unit {
+        if u.si != "rad" && u.si != "m" {
+            return Err(bad(format!(
+                "{file}: column `{}`: a position must be in rad, deg, m or mm (its unit is {})",
+                header[yi], u.si
+            )));
+        }
+    }
+    let cols: Vec<(usize, &str)> = [Some(ti), Some(ui), Some(yi), ri, pi, vi]
+        .into_iter()
+        .flatten()
+        .map(|i| (i, header[i]))
+        .collect();
+    let mut data: Vec<Vec<f64>> = vec![Vec::new(); cols.len()];
+    let mut line_of: Vec<usize> = Vec::new();
+    for (row, (line, l)) in lines.enumerate() {
+        let row = row + 1;
+        if row > MAX_ROWS {
+            return Err(bad(format!(
+                "{file}: line {line} (row {row}): more than {MAX_ROWS} rows"
+            )));
+        }
+        let fields: Vec<&str> = l.split(',').map(str::trim).collect();
+        if fields.len() != header.len() {
+            return Err(bad(format!(
+                "{file}: line {line} (row {row}): {} fields, the header has {}",
+                fields.len(),
+                header.len()
+            )));
+        }
+        for (j, &(c, name)) in cols.iter().enumerate() {
+            let v: f64 = fields[c].parse().map_err(|_| {
+                bad(format!(
+                    "{file}: line {line} (row {row}), column `{name}`: `{}` is not a number",
+                    fields[c]
+                ))
+            })?;
+            if v.is_nan() {
+                return Err(bad(format!(
+                    "{file}: line {line} (row {row}), column `{name}`: NaN (a logged value must be a number)"
+                )));
+            }
+            if !v.is_finite() {
+                return Err(bad(format!(
+                    "{file}: line {line} (row {row}), column `{name}`: {v} (values must be finite)"
+                )));
+            }
+            data[j].push(v);
+        }
+        line_of.push(line);
+    }
+    let n = line_of.len();
+    if n < opts.min_rows.max(2) {
+        return Err(bad(format!(
+            "{file}: {n} data rows: at least {} are needed",
+            opts.min_rows.max(2)
+        )));
+    }
+    // Time: strictly increasing and uniform.
+    let tname = header[ti];
+    let tf = unit_of(tname).map_or(1.0, |u| u.factor);
+    let t: Vec<f64> = data[0].iter().map(|v| v * tf).collect();
+    for k in 1..n {
+        if t[k] <= t[k - 1] {
+            return Err(bad(format!(
+                "{file}: line {} (row {}), column `{tname}`: time does not increase (t = {} after {})",
+                line_of[k],
+                k + 1,
+                data[0][k],
+                data[0][k - 1]
+            )));
+        }
+    }
+    let h = (t[n - 1] - t[0]) / (n - 1) as f64;
+    for k in 0..n {
+        let dev = t[k] - (t[0] + k as f64 * h);
+        if dev.abs() > opts.tolerance * h {
+            return Err(bad(format!(
+                "{file}: line {} (row {}), column `{tname}`: non-uniform sample period: t = {} s where a uniform grid of period {h:.6e} s puts {:.6e} s (off by {:.1} % of a period; the limit is {:.1} %)",
+                line_of[k],
+                k + 1,
+                t[k],
+                t[0] + k as f64 * h,
+                100.0 * dev.abs() / h,
+                100.0 * opts.tolerance
+            )));
+        }
+    }
+    let channel = |j: usize| -> Channel {
+        let name = cols[j].1;
+        let u = unit_of(name);
+        let f = u.map_or(1.0, |u| u.factor);
+        Channel {
+            column: name.to_string(),
+            unit: u.map_or("", |u| u.si),
+            values: data[j].iter().map(|v| v * f).collect(),
+        }
+    };
+    let u = channel(1);
+    let (lo, hi) = u
+        .values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if hi - lo <= 1e-12 * hi.abs().max(lo.abs()) || hi - lo == 0.0 {
+        return Err(bad(format!(
+            "{file}: column `{}`: the command never moves (every row is {}): nothing can be identified",
+            u.column, data[1][0]
+        )));
+    }
+    let mut j = 3;
+    let mut next = |present: bool| {
+        if present {
+            j += 1;
+            Some(channel(j - 1))
+        } else {
+            None
+        }
+    };
+    let reference = next(ri.is_some());
+    let pressure = next(pi.is_some());
+    let velocity = next(vi.is_some());
+    if let Some(p) = &pressure {
+        if !p.unit.is_empty() && p.unit != "Pa" {
+            return Err(bad(format!(
+                "{file}: column `{}`: a pressure must be in Pa, kPa, bar or MPa",
+                p.column
+            )));
+        }
+    }
+    Ok(Experiment {
+        file: file.to_string(),
+        t0: t[0],
+        h,
+        u,
+        y: channel(2),
+        reference,
+        pressure,
+        velocity,
+        axis,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rows(n: usize, f: impl Fn(usize) -> String) -> String {
+        (0..n).map(|k| f(k) + "\n").collect()
+    }
+
+    fn opts() -> ReadOptions {
+        ReadOptions {
+            tolerance: 0.05,
+            min_rows: 4,
+        }
+    }
+
+    /// Degrees and millimetres are converted: 180° is π rad; bar is 1e5 Pa.
+    #[test]
+    fn units_come_from_the_suffixes() {
+        let text = format!(
+            "t_s,u_V,theta_deg,p_load_bar\n{}",
+            rows(5, |k| format!("{},{},180,2", k as f64 * 0.01, k % 2))
+        );
+        let e = parse(&text, "x.csv", &ColumnMap::default(), opts()).unwrap();
+        assert_eq!(e.axis, Axis::Rotary);
+        assert!((e.y.values[0] - std::f64::consts::PI).abs() < 1e-15);
+        assert!((e.pressure.unwrap().values[0] - 2e5).abs() < 1e-9);
+        assert!((e.h - 0.01).abs() < 1e-15);
+        let text = format!(
+            "t,u_V,y_mm\n{}",
+            rows(5, |k| format!("{},{},250", k, k % 2))
+        );
+        let e = parse(&text, "x.csv", &ColumnMap::default(), opts()).unwrap();
+        assert_eq!(e.axis, Axis::Linear);
+        assert!((e.y.values[0] - 0.25).abs() < 1e-15);
+    }
+
+    /// ehservo's trace.csv: the measured angle is preferred to the true one.
+    #[test]
+    fn a_trace_reads_its_measured_angle() {
+        let text = format!(
+            "t_s,theta_d_deg,theta_deg,e_deg,u_V,p_load_Pa,theta_meas_deg\n{}",
+            rows(5, |k| format!("{},0,1,0,{},0,2", k as f64 * 0.001, k))
+        );
+        let e = parse(&text, "trace.csv", &ColumnMap::default(), opts()).unwrap();
+        assert_eq!(e.y.column, "theta_meas_deg");
+        assert_eq!(e.reference.as_ref().unwrap().column, "theta_d_deg");
+        let none = ColumnMap {
+            pressure: Some("none".into()),
+            reference: Some("none".into()),
+            ..Default::default()
+        };
+        let e = parse(&text, "trace.csv", &none, opts()).unwrap();
+        assert!(e.pressure.is_none() && e.reference.is_none());
+    }
+
+    fn err(text: &str) -> String {
+        parse(text, "d.csv", &ColumnMap::default(), opts())
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn bad_rows_are_named() {
+        let head = "t_s,u_V,theta_rad\n";
+        let e = err(&format!(
+            "{head}0,0,0\n0.1,1,0\n0.1,0,0\n0.3,1,0\n0.4,0,0\n"
+        ));
+        assert!(
+            e.contains("line 4 (row 3)") && e.contains("does not increase"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{head}0,0,0\n0.1,1,0\n0.2,NaN,0\n0.3,1,0\n0.4,0,0\n"
+        ));
+        assert!(
+            e.contains("row 3") && e.contains("`u_V`") && e.contains("NaN"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{head}0,0,0\n0.1,1,0\n0.25,0,0\n0.3,1,0\n0.4,0,0\n"
+        ));
+        assert!(e.contains("row 3") && e.contains("non-uniform"), "{e}");
+        let e = err(&format!("{head}0,1,0\n0.1,1,0\n0.2,1,0\n0.3,1,0\n"));
+        assert!(e.contains("never moves"), "{e}");
+        let e = err(&format!("{head}0,1,0\n0.1,0,0\n"));
+        assert!(e.contains("2 data rows"), "{e}");
+        let e = err(&format!("{head}0,1,x\n"));
+        assert!(
+            e.contains("`x` is not a number") && e.contains("theta_rad"),
+            "{e}"
+        );
+        let e = err("t_s,u_V,v\n0,1,2\n");
+        assert!(e.contains("no position column"), "{e}");
+        let e = err("0,0,0\n1,1,1\n");
+        assert!(e.contains("not a header"), "{e}");
+        // Times rounded to the printed digits stay within the tolerance.
+        let t = format!(
+            "{head}{}",
+            rows(2048, |k| format!(
+                "{:.4},{},0",
+                3.0 * k as f64 / 2047.0,
+                k % 2
+            ))
+        );
+        assert!(parse(&t, "d.csv", &ColumnMap::default(), opts()).is_ok());
+    }
+}
