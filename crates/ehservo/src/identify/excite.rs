@@ -451,9 +451,9 @@ pub fn excite_to_dir(
     };
     let d = design(spec)?;
     let h = 1.0 / spec.rate;
-    let pp = prior.plant.params;
-    let a = super::greybox::effective(&pp, &prior.load);
-    let b = ehservo_core::servo::NominalModel::new(pp, prior.load).b_at_rest();
+    let pp = prior.servo();
+    let a = super::greybox::effective(&pp, &prior.load_model());
+    let b = ehservo_core::servo::NominalModel::new(pp, prior.load_model()).b_at_rest();
     let kp = match spec.loop_kind {
         Loop::Open => None,
         Loop::Closed => Some(spec.kp.unwrap_or_else(|| default_kp(a, b))),

@@ -167,7 +167,14 @@ impl Physical {
 /// signature; only this adapter follows it.
 pub mod adapter {
     use ehservo_core::servo::{Load, ServoParams};
-    use ehservo_sim::plant::{PhysicalPlant, Plant, Variation};
+    use ehservo_sim::physical::PhysicalVariation;
+    use ehservo_sim::plant::{Factors, PhysicalPlant, Plant, Variation};
+
+    /// No variation, in the physical plant's form.
+    const NONE: PhysicalVariation = PhysicalVariation {
+        paper: Variation::NONE,
+        factors: Factors::ONE,
+    };
 
     /// The physical plant, as the grey-box sees it.
     pub struct Adapter(PhysicalPlant);
@@ -180,14 +187,14 @@ pub mod adapter {
 
         /// The state (θ, θ̇, P_l) at rest at θ0: P_l from the torque balance.
         pub fn at_rest(&self, theta0: f64) -> [f64; 3] {
-            self.0.initial_state([theta0, 0.0, 0.0])
+            self.0.initial_state([theta0, 0.0, 0.0], &NONE)
         }
 
         /// d(θ, θ̇, P_l)/dt under the valve command `u` (V).
         #[inline]
         pub fn deriv(&self, s: &[f64; 3], u: f64) -> [f64; 3] {
             let mut ds = [0.0; 3];
-            self.0.deriv(0.0, s, u, &Variation::NONE, &mut ds);
+            self.0.deriv(0.0, s, u, &NONE, &mut ds);
             ds
         }
     }

@@ -602,14 +602,14 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         .collect();
     // 2. The linear model.
     let load_terms = opts.load_terms;
-    let k = prior.load.wavenumber;
+    let k = prior.load_model().wavenumber;
     if load_terms && !(k.is_finite() && k > 0.0) {
         return Err(bad(format!(
             "--load-terms: the prior's load.wavenumber is {k}: the load terms need k > 0 (set it with --set load.wavenumber=K)"
         )));
     }
-    let pp = prior.plant.params;
-    let pl = prior.load;
+    let pp = prior.servo();
+    let pl = prior.load_model();
     let pm = ehservo_core::servo::NominalModel::new(pp, pl);
     let prior_eff = greybox::effective(&pp, &pl);
     let prior_d = [
@@ -1164,17 +1164,26 @@ fn identified_scenario(
     files: &[PathBuf],
 ) -> anyhow::Result<Scenario> {
     let nk = greybox::KEYS.len();
-    let (p, l): (ServoParams, Load) = greybox::from_vec(&g.fit.values()[..nk], &prior.load);
+    let (p, l): (ServoParams, Load) = greybox::from_vec(&g.fit.values()[..nk], &prior.load_model());
     let mut s = prior.clone();
     s.name = "identified".into();
     s.description = format!(
         "Identified by `ehservo identify` from {}: the grey-box fit's physical parameters (the paper's model (1)-(6)); no parameter variation; the controller's bound_a and bound_b from the estimates' spread when there was one.",
         files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ")
     );
-    s.plant.params = p;
-    s.plant.cylinder = None;
-    s.load = l;
-    s.uncertainty = ehservo_sim::plant::UncertaintySpec::NONE;
+    s.plant = if prior.plant.model() == "physical" {
+        crate::scenario::PlantCfg::Physical(ehservo_sim::physical::PhysicalCfg { params: p })
+    } else {
+        crate::scenario::PlantCfg::ThirdOrder(ehservo_sim::third_order::ThirdOrderCfg { params: p })
+    };
+    s.load = Some(l);
+    s.uncertainty = crate::scenario::UncertaintyCfg {
+        a_bias: Some(0.0),
+        a_random: Some(0.0),
+        b_bias: Some(0.0),
+        b_random: Some(0.0),
+        ..Default::default()
+    };
     let mut values: Vec<(String, toml::Value)> = Vec::new();
     if let Some(b) = bounds {
         let t = s.controller.to_table();
