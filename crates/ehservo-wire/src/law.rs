@@ -273,11 +273,11 @@ impl<F: Real> AnyLaw<F> {
             SampledController::with_policy(c, dt, p)
         }
         Ok(match &h.controller {
-            WireController::Nnvsc(c) => Self::Nnvsc(sampled(c.build(&design)?.cast()?, dt, policy)?),
-            WireController::Vsc(c) => Self::Vsc(sampled(c.build(&design)?.cast()?, dt, policy)?),
-            WireController::VscSat(c) => {
-                Self::Vsc(sampled(c.build(&design)?.cast()?, dt, policy)?)
+            WireController::Nnvsc(c) => {
+                Self::Nnvsc(sampled(c.build(&design)?.cast()?, dt, policy)?)
             }
+            WireController::Vsc(c) => Self::Vsc(sampled(c.build(&design)?.cast()?, dt, policy)?),
+            WireController::VscSat(c) => Self::Vsc(sampled(c.build(&design)?.cast()?, dt, policy)?),
             WireController::Pid(c) => Self::Pid(sampled(c.build(&design)?.cast(), dt, policy)?),
             WireController::NnRobust(c) => {
                 Self::NnRobust(sampled(c.build(&design)?.cast()?, dt, policy)?)

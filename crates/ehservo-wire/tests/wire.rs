@@ -121,7 +121,10 @@ fn every_kind_round_trips() {
         assert_eq!(round_trip(&m), m);
     }
     // A load with friction (an optional table).
-    let mut h = hello(WireController::Nnvsc(NnVscConfig::default()), FloatType::F32);
+    let mut h = hello(
+        WireController::Nnvsc(NnVscConfig::default()),
+        FloatType::F32,
+    );
     h.model.load.friction = Some(Friction::default());
     let m: ToBoard<f32> = ToBoard::Hello(h);
     assert_eq!(round_trip(&m), m);
@@ -350,7 +353,10 @@ fn x_at(k: u32) -> [f32; 3] {
 #[test]
 fn the_board_steps_the_f32_loop_and_rolls_back() {
     let mut b = Board::new("test 0", clock());
-    let h = hello(WireController::Nnvsc(NnVscConfig::default()), FloatType::F32);
+    let h = hello(
+        WireController::Nnvsc(NnVscConfig::default()),
+        FloatType::F32,
+    );
     let w = welcome(&mut b, &h);
     assert_eq!(
         (w.scenario_hash, w.signals, w.float),
@@ -401,7 +407,10 @@ fn the_board_steps_the_f32_loop_and_rolls_back() {
 fn the_handshake_refuses_what_it_cannot_run() {
     let mut b = Board::new("test 0", clock());
     // Another protocol.
-    let mut h = hello(WireController::Nnvsc(NnVscConfig::default()), FloatType::F32);
+    let mut h = hello(
+        WireController::Nnvsc(NnVscConfig::default()),
+        FloatType::F32,
+    );
     h.protocol = PROTOCOL_VERSION + 1;
     match ask::<f32>(&mut b, &ToBoard::Hello(h)) {
         FromBoard::Refused(r) => {
@@ -412,7 +421,10 @@ fn the_handshake_refuses_what_it_cannot_run() {
     }
     // A board of another protocol refuses ours.
     let mut old = Board::new("test 0", clock()).with_protocol(PROTOCOL_VERSION + 7);
-    let h = hello(WireController::Nnvsc(NnVscConfig::default()), FloatType::F32);
+    let h = hello(
+        WireController::Nnvsc(NnVscConfig::default()),
+        FloatType::F32,
+    );
     assert!(matches!(
         ask::<f32>(&mut old, &ToBoard::Hello(h.clone())),
         FromBoard::Refused(Refusal { protocol, reason: RefuseReason::Protocol }) if protocol == PROTOCOL_VERSION + 7
@@ -546,10 +558,7 @@ fn every_kind_builds_in_both_float_types() {
                 match ask(&mut b, &ToBoard::Sample(bad(1))) {
                     FromBoard::Reply(r) => {
                         assert_eq!(r.u, 0.0);
-                        assert_ne!(
-                            r.flags & ehservo_core::control::flags::MEASUREMENT_FAULT,
-                            0
-                        );
+                        assert_ne!(r.flags & ehservo_core::control::flags::MEASUREMENT_FAULT, 0);
                     }
                     o => panic!("{o:?}"),
                 }

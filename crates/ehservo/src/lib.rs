@@ -17,6 +17,7 @@
 //! | [`tune`], [`league`] | controller tuning by particle swarm; every controller of a suite, tuned alike, on every scenario |
 //! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
 //! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
+//! | [`pil`] | `ehservo pil`: the controller on a board (QEMU or serial), the rest simulated, in lock-step; `ehservo run --float f32` |
 
 pub mod analysis;
 pub mod error;
@@ -25,6 +26,8 @@ pub mod fmu;
 pub mod input;
 pub mod league;
 pub mod output;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod pil;
 pub mod plot;
 pub mod reproduce;
 pub mod run;
