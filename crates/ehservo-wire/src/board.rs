@@ -68,7 +68,7 @@ impl<F: Real> Run<F> {
         }
     }
 
-    fn sample(&mut self, s: &Sample<F>, clock: &mut dyn Ticks) -> FromBoard<F> {
+    fn sample<T: Ticks>(&mut self, s: &Sample<F>, clock: &mut T) -> FromBoard<F> {
         if self.last_k.is_some_and(|j| s.k <= j) {
             return FromBoard::Fault(Fault {
                 k: Some(s.k),
@@ -162,7 +162,7 @@ impl Board {
     /// Handles one frame (`raw`: its bytes without the final zero, decoded
     /// in place) and writes the answer's frame into `out` (at least
     /// [`frame::MAX_FRAME`] bytes); returns its length.
-    pub fn on_frame(&mut self, raw: &mut [u8], clock: &mut dyn Ticks, out: &mut [u8]) -> usize {
+    pub fn on_frame<T: Ticks>(&mut self, raw: &mut [u8], clock: &mut T, out: &mut [u8]) -> usize {
         let Ok(payload) = frame::open(raw) else {
             return self.fault(None, FaultCode::BadFrame, out);
         };
@@ -180,7 +180,7 @@ impl Board {
 
     /// A frame that did not decode in the session's float type: a Hello
     /// decodes in either, anything else is a bad frame.
-    fn maybe_hello(&mut self, payload: &[u8], clock: &mut dyn Ticks, out: &mut [u8]) -> usize {
+    fn maybe_hello<T: Ticks>(&mut self, payload: &[u8], clock: &mut T, out: &mut [u8]) -> usize {
         match frame::decode::<ToBoard<f64>>(payload) {
             Ok(m @ ToBoard::Hello(_)) => self.handle(m, payload, clock, out),
             _ => self.fault(None, FaultCode::BadFrame, out),
@@ -196,11 +196,11 @@ impl Board {
         send::<f32>(&FromBoard::Fault(Fault { k, code }), out)
     }
 
-    fn handle<F: WireFloat>(
+    fn handle<F: WireFloat, T: Ticks>(
         &mut self,
         m: ToBoard<F>,
         payload: &[u8],
-        clock: &mut dyn Ticks,
+        clock: &mut T,
         out: &mut [u8],
     ) -> usize {
         match m {

@@ -174,7 +174,7 @@ macro_rules! kinds {
             /// loop as it was before the step (whose state the law saw: the
             /// diagnostics are computed with it, and the board goes back to
             /// it if the host does not use the reply).
-            pub fn step(&mut self, t: F, x: [F; 3], z: [F; 4], clock: &mut dyn Ticks) -> (Stepped<F>, AnyLaw<F>) {
+            pub fn step<T: Ticks>(&mut self, t: F, x: [F; 3], z: [F; 4], clock: &mut T) -> (Stepped<F>, AnyLaw<F>) {
                 match self {
                     $(Self::$variant(c) => {
                         let (r, saw) = step_one(c, t, x, z, clock);
@@ -296,16 +296,17 @@ impl<F: Real> AnyLaw<F> {
 /// simulator fills them (with the state the law saw, on good steps only)
 /// but with a plant that answers 0.
 #[inline(never)]
-fn step_one<C, F>(
+fn step_one<C, F, T>(
     c: &mut SampledController<C, F>,
     t: F,
     x: [F; 3],
     z: [F; 4],
-    clock: &mut dyn Ticks,
+    clock: &mut T,
 ) -> (Stepped<F>, SampledController<C, F>)
 where
     C: Controller<F> + Clone,
     F: Real,
+    T: Ticks,
 {
     let saw = c.clone();
     let t0 = clock.now();

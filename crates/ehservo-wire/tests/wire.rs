@@ -195,6 +195,27 @@ fn the_frames_are_as_long_as_the_budget_says() {
     // tag 1 + k 2 + u 4 + flags 1 + ticks 1 + length 1 + 16·4 + CRC 2 = 76,
     // + 1 + 1 = 78.
     assert_eq!(frame::seal(&r, &mut out).unwrap(), 78);
+    // f64: 1 + 2 + 1 + 7·8 + 2 = 62 (+ 2) and 1 + 2 + 8 + 1 + 1 + 1 + 16·8
+    // + 2 = 144 (+ 2).
+    let s64: ToBoard<f64> = ToBoard::Sample(Sample {
+        k: 5_000,
+        acc: 0x89,
+        x: [0.1; 3],
+        z: [0.2; 4],
+    });
+    assert_eq!(frame::seal(&s64, &mut out).unwrap(), 64);
+    let mut parts = heapless::Vec::new();
+    for _ in 0..16 {
+        parts.push(0.5f64).unwrap();
+    }
+    let r64: FromBoard<f64> = FromBoard::Reply(Reply {
+        k: 5_000,
+        u: 1.0,
+        flags: 0,
+        ticks: 60,
+        parts,
+    });
+    assert_eq!(frame::seal(&r64, &mut out).unwrap(), 146);
 }
 
 proptest! {
