@@ -95,11 +95,9 @@ impl Qemu {
             .spawn()
             .map_err(|e| {
                 if e.kind() == std::io::ErrorKind::NotFound {
-                    crate::error::InputError(
+                    anyhow::anyhow!(
                         "qemu-system-arm is not installed (Debian: apt-get install qemu-system-arm)"
-                            .into(),
                     )
-                    .into()
                 } else {
                     anyhow::Error::from(e).context("starting qemu-system-arm")
                 }
