@@ -102,6 +102,8 @@ impl<F: Real> Run<F> {
     }
 }
 
+// No allocation on a board: the one session lives in place.
+#[allow(clippy::large_enum_variant)]
 enum Session {
     F32(Run<f32>),
     F64(Run<f64>),

@@ -111,7 +111,7 @@ pub fn open(frame: &mut [u8]) -> Result<&[u8], FrameError> {
 /// The message of a payload; every byte must be used.
 pub fn decode<'a, T: Deserialize<'a>>(payload: &'a [u8]) -> Result<T, FrameError> {
     match postcard::take_from_bytes(payload) {
-        Ok((v, rest)) if rest.is_empty() => Ok(v),
+        Ok((v, [])) => Ok(v),
         _ => Err(FrameError::Decode),
     }
 }

@@ -175,9 +175,9 @@ pub struct Sample<F> {
     /// The sample index k (t_k = k·h, computed on the board in f64 from
     /// [`Hello::dt`], as the host computes it).
     pub k: u32,
-    /// The host's acceptance token: (the last k whose reply the host used
-    /// + 1) mod 256, 0 before any. A board whose last step's reply was not
-    /// used restores its state from before that step
+    /// The host's acceptance token: (1 + the last k whose reply the host
+    /// used) mod 256, 0 before any. A board whose last step's reply was
+    /// not used restores its state from before that step
     /// ([`crate::board::Board`]).
     pub acc: u8,
     /// What the controller measures: x = (θ, θ̇, θ̈) after the sensors and
@@ -197,6 +197,8 @@ pub struct Stop {
 }
 
 /// Host to board.
+// A message is built, sent and dropped: no allocation to box the Hello.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum ToBoard<F> {
     /// Open (or reopen) a session.
@@ -269,6 +271,7 @@ pub struct Boot {
 }
 
 /// Board to host.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum FromBoard<F> {
     /// Sent once at reset.

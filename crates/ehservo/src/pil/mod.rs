@@ -412,8 +412,8 @@ impl RunHooks for Hooks {
         // same Hello, with the board's code: a Hello it refuses is refused
         // here first, with the key named.
         let shadow = match self.opts.float {
-            FloatType::F32 => AnyLaw::<f32>::build(&h).map(Shadow::F32),
-            FloatType::F64 => AnyLaw::<f64>::build(&h).map(Shadow::F64),
+            FloatType::F32 => AnyLaw::<f32>::build(&h).map(|l| Shadow::F32(Box::new(l))),
+            FloatType::F64 => AnyLaw::<f64>::build(&h).map(|l| Shadow::F64(Box::new(l))),
         }
         .map_err(|e| {
             crate::error::InputError(format!(

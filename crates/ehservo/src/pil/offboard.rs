@@ -19,9 +19,9 @@ use std::rc::Rc;
 /// diagnostics that need the true plant from the board's parts.
 pub enum Shadow {
     /// In f32.
-    F32(AnyLaw<f32>),
+    F32(Box<AnyLaw<f32>>),
     /// In f64.
-    F64(AnyLaw<f64>),
+    F64(Box<AnyLaw<f64>>),
 }
 
 /// The session and what the host keeps beside it.

@@ -450,8 +450,7 @@ impl Session {
                 FromBoard::Reply(r) if r.k < k => {
                     // A reply that missed its deadline: never used. Its
                     // sample's no-reply becomes a late reply.
-                    let late = start.elapsed();
-                    self.late(r.k, k, late);
+                    self.late(r.k, k);
                 }
                 FromBoard::Reply(r) => {
                     return Err((
@@ -491,7 +490,7 @@ impl Session {
     }
 
     /// Sample `j`'s reply arrived during sample `k`'s exchange.
-    fn late(&mut self, j: u32, k: u32, _during: Duration) {
+    fn late(&mut self, j: u32, k: u32) {
         let rec = self.records.iter_mut().rev().find(|r| r.k == j);
         let detail =
             format!("the reply to sample {j} arrived during sample {k}'s exchange, unused");
