@@ -18,6 +18,7 @@
 //! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
 //! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
 //! | [`identify`] | `ehservo excite` and `ehservo identify`: experiments designed, logged data turned into a scenario (docs/identification.md) |
+//! | [`pil`] | `ehservo pil`: the controller on a board (QEMU or serial), the rest simulated, in lock-step; `ehservo run --float f32` |
 
 pub mod analysis;
 pub mod error;
@@ -27,6 +28,8 @@ pub mod identify;
 pub mod input;
 pub mod league;
 pub mod output;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod pil;
 pub mod plot;
 pub mod reproduce;
 pub mod run;

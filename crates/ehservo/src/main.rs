@@ -90,6 +90,58 @@ enum Command {
         /// Print nothing but errors.
         #[arg(long, short)]
         quiet: bool,
+        /// The controller's float type: f64 (the simulator's own) or f32
+        /// (the PIL board's code, computed here: what `ehservo pil` must
+        /// match to the bit).
+        #[arg(long, default_value = "f64", value_parser = ["f32", "f64"])]
+        float: String,
+    },
+    /// Processor-in-the-loop: the controller on a board (QEMU's Cortex-M4F or a serial port), the rest simulated here in lock-step; writes run's outputs and pil.csv.
+    Pil {
+        /// The scenario file (TOML).
+        scenario: PathBuf,
+        /// Output directory (default: out/<scenario name>-pil).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a key (repeatable).
+        #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+        set: Vec<String>,
+        /// Start QEMU (mps2-an386) with the PIL firmware, and stop it at the end.
+        #[arg(long, conflicts_with = "port")]
+        qemu: bool,
+        /// A real board's serial port (e.g. /dev/ttyACM0).
+        #[arg(long)]
+        port: Option<String>,
+        /// The serial port's rate.
+        #[arg(long, default_value_t = 115_200)]
+        baud: u32,
+        /// Reach the board over TCP at HOST:PORT (a proxy, a QEMU started elsewhere, a serial server).
+        #[arg(long, value_name = "HOST:PORT")]
+        connect: Option<String>,
+        /// With --qemu: listen here for QEMU's UART (or a proxy in front of it) to connect.
+        #[arg(long, value_name = "HOST:PORT")]
+        listen: Option<String>,
+        /// With --qemu: QEMU's -serial backend, verbatim (e.g. tcp:127.0.0.1:5556,server=on,wait=on with --connect to a proxy).
+        #[arg(long, value_name = "SPEC")]
+        qemu_serial: Option<String>,
+        /// The firmware ELF (default: target/thumbv7em-none-eabihf/release/ehservo-firmware-pil).
+        #[arg(long)]
+        firmware: Option<PathBuf>,
+        /// The float type the board computes in.
+        #[arg(long, default_value = "f32", value_parser = ["f32", "f64"])]
+        float: String,
+        /// How long to wait for each reply (ms) before applying the fault policy.
+        #[arg(long, default_value_t = 200.0)]
+        timeout_ms: f64,
+        /// Inject a fault between host and board at sample K (testing): KIND@K with KIND one of corrupt-request, corrupt-reply, drop-request, drop-reply, late-reply, reset-board (repeatable).
+        #[arg(long, value_name = "KIND@K")]
+        inject: Vec<String>,
+        /// Do not write trace.png.
+        #[arg(long)]
+        no_plot: bool,
+        /// Print nothing but errors.
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// What the theory says about a scenario: poles, K1/K2 and Theorem 2's bound, Remark 6, the σ-loop and the integrator.
     Analyze {
@@ -440,6 +492,7 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             set,
             no_plot,
             quiet,
+            float,
         } => {
             let s = load(&scenario, &set)?;
             let dir = match out {
@@ -454,15 +507,144 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                     rows * 300 / 1_000_000
                 );
             }
-            let (r, files) = output::run_to_dir(&dir, &s, s.output.plot && !no_plot)?;
+            let plot = s.output.plot && !no_plot;
+            let (r, files) = if float == "f32" {
+                let opts = ehservo::pil::Options::in_process(ehservo_wire_float(&float));
+                let (r, files, _) = ehservo::pil::run_to_dir(&dir, &s, plot, opts)?;
+                (r, files)
+            } else {
+                output::run_to_dir(&dir, &s, plot)?
+            };
             let elapsed = start.elapsed();
             if !quiet {
                 print_summary(w, &s, &r, elapsed.as_secs_f64())?;
+                if float == "f32" {
+                    out!(
+                        w,
+                        "  controller in f32 (the PIL board's code, on this host)"
+                    );
+                }
                 let names: Vec<String> = files
                     .iter()
                     .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
                     .collect();
                 out!(w, "wrote {}/{{{}}}", dir.display(), names.join(", "));
+            }
+            Ok(())
+        }
+        Command::Pil {
+            scenario,
+            out,
+            set,
+            qemu,
+            port,
+            baud,
+            connect,
+            listen,
+            qemu_serial,
+            firmware,
+            float,
+            timeout_ms,
+            inject,
+            no_plot,
+            quiet,
+        } => {
+            use ehservo::pil::{Options, Target};
+            let s = load(&scenario, &set)?;
+            let dir = match out {
+                Some(d) => d,
+                None => default_out(&format!("{}-pil", s.name))?,
+            };
+            if !(timeout_ms.is_finite() && timeout_ms > 0.0 && timeout_ms <= 60_000.0) {
+                ehservo::bad_input!("--timeout-ms {timeout_ms}: must be > 0 and at most 60000");
+            }
+            let mut plan = Vec::new();
+            for i in &inject {
+                match ehservo::pil::transport::Inject::parse(i) {
+                    Some(p) => plan.push((p.1, p.0)),
+                    None => ehservo::bad_input!(
+                        "--inject {i}: expected KIND@K, KIND one of corrupt-request, corrupt-reply, drop-request, drop-reply, late-reply, reset-board"
+                    ),
+                }
+            }
+            if !qemu && (listen.is_some() || qemu_serial.is_some() || firmware.is_some()) {
+                ehservo::bad_input!("--listen, --qemu-serial and --firmware go with --qemu");
+            }
+            let target = match (qemu, port, connect) {
+                (true, None, connect) => Target::Qemu {
+                    firmware,
+                    serial: qemu_serial,
+                    connect,
+                    listen,
+                },
+                (false, Some(path), None) => Target::Port { path, baud },
+                (false, None, Some(addr)) => Target::Connect(addr),
+                (false, Some(_), Some(_)) => {
+                    ehservo::bad_input!("--port and --connect: give one board")
+                }
+                _ => ehservo::bad_input!(
+                    "say where the board is: --qemu, --port /dev/ttyX or --connect HOST:PORT"
+                ),
+            };
+            let opts = Options {
+                target,
+                float: ehservo_wire_float(&float),
+                timeout: std::time::Duration::from_secs_f64(timeout_ms / 1e3),
+                handshake_timeout: std::time::Duration::from_secs(20),
+                inject: plan,
+            };
+            let start = Instant::now();
+            let (r, files, rep) =
+                ehservo::pil::run_to_dir(&dir, &s, s.output.plot && !no_plot, opts)?;
+            let elapsed = start.elapsed();
+            let o = &rep.offboard;
+            if !quiet {
+                print_summary(w, &s, &r, elapsed.as_secs_f64())?;
+                out!(
+                    w,
+                    "  PIL over {}: {} ({} samples in {:.2} s: {:.0} samples/s; round trip mean {:.0} µs, max {:.0} µs)",
+                    o["transport"].as_str().unwrap_or("?"),
+                    o["firmware"].as_str().unwrap_or("?"),
+                    o["samples"],
+                    o["wall_s"].as_f64().unwrap_or(0.0),
+                    o["samples_per_s"].as_f64().unwrap_or(0.0),
+                    o["rtt_us"]["mean"].as_f64().unwrap_or(0.0),
+                    o["rtt_us"]["max"].as_f64().unwrap_or(0.0),
+                );
+                out!(
+                    w,
+                    "  board step ({}): mean {:.0} cycles, max {:.0} cycles",
+                    o["float"].as_str().unwrap_or("?"),
+                    o["step_cycles"]["mean"].as_f64().unwrap_or(0.0),
+                    o["step_cycles"]["max"].as_f64().unwrap_or(0.0),
+                );
+                let names: Vec<String> = files
+                    .iter()
+                    .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+                    .collect();
+                out!(w, "wrote {}/{{{}}}", dir.display(), names.join(", "));
+            }
+            if let Some(events) = o["events"].as_array() {
+                for e in events.iter().take(20) {
+                    note!(
+                        "link fault at k = {}: {} ({})",
+                        e["k"],
+                        e["fault"].as_str().unwrap_or("?"),
+                        e["detail"].as_str().unwrap_or("")
+                    );
+                }
+                if events.len() > 20 {
+                    note!(
+                        "… {} link faults in all: see summary.json",
+                        o["link_faults"]
+                    );
+                }
+            }
+            if let Some(lost) = o["link_lost"].as_str() {
+                anyhow::bail!(
+                    "the link to the board was lost ({lost}); the outputs in {} record the run with the fault policy's command from then on",
+                    dir.display()
+                );
             }
             Ok(())
         }
@@ -917,6 +1099,11 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// `--float`'s value (checked by clap).
+fn ehservo_wire_float(s: &str) -> ehservo_wire::msg::FloatType {
+    ehservo::pil::parse_float(s).unwrap_or(ehservo_wire::msg::FloatType::F64)
 }
 
 fn fmt_opt(v: Option<f64>, digits: usize, unit: &str) -> String {

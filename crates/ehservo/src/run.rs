@@ -74,6 +74,7 @@ pub fn run_observed(
         setup: &setup,
         observe,
         states: true,
+        map: Same,
     }))
 }
 
@@ -84,23 +85,63 @@ pub fn run_setup(setup: &Setup, observe: &mut dyn FnMut(&Sample)) -> (Outcome, M
         setup,
         observe,
         states: false,
+        map: Same,
+    })
+}
+
+/// What runs in place of the controller a scenario builds: the hook of the
+/// off-board runs (`ehservo run --float f32`, `ehservo pil`:
+/// [`crate::pil`]), which put the built controller's kind on a board and
+/// keep the rest of the loop as it is.
+pub trait MapController {
+    /// The controller that runs, for kind `K`.
+    type Out<K: ControllerConfig>: Controller;
+    /// It, from the kind's parameters and the controller they built.
+    fn map<K: ControllerConfig>(self, cfg: &K, built: K::Controller) -> Self::Out<K>;
+}
+
+/// The built controller itself (every ordinary run).
+pub struct Same;
+
+impl MapController for Same {
+    type Out<K: ControllerConfig> = K::Controller;
+    fn map<K: ControllerConfig>(self, _cfg: &K, built: K::Controller) -> K::Controller {
+        built
+    }
+}
+
+/// [`run_setup`] with the controller replaced by `map`'s, the samples
+/// carrying the plant's states as `ehservo run`'s do.
+pub fn run_setup_mapped<M: MapController>(
+    setup: &Setup,
+    map: M,
+    observe: &mut dyn FnMut(&Sample),
+) -> (Outcome, Metrics) {
+    setup.controller.visit(Runner {
+        setup,
+        observe,
+        states: true,
+        map,
     })
 }
 
 /// Builds the plant and the controller of a [`Setup`] and runs them: the
 /// generic half of [`run_setup`], monomorphised per kind and plant.
-pub struct Runner<'a, 'b> {
+pub struct Runner<'a, 'b, M = Same> {
     setup: &'a Setup,
     observe: &'b mut dyn FnMut(&Sample),
     states: bool,
+    map: M,
 }
 
-impl Visit for Runner<'_, '_> {
+impl<M: MapController> Visit for Runner<'_, '_, M> {
     type Out = (Outcome, Metrics);
     fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
-        let ctrl = cfg
-            .build(&self.setup.design)
-            .expect("Setup::new built this controller once already");
+        let ctrl = self.map.map(
+            cfg,
+            cfg.build(&self.setup.design)
+                .expect("Setup::new built this controller once already"),
+        );
         self.setup.plant.visit(WithPlant {
             ctrl,
             setup: self.setup,

@@ -38,6 +38,35 @@ static REGISTRY: Mutex<Registry> = Mutex::new(Registry {
     live: Vec::new(),
 });
 
+/// Child processes to stop with the command (`ehservo pil --qemu`'s QEMU),
+/// by process id.
+static CHILDREN: Mutex<Vec<u32>> = Mutex::new(Vec::new());
+
+/// Lists a child process for the handler to kill.
+pub(crate) fn add_child(pid: u32) {
+    CHILDREN.lock().unwrap_or_else(|e| e.into_inner()).push(pid);
+}
+
+/// Takes a child off the list (it has been stopped and waited for).
+pub(crate) fn remove_child(pid: u32) {
+    CHILDREN
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .retain(|&p| p != pid);
+}
+
+/// Kills the listed children (SIGKILL, by process id).
+#[cfg(all(feature = "cli", unix))]
+fn kill_children() {
+    let pids = CHILDREN.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    for pid in pids {
+        if let Ok(p) = i32::try_from(pid) {
+            let _ =
+                nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::SIGKILL);
+        }
+    }
+}
+
 /// The registry, locked (a panic elsewhere does not make it unusable).
 pub(crate) fn registry() -> MutexGuard<'static, Registry> {
     REGISTRY.lock().unwrap_or_else(|e| e.into_inner())
@@ -99,6 +128,8 @@ pub(crate) fn remove_created(created: &[PathBuf]) {
 #[cfg(feature = "cli")]
 pub fn install() -> Result<(), ctrlc::Error> {
     ctrlc::set_handler(|| {
+        #[cfg(unix)]
+        kill_children();
         // Waits for a commit in progress; never released: the process ends.
         let mut reg = registry();
         reg.clean_all();

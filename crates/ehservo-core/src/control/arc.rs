@@ -227,6 +227,23 @@ fn reference_scales(a: [f64; 3]) -> [f64; 4] {
 }
 
 impl<T: Real> Arc<T> {
+    /// The same controller in another float type (model and surface
+    /// recomputed in `U`, every gain and bound rounded to `U`).
+    pub fn cast<U: Real>(&self) -> Arc<U> {
+        let c = |v: T| U::of(v.to_f64());
+        Arc {
+            model: self.model.cast(),
+            surface: self.surface.cast(),
+            k_s: c(self.k_s),
+            eps: c(self.eps),
+            gamma: self.gamma.map(c),
+            delta: c(self.delta),
+            lo: self.lo.map(c),
+            hi: self.hi.map(c),
+            b_floor: c(self.b_floor),
+        }
+    }
+
     /// The gains `(k_s, ε, Γ)` in use.
     pub fn gains(&self) -> (T, T, [T; 4]) {
         (self.k_s, self.eps, self.gamma)

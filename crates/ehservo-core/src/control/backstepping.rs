@@ -216,6 +216,21 @@ pub struct Backstepping<T: Real = f64> {
 }
 
 impl<T: Real> Backstepping<T> {
+    /// The same controller in another float type (model recomputed in `U`,
+    /// every gain and bound rounded to `U`).
+    pub fn cast<U: Real>(&self) -> Backstepping<U> {
+        let c = |v: T| U::of(v.to_f64());
+        Backstepping {
+            model: self.model.cast(),
+            c: self.c.map(c),
+            gamma: self.gamma.map(c),
+            gamma_rho: c(self.gamma_rho),
+            lo: self.lo.map(c),
+            hi: self.hi.map(c),
+            b_floor: c(self.b_floor),
+        }
+    }
+
     /// The projection's box `(min, max)` for (a1, a2, a3, ϱ) (±∞ without
     /// projection).
     pub fn bounds(&self) -> ([T; 4], [T; 4]) {

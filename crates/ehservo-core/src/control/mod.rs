@@ -142,6 +142,12 @@ pub mod flags {
     /// The state update ξ + dt·ξ̇ was non-finite: the safe command was
     /// returned and the state left alone.
     pub const NON_FINITE_STATE: u8 = 32;
+    /// The command of an off-board controller (processor-in-the-loop) did
+    /// not arrive usable: a corrupted, dropped or late frame, or a board
+    /// that reset. The fault policy's safe command was applied instead and
+    /// the board's state left as it was before the sample
+    /// (`crates/ehservo-wire`, `ehservo pil`).
+    pub const LINK_FAULT: u8 = 64;
 }
 
 /// One named signal of a controller's parts.

@@ -225,6 +225,26 @@ pub struct NnRobust<T: Real = f64> {
 }
 
 impl<T: Real> NnRobust<T> {
+    /// The same controller in another float type: the NNBVSC cast
+    /// ([`NnVsc::cast`]), the weight law's gains rounded to `U` and its
+    /// constants recomputed in `U`.
+    pub fn cast<U: Real>(&self) -> Result<NnRobust<U>, ParamError> {
+        let c = |v: T| U::of(v.to_f64());
+        let nn = self.nn.cast::<U>()?;
+        NnRobust::try_new(
+            *nn.model(),
+            *nn.surface(),
+            *nn.params(),
+            *nn.rbf(),
+            WeightLawParams {
+                law: self.wl.law,
+                sigma_mod: c(self.wl.sigma_mod),
+                nu: c(self.wl.nu),
+            },
+            c(self.dt),
+        )
+    }
+
     /// Validates every gain and builds the controller; `dt` is the loop's
     /// sample period (the simulation step), used by the projection.
     pub fn try_new(

@@ -63,6 +63,13 @@ impl<T: Real> OpenLoop<T> {
     pub fn gain(&self) -> T {
         self.gain
     }
+
+    /// The same law in another float type.
+    pub fn cast<U: Real>(&self) -> OpenLoop<U> {
+        OpenLoop {
+            gain: U::of(self.gain.to_f64()),
+        }
+    }
 }
 
 impl Config for OpenLoopConfig {

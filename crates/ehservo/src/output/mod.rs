@@ -270,6 +270,10 @@ pub struct Summary<'a> {
     /// Condition 4) of Theorem 3 and the dead zone along this run (NNBVSC,
     /// when the trace was kept).
     pub diagnostics: Option<crate::analysis::RunDiagnostics>,
+    /// Where the controller ran when not in the simulator itself: the
+    /// float type, the board, the link's faults ([`crate::pil`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offboard: Option<serde_json::Value>,
 }
 
 /// A divergence, with a sentence.
@@ -357,6 +361,7 @@ pub fn summary_with<'a>(
         },
         analysis: crate::analysis::analyze(s),
         diagnostics,
+        offboard: None,
     }
 }
 
@@ -539,6 +544,51 @@ pub const MAX_KEPT: u64 = 200_000;
 /// few numbers of each kept sample that the diagnostics read are kept,
 /// [`crate::analysis::DiagRecorder`]: the same summary.json).
 pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Vec<PathBuf>)> {
+    run_to_dir_with(dir, s, plot, &mut InSimulator)
+}
+
+/// How [`run_to_dir_with`] runs the loop, and what it adds to the output:
+/// the hook of the off-board runs ([`crate::pil`]: `ehservo run --float
+/// f32`, `ehservo pil`).
+pub trait RunHooks {
+    /// Runs `s`, handing every sample to `observe`; `stage` is the staging
+    /// folder, for files written as the run goes.
+    fn run(
+        &mut self,
+        s: &Scenario,
+        stage: &Path,
+        observe: &mut dyn FnMut(&Sample),
+    ) -> Result<(crate::simulation::Outcome, Metrics)>;
+    /// After the run: writes its own files into `stage` and returns their
+    /// names and the summary's `offboard` section.
+    fn finish(&mut self, stage: &Path) -> Result<(Vec<&'static str>, Option<serde_json::Value>)>;
+}
+
+/// The ordinary run: the scenario's loop in the simulator.
+struct InSimulator;
+
+impl RunHooks for InSimulator {
+    fn run(
+        &mut self,
+        s: &Scenario,
+        _stage: &Path,
+        observe: &mut dyn FnMut(&Sample),
+    ) -> Result<(crate::simulation::Outcome, Metrics)> {
+        Ok(crate::run::run_observed(s, observe)?)
+    }
+    fn finish(&mut self, _stage: &Path) -> Result<(Vec<&'static str>, Option<serde_json::Value>)> {
+        Ok((Vec::new(), None))
+    }
+}
+
+/// [`run_to_dir`] with the loop run by `hooks`, and their files and
+/// summary section added.
+pub fn run_to_dir_with(
+    dir: &Path,
+    s: &Scenario,
+    plot: bool,
+    hooks: &mut dyn RunHooks,
+) -> Result<(RunResult, Vec<PathBuf>)> {
     let stage = Staging::new(dir)?;
     let csv_path = stage.path().join("trace.csv");
     let file =
@@ -560,7 +610,7 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
     let mut last_kept: Option<u64> = None;
     let mut last = None;
     let mut failure: Option<anyhow::Error> = None;
-    let (outcome, metrics) = crate::run::run_observed(s, &mut |smp| {
+    let (outcome, metrics) = hooks.run(s, stage.path(), &mut |smp| {
         if failure.is_none() && smp.k % decimate == 0 {
             if let Err(e) = w.write(smp) {
                 failure = Some(e);
@@ -595,7 +645,11 @@ pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Ve
         trace: kept,
     };
     let mut files = vec!["trace.csv", "summary.json"];
-    let json = serde_json::to_string_pretty(&summary_with(s, &run, diag.finish(s)))?;
+    let (extra, offboard) = hooks.finish(stage.path())?;
+    files.extend(extra);
+    let mut summary = summary_with(s, &run, diag.finish(s));
+    summary.offboard = offboard;
+    let json = serde_json::to_string_pretty(&summary)?;
     // Straight into the staging folder, which is what makes the output
     // whole or absent (write_atomic's own temporary file, rename and fsync
     // would add nothing to that, and its fsync cost more than the rest of

@@ -22,6 +22,7 @@ mod league;
 mod models;
 mod nn_robust;
 mod outputs;
+mod pil;
 mod properties;
 mod realistic;
 mod reproduce_bad_input;
