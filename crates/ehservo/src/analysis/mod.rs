@@ -115,6 +115,7 @@ mod linalg;
 mod poles;
 mod report;
 mod spectral;
+pub mod step;
 mod weights;
 
 pub use closed_loop::{rk4_amplification, LoopAnalysis, RK4_REAL_LIMIT};

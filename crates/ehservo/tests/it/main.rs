@@ -15,6 +15,7 @@ mod cluster;
 mod controllers;
 mod faults;
 mod golden;
+mod hopsan;
 mod identify;
 mod independent;
 mod k1_closed_form;
