@@ -148,7 +148,8 @@ fn main() -> Result<()> {
         );
     }
     let styles = [Dash::Dotted, Dash::Dashed, Dash::Solid, Dash::DashDot];
-    let lines = |f: &dyn Fn(&Trace) -> (Vec<f64>, Vec<f64>), scale: f64| -> Vec<Series> {
+    type Pick<'a> = &'a dyn Fn(&Trace) -> (Vec<f64>, Vec<f64>);
+    let lines = |f: Pick, scale: f64| -> Vec<Series> {
         traces
             .iter()
             .enumerate()

@@ -112,7 +112,9 @@ pub fn step_metrics(
                 }
                 let cur = (t[i], norm(y[i]));
                 if cur.1 >= *level {
-                    let tc = if cur.1 == prev.1 {
+                    // The bracket's level difference: > 0 unless s jumped
+                    // onto the level exactly (then the sample's time).
+                    let tc = if cur.1 <= prev.1 {
                         cur.0
                     } else {
                         prev.0 + (level - prev.1) / (cur.1 - prev.1) * (cur.0 - prev.0)
@@ -124,9 +126,9 @@ pub fn step_metrics(
             }
         }
         let (mut ip, mut sp) = (i0, f64::NEG_INFINITY);
-        for i in i0..end {
-            if norm(y[i]) > sp {
-                sp = norm(y[i]);
+        for (i, &v) in y.iter().enumerate().take(end).skip(i0) {
+            if norm(v) > sp {
+                sp = norm(v);
                 ip = i;
             }
         }
@@ -141,7 +143,8 @@ pub fn step_metrics(
                 None => Some(0.0),
                 Some(j) => {
                     let (a, b) = ((y[j] - target).abs(), (y[j + 1] - target).abs());
-                    let w = if a == b { 1.0 } else { (a - band) / (a - b) };
+                    // a > band ≥ b: the entry is inside the interval.
+                    let w = if a <= b { 1.0 } else { (a - band) / (a - b) };
                     Some(t[j] + w * (t[j + 1] - t[j]) - t0)
                 }
             }
@@ -301,7 +304,10 @@ mod tests {
                 if v < 0.1 {
                     0.0
                 } else {
-                    2.0 + 0.05 * (2.0 * core::f64::consts::PI * v / 0.04).sin()
+                    // A fast rise (τ = 10 ms) into a sine about the target.
+                    let d = v - 0.1;
+                    2.0 * (1.0 - (-d / 0.01).exp())
+                        + 0.05 * (2.0 * core::f64::consts::PI * d / 0.04).sin()
                 }
             })
             .collect();
