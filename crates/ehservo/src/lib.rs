@@ -17,13 +17,18 @@
 //! | [`tune`], [`league`] | controller tuning by particle swarm; every controller of a suite, tuned alike, on every scenario |
 //! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
 //! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
+//! | [`cancel`] | stopping long work from a host that stays alive (Python's Ctrl-C) |
+//! | [`limits`] | the work a run, a tune or a league may ask for, counted before any of it |
 
 pub mod analysis;
+pub mod bisection;
+pub mod cancel;
 pub mod error;
 pub mod estimation;
 pub mod fmu;
 pub mod input;
 pub mod league;
+pub mod limits;
 pub mod output;
 pub mod plot;
 pub mod reproduce;

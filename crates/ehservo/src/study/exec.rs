@@ -36,6 +36,17 @@ pub fn execute(
             .into_par_iter()
             .map(|i| {
                 let (values, sets, seed) = plan.run_values(i);
+                if crate::cancel::requested() {
+                    // Interrupted (crate::cancel): no run is started, and
+                    // these rows are never returned.
+                    return RunRow {
+                        index: i,
+                        values,
+                        seed,
+                        metrics: None,
+                        error: None,
+                    };
+                }
                 let row = match plan.build_run(&sets) {
                     // Validation built the Setup: run it, not the scenario again.
                     Ok((_, setup)) => RunRow {
@@ -58,16 +69,20 @@ pub fn execute(
             })
             .collect()
     };
-    match threads {
+    let rows = match threads {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n.max(1))
                 .build()
                 .context("building the thread pool")?;
-            Ok(pool.install(work))
+            pool.install(work)
         }
-        None => Ok(work()),
+        None => work(),
+    };
+    if crate::cancel::requested() {
+        return Err(crate::cancel::Cancelled.into());
     }
+    Ok(rows)
 }
 
 /// Options of a sweep.
