@@ -24,6 +24,7 @@ mod nn_robust;
 mod outputs;
 mod properties;
 mod realistic;
+mod reliability;
 mod reproduce_bad_input;
 mod reproduction;
 mod sampled_loop;
