@@ -158,6 +158,15 @@ fn set_of(table: &toml::Table, key: &str, v: &toml::Value) -> String {
     format!("{path}={}", toml::Value::Array(arr))
 }
 
+/// Whether text holds a non-finite number as Rust prints one: `NaN`,
+/// `inf`, `-inf` (not the word "infinite").
+fn non_finite(text: &str) -> bool {
+    text.contains("NaN")
+        || text
+            .match_indices("inf")
+            .any(|(i, _)| !text[i..].starts_with("infinite"))
+}
+
 /// Every numeric key of every kind of scenario, set in turn to ±1e308,
 /// ±5e-324 (the smallest subnormal) and 0 (integers: −1, 0, 2³²−1,
 /// 2⁶³−1), on a short horizon: each run either is refused as bad input (the
@@ -201,7 +210,9 @@ fn every_numeric_key_at_its_extremes_is_a_result_or_bad_input() {
                 let out = tmp.path().join(format!("o{cases}"));
                 let r = std::panic::catch_unwind(|| {
                     let s = Scenario::parse_with(&base, "<base>", &sets)?;
-                    ehservo::output::run_to_dir(&out, &s, false).map(|_| ())
+                    ehservo::output::run_to_dir(&out, &s, false)?;
+                    // What `ehservo analyze` prints of it, too.
+                    Ok::<_, anyhow::Error>(ehservo::analysis::analyze(&s).to_text())
                 });
                 match r {
                     Err(_) => failures.push(format!("{what}: panicked")),
@@ -209,12 +220,17 @@ fn every_numeric_key_at_its_extremes_is_a_result_or_bad_input() {
                         failures.push(format!("{what}: exit 1: {e:#}"))
                     }
                     Ok(Err(_)) => {}
-                    Ok(Ok(())) => {
+                    Ok(Ok(analysis)) => {
                         for f in ["trace.csv", "summary.json"] {
                             let text = std::fs::read_to_string(out.join(f)).unwrap();
-                            if text.contains("NaN") || text.contains("inf") {
+                            if non_finite(&text) {
                                 failures.push(format!("{what}: a non-finite number in {f}"));
                             }
+                        }
+                        if non_finite(&analysis) {
+                            failures.push(format!(
+                                "{what}: a non-finite number in `analyze`: {analysis}"
+                            ));
                         }
                         std::fs::remove_dir_all(&out).unwrap();
                     }
