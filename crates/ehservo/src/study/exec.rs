@@ -30,6 +30,8 @@ pub fn execute(
     progress: &indicatif::ProgressBar,
 ) -> Result<Vec<RunRow>> {
     use rayon::prelude::*;
+    // The work of these runs, bounded before any of them.
+    crate::limits::check_study(plan, range.clone())?;
     let work = || -> Vec<RunRow> {
         range
             .clone()
