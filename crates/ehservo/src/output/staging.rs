@@ -87,6 +87,16 @@ fn parent_of(dest: &Path) -> &Path {
     }
 }
 
+/// The folder whose lock guards `dest` (normalised): the real parent of
+/// what it resolves to, so that two paths to one folder (a symbolic link)
+/// share the lock.
+fn lock_dir(norm: &Path) -> PathBuf {
+    fs::canonicalize(norm)
+        .ok()
+        .and_then(|r| r.parent().map(Path::to_path_buf))
+        .unwrap_or_else(|| parent_of(norm).to_path_buf())
+}
+
 /// Checks that `dest` may receive an output, which replaces it whole: it
 /// does not exist yet (and names a folder), or it is a directory that is
 /// empty or holds an earlier ehservo output ([`OUTPUT_MARKERS`]). Refused as
@@ -97,7 +107,7 @@ pub fn check_destination(dest: &Path) -> Result<PathBuf> {
     // `a/./b/` → `a/b`, so that parent and file name are the real ones.
     let norm: PathBuf = dest.components().collect();
     // No other process is half-way through replacing an output here.
-    let _lock = ParentLock::take(parent_of(&norm), false)?;
+    let _lock = ParentLock::take(&lock_dir(&norm), false)?;
     check_unlocked(dest, norm)
 }
 
@@ -300,8 +310,7 @@ impl Staging {
     /// the folder as that change left it.
     fn move_into_place(&self) -> Result<()> {
         let norm: PathBuf = self.dest.components().collect();
-        let parent = parent_of(&norm).to_path_buf();
-        let lock = ParentLock::take(&parent, true)?;
+        let lock = ParentLock::take(&lock_dir(&norm), true)?;
         let dest = match check_unlocked(&self.dest, norm) {
             Ok(d) => d,
             // It was a valid destination when the command began
