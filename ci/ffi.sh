@@ -57,6 +57,18 @@ else
     echo "$exe: e_max_deg = $c_emax = ehservo run's; the controller handle gave the loop's 1001 commands"
   done
 
+  # The flags from C, by their header constants: the samples the C loop
+  # sees with EHSERVO_FLAG_SATURATED set are summary.json's
+  # saturated_samples of the same scenario with a 0.3 V valve.
+  printf '[actuator]\nlimit = 0.3\n' >"$d/sat.toml"
+  "$bin/ehservo" run "$d/sat.toml" --out "$d/sat" --no-plot -q
+  cli_sat=$(sed -n 's/.*"saturated_samples": *\([0-9]*\).*/\1/p' "$d/sat/summary.json" | head -1)
+  c_sat=$("$d/ehservo_run" "$d/sat.toml" | sed -n 's/^saturated_samples=//p')
+  if [ -z "$cli_sat" ] || [ "$cli_sat" = 0 ] || [ "$c_sat" != "$cli_sat" ]; then
+    echo "saturated samples: C (EHSERVO_FLAG_SATURATED) $c_sat, ehservo run $cli_sat"; exit 1
+  fi
+  echo "flags from C: $c_sat samples with EHSERVO_FLAG_SATURATED = ehservo run's saturated_samples"
+
   # Misuse from C: a step on a handle never made, NaN arguments.
   "$d/ehservo_run" --misuse scenarios/paper/fig2.toml >"$d/misuse.out"
   for want in \

@@ -86,9 +86,12 @@ int main(int argc, char **argv) {
 
     /* The loop: one sample per call, to the horizon. */
     EhservoSample s;
-    uint64_t samples = 0, mismatches = 0;
+    uint64_t samples = 0, mismatches = 0, saturated = 0;
     while ((st = ehservo_sim_step(sim, &s)) == EHSERVO_STATUS_OK) {
         samples++;
+        /* A flag is tested by its constant (docs/flags.md), never by a
+           bit number written by hand. */
+        if (s.flags & EHSERVO_FLAG_SATURATED) saturated++;
         if (ctl) {
             const double x[3] = {s.theta, s.theta_dot, s.theta_ddot};
             double u = NAN;
@@ -108,6 +111,7 @@ int main(int argc, char **argv) {
     printf("%s\n", ehservo_last_error()); /* why it stopped */
     printf("samples=%llu period=%.17g steps=%llu\n", (unsigned long long)samples, period,
            (unsigned long long)steps);
+    printf("saturated_samples=%llu\n", (unsigned long long)saturated);
 
     double e_max = NAN;
     st = ehservo_sim_e_max_deg(sim, &e_max);

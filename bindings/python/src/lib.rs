@@ -17,10 +17,13 @@ use ehservo::stepper::ControllerStepper;
 use ehservo::study::Plan;
 use numpy::PyArray1;
 use pyo3::create_exception;
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{
+    PyKeyboardInterrupt, PyMemoryError, PyOSError, PyRuntimeError, PyValueError,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 create_exception!(
     ehservo,
@@ -56,6 +59,96 @@ fn study_error(py: Python<'_>, msg: String) -> PyErr {
     let _ = v.setattr("column", py.None());
     let _ = v.setattr("reason", msg);
     err
+}
+
+/// How often a call that computes looks for Python's signals (Ctrl-C).
+const SIGNAL_POLL: Duration = Duration::from_millis(100);
+
+/// Runs `work` on a thread of its own, without the GIL, while this thread
+/// looks for signals every [`SIGNAL_POLL`] (`Python::check_signals`: the
+/// interpreter runs its handlers, Ctrl-C's raises `KeyboardInterrupt`). On
+/// an interrupt the work is asked to stop (`ehservo::cancel`: the run in
+/// progress stops at its next chunk, no new run starts, nothing is
+/// committed), and the exception is raised once it has: within a fraction
+/// of a second. A call interrupted this way returns no result.
+fn interruptible<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+where
+    F: FnOnce() -> T + Send,
+    T: Send,
+{
+    use std::sync::mpsc::{channel, RecvTimeoutError};
+    let _scope = ehservo::cancel::Scope::enter();
+    std::thread::scope(|sc| {
+        let (tx, rx) = channel::<()>();
+        let handle = sc.spawn(move || {
+            let r = work();
+            let _ = tx.send(());
+            r
+        });
+        // Behind a mutex: only a Sync value crosses into `detach`.
+        let rx = std::sync::Mutex::new(rx);
+        let mut interrupt = None;
+        loop {
+            let waited = py.detach(|| match rx.lock() {
+                Ok(r) => r.recv_timeout(SIGNAL_POLL),
+                Err(_) => Err(RecvTimeoutError::Disconnected),
+            });
+            match waited {
+                Err(RecvTimeoutError::Timeout) => {
+                    if let Err(e) = py.check_signals() {
+                        ehservo::cancel::request();
+                        interrupt = Some(e);
+                        break;
+                    }
+                }
+                _ => break,
+            }
+        }
+        let joined = py.detach(|| handle.join());
+        if let Some(e) = interrupt {
+            return Err(e);
+        }
+        let r = joined.map_err(|_| {
+            PyRuntimeError::new_err("internal error: ehservo's computation panicked (a bug)")
+        })?;
+        // Another thread's Ctrl-C stopped this call too: its result may
+        // be cut short.
+        if ehservo::cancel::requested() {
+            return Err(PyKeyboardInterrupt::new_err(
+                "interrupted: ehservo's computation was stopped",
+            ));
+        }
+        Ok(r)
+    })
+}
+
+/// An error of a long call (sweep, tune, league) as a Python exception:
+/// bad input is `ScenarioError`, an interruption `KeyboardInterrupt`, the
+/// rest (an output that cannot be written) `OSError`.
+fn work_error(py: Python<'_>, e: anyhow::Error) -> PyErr {
+    if ehservo::cancel::is_cancelled(&e) {
+        PyKeyboardInterrupt::new_err(e.to_string())
+    } else if ehservo::error::is_bad_input(&e) {
+        study_error(py, format!("{e:#}"))
+    } else {
+        PyOSError::new_err(format!("{e:#}"))
+    }
+}
+
+/// `threads`, when given, within 1..=1024 (as `--threads`).
+fn check_threads(threads: Option<usize>) -> PyResult<()> {
+    match threads {
+        Some(t) if !(1..=1024).contains(&t) => Err(PyValueError::new_err(format!(
+            "threads={t}: must be between 1 and 1024"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Why a run gave no result.
+enum RunFailure {
+    Scenario(RsScenarioError),
+    Memory(String),
 }
 
 /// The scenario of a file (`path`) or of TOML text, with the CLI's
@@ -122,7 +215,9 @@ fn run<'py>(
     String,
 )> {
     let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
-    let result = py.detach(|| -> Result<_, RsScenarioError> {
+    // Validated before any work (and before any memory is asked for).
+    s.setup().map_err(|e| scenario_error(py, &e))?;
+    let result = interruptible(py, || -> Result<_, RunFailure> {
         let layout = TraceLayout::of(&s);
         let mut names: Vec<String> = layout.columns.iter().map(|c| c.to_string()).collect();
         if raw {
@@ -130,7 +225,22 @@ fn run<'py>(
         }
         let decimate = s.output.decimate.max(1) as u64;
         let rows = (s.sim_config().steps / decimate + 1) as usize;
-        let mut cols: Vec<Vec<f64>> = (0..names.len()).map(|_| Vec::with_capacity(rows)).collect();
+        // The whole trace, asked for up front and fallibly: a run too long
+        // for the memory there is raises MemoryError before it starts
+        // (an infallible allocation would abort the interpreter), and the
+        // pushes below never reallocate.
+        let mut cols: Vec<Vec<f64>> = Vec::new();
+        for _ in 0..names.len() {
+            let mut c = Vec::new();
+            if c.try_reserve_exact(rows).is_err() {
+                return Err(RunFailure::Memory(format!(
+                    "the trace of {rows} rows × {} columns needs {} MB, which cannot be had: set output.decimate to keep fewer rows",
+                    names.len(),
+                    rows as u64 * names.len() as u64 * 8 / 1_000_000
+                )));
+            }
+            cols.push(c);
+        }
         let mut row = Vec::with_capacity(names.len());
         let (outcome, metrics) = ehservo::run::run_observed(&s, &mut |smp| {
             if smp.k % decimate != 0 {
@@ -142,9 +252,13 @@ fn run<'py>(
                 row.extend(smp.x_ctrl);
             }
             for (c, v) in cols.iter_mut().zip(&row) {
-                c.push(*v);
+                // Within the capacity reserved above (at most `rows`).
+                if c.len() < c.capacity() {
+                    c.push(*v);
+                }
             }
-        })?;
+        })
+        .map_err(RunFailure::Scenario)?;
         let info = serde_json::json!({
             "divergence": outcome.diverged.map(ehservo::output::DivergenceInfo::from),
             "faults": ehservo::output::Faults {
@@ -156,7 +270,10 @@ fn run<'py>(
         });
         Ok((names, cols, metrics, info.to_string()))
     });
-    let (names, cols, metrics, info) = result.map_err(|e| scenario_error(py, &e))?;
+    let (names, cols, metrics, info) = result?.map_err(|e| match e {
+        RunFailure::Scenario(e) => scenario_error(py, &e),
+        RunFailure::Memory(m) => PyMemoryError::new_err(m),
+    })?;
     let arrays = cols
         .into_iter()
         .map(|c| PyArray1::from_vec(py, c))
@@ -287,15 +404,23 @@ fn sweep<'py>(
     threads: Option<usize>,
     out: Option<PathBuf>,
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
-    if let Some(t) = threads {
-        if !(1..=1024).contains(&t) {
-            return Err(PyValueError::new_err(format!(
-                "threads={t}: must be between 1 and 1024"
-            )));
-        }
-    }
+    check_threads(threads)?;
     let plan = Plan::load(&path).map_err(|e| study_error(py, e.0))?;
-    let rows = py.detach(|| -> anyhow::Result<Vec<ehservo::study::RunRow>> {
+    // The rows and the columns made of them, asked for before any run: a
+    // study too large for the memory there raises MemoryError up front
+    // rather than aborting the interpreter when the rows are collected.
+    let per_row = std::mem::size_of::<ehservo::study::RunRow>()
+        + 2 * plan.columns().len() * std::mem::size_of::<toml::Value>()
+        + 2 * 8 * (Metrics::NAMES.len() + 3);
+    let bytes = (plan.runs as usize).saturating_mul(per_row);
+    if Vec::<u8>::new().try_reserve_exact(bytes).is_err() {
+        return Err(PyMemoryError::new_err(format!(
+            "the results of {} runs need about {} MB, which cannot be had: shard the study (ehservo sweep --shard)",
+            plan.runs,
+            bytes / 1_000_000
+        )));
+    }
+    let rows = interruptible(py, || -> anyhow::Result<Vec<ehservo::study::RunRow>> {
         match &out {
             Some(dir) => {
                 ehservo::output::probe_destination(dir)?;
@@ -316,7 +441,7 @@ fn sweep<'py>(
             ),
         }
     });
-    let rows = rows.map_err(|e| PyOSError::new_err(format!("{e:#}")))?;
+    let rows = rows?.map_err(|e| work_error(py, e))?;
 
     let mut names: Vec<String> = vec!["run".into()];
     let varied = plan.columns();
@@ -369,12 +494,71 @@ fn sweep<'py>(
     Ok((names, cols))
 }
 
+/// Tunes a controller as `ehservo tune` does: the result's JSON (tune.json's
+/// `result`). With `out`, also writes the CLI's output folder.
+#[pyfunction]
+#[pyo3(signature = (path, threads=None, out=None, plot=true))]
+fn tune(
+    py: Python<'_>,
+    path: PathBuf,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+    plot: bool,
+) -> PyResult<String> {
+    check_threads(threads)?;
+    let t = ehservo::tune::Tune::load(&path).map_err(|e| study_error(py, e.0))?;
+    let r = interruptible(py, || -> anyhow::Result<String> {
+        let hidden = indicatif::ProgressBar::hidden();
+        let r = match &out {
+            Some(dir) => {
+                ehservo::output::probe_destination(dir)?;
+                ehservo::tune::tune_to_dir(&t, dir, threads, &hidden, plot)?
+            }
+            None => ehservo::tune::search(&t, threads, &hidden)?,
+        };
+        Ok(serde_json::to_string(&r)?)
+    })?;
+    r.map_err(|e| work_error(py, e))
+}
+
+/// Runs a league as `ehservo league` does: JSON with the standings and
+/// league.csv's rows. With `out`, also writes the CLI's output folder.
+#[pyfunction]
+#[pyo3(signature = (path, threads=None, out=None, plot=true))]
+fn league(
+    py: Python<'_>,
+    path: PathBuf,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+    plot: bool,
+) -> PyResult<String> {
+    check_threads(threads)?;
+    let l = ehservo::league::League::load(&path).map_err(|e| study_error(py, e.0))?;
+    let r = interruptible(py, || -> anyhow::Result<String> {
+        let hidden = indicatif::ProgressBar::hidden();
+        let r = match &out {
+            Some(dir) => {
+                ehservo::output::probe_destination(dir)?;
+                ehservo::league::league_to_dir(&l, dir, threads, &hidden, plot)?
+            }
+            None => ehservo::league::play(&l, threads, &hidden, None, false)?,
+        };
+        let rows = ehservo::league::report::rows(&l, &r);
+        Ok(serde_json::to_string(&serde_json::json!({
+            "standings": r.standings,
+            "rows": rows,
+        }))?)
+    })?;
+    r.map_err(|e| work_error(py, e))
+}
+
 /// A scenario's controller as a sampled-data system (the Rust half of
 /// `ehservo.Controller`): `ehservo::stepper::ControllerStepper`, which the
-/// C ABI and the FMU hold too. Unsendable: the controller types are plain
-/// data, but the kind-generic box does not say so; a controller object
-/// stays on the thread that made it (as a control loop does).
-#[pyclass(module = "ehservo._ehservo", unsendable)]
+/// C ABI and the FMU hold too. The controller types are plain data (Send
+/// and Sync), so a controller made on one thread may be stepped on
+/// another; two threads stepping one controller at once get Python's
+/// "Already borrowed" RuntimeError for the second, never a panic.
+#[pyclass(module = "ehservo._ehservo")]
 struct RawController {
     ctrl: ControllerStepper,
     kind: &'static str,
@@ -512,6 +696,14 @@ fn _ehservo(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(tune, m)?)?;
+    m.add_function(wrap_pyfunction!(league, m)?)?;
+    // The flags of a sample (docs/flags.md): name → value.
+    let flags = PyDict::new(m.py());
+    for (name, value, _) in ehservo_core::control::flags::ALL {
+        flags.set_item(name, value)?;
+    }
+    m.add("FLAGS", flags)?;
     m.add_function(wrap_pyfunction!(is_file, m)?)?;
     m.add_class::<RawController>()?;
     Ok(())

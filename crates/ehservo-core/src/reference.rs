@@ -319,6 +319,25 @@ impl<'a> Prefiltered<'a> {
                     i as f64,
                 ));
             }
+            // A segment's slope, and time measured from the first knot,
+            // must be finite: (v1 − v0)/∞ would be a silent 0.
+            if i > 0 && !(k.t - knots[0].t).is_finite() {
+                return Err(ParamError::new(
+                    "knots",
+                    "the time span from the first knot overflows (index given)",
+                    i as f64,
+                ));
+            }
+            if i > 0 && k.t > knots[i - 1].t {
+                let p = knots[i - 1];
+                if !((k.v - p.v) / (k.t - p.t)).is_finite() {
+                    return Err(ParamError::new(
+                        "knots",
+                        "the slope to this knot overflows (index given)",
+                        i as f64,
+                    ));
+                }
+            }
         }
         states[0] = [knots[0].v; 4];
         for i in 0..knots.len() - 1 {
@@ -559,5 +578,28 @@ mod tests {
         let k = [Knot { t: 0.0, v: 0.0 }, Knot { t: 0.5, v: 1.0 }];
         assert!(Prefiltered::fill_states(&k, -0.1, &mut st).is_err());
         assert!(Prefiltered::fill_states(&k, 0.1, &mut st[..1]).is_err());
+    }
+
+    /// Knots at ±1e308: their span 2e308 overflows, and the slope
+    /// 1/(t1 − t0) would be 1/∞ = 0, a flat θd = 0 instead of the ramp the
+    /// table describes: refused, as is a slope of 1/5e-324 = ∞. A jump
+    /// (two knots at one time) is not a slope and stays allowed.
+    #[test]
+    fn knots_whose_slope_or_span_overflows_are_refused() {
+        let mut st = [[0.0; 4]; 2];
+        let k = [Knot { t: -1e308, v: -1.0 }, Knot { t: 1e308, v: 1.0 }];
+        let e = Prefiltered::fill_states(&k, 0.1, &mut st).unwrap_err();
+        assert!(e.reason.contains("span"), "{e:?}");
+        let k = [
+            Knot { t: 0.0, v: 0.0 },
+            Knot {
+                t: f64::from_bits(1),
+                v: 1.0,
+            },
+        ];
+        let e = Prefiltered::fill_states(&k, 0.1, &mut st).unwrap_err();
+        assert!(e.reason.contains("slope"), "{e:?}");
+        let k = [Knot { t: 1.0, v: 0.0 }, Knot { t: 1.0, v: 1.0 }];
+        assert!(Prefiltered::fill_states(&k, 0.1, &mut st).is_ok());
     }
 }

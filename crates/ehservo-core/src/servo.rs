@@ -139,6 +139,48 @@ impl<T: Real> ServoParams<T> {
         positive("rho", self.rho)?;
         positive("Cd", self.cd)?;
         positive("Ag", self.ag)?;
+        // Each parameter finite is not enough: the model's constants are
+        // products and quotients of them (Bm = 1e308 or Jt = 5e-324 made
+        // a2 = ∞ and the open-loop poles NaN). The most extreme parameter
+        // (farthest from 1 by ratio) is named.
+        let c = self.coefficients();
+        let (kg, _) = self.flow_gain(T::ZERO, T::ONE);
+        let derived = [
+            c.a1,
+            c.a2,
+            c.a3,
+            self.b_per_kg() * kg,
+            self.d_per_torque(),
+            T::ONE / self.jt,
+        ];
+        if derived.iter().any(|v| !v.is_finite()) {
+            let params = [
+                ("Ps", self.ps),
+                ("beta_e", self.beta_e),
+                ("Vt", self.vt),
+                ("Kce", self.kce),
+                ("Dm", self.dm),
+                ("Jt", self.jt),
+                ("Bm", self.bm),
+                ("Kv", self.kv),
+                ("G", self.g),
+                ("rho", self.rho),
+                ("Cd", self.cd),
+                ("Ag", self.ag),
+            ];
+            let far = |v: f64| if v >= 1.0 { v } else { 1.0 / v };
+            let (name, v) = params
+                .iter()
+                .map(|(n, v)| (*n, v.to_f64()))
+                .filter(|(_, v)| *v > 0.0)
+                .max_by(|a, b| far(a.1).total_cmp(&far(b.1)))
+                .unwrap_or(("Jt", self.jt.to_f64()));
+            return Err(ParamError::new(
+                name,
+                "is so far from a physical servo that the model's constants (a1, a2, a3, b̄, d) overflow",
+                v,
+            ));
+        }
         Ok(())
     }
 
@@ -670,6 +712,24 @@ mod tests {
         assert!((c.a1 - 0.39982).abs() < 0.5e-5, "a1 = {}", c.a1);
         assert!((c.a2 - 13000.2711).abs() < 0.5e-4, "a2 = {}", c.a2);
         assert!((c.a3 - 169.98043).abs() < 0.5e-5, "a3 = {}", c.a3);
+    }
+
+    /// Every parameter finite and positive, yet the model overflows: Bm =
+    /// 1e308 gives a3 = Bm/Jt = 1e308/0.05652 = ∞, Jt = 5e-324 gives
+    /// 1/Jt = ∞; each is refused, naming that parameter. The paper's set,
+    /// and one a thousand times lighter, pass.
+    #[test]
+    fn parameters_whose_model_overflows_are_refused() {
+        let mut p = ServoParams::paper();
+        p.bm = 1e308;
+        assert_eq!(p.validate().unwrap_err().name, "Bm");
+        let mut p = ServoParams::paper();
+        p.jt = f64::from_bits(1);
+        assert_eq!(p.validate().unwrap_err().name, "Jt");
+        assert!(ServoParams::paper().validate().is_ok());
+        let mut p = ServoParams::paper();
+        p.jt *= 1e-3;
+        assert!(p.validate().is_ok());
     }
 
     /// b at Pl = 0: Kg = 0.67·3.385e-7·sqrt(13.795e6/850) = 2.26795e-7·127.394

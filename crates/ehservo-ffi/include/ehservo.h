@@ -17,6 +17,49 @@
 #include <stdlib.h>
 
 /*
+ Flag of [`EhservoSample::flags`]: the valve root of (2) had a negative
+ argument and was clamped at 0 (bit 0).
+ */
+#define EHSERVO_FLAG_VALVE_ROOT_CLAMPED 1
+
+/*
+ Flag of [`EhservoSample::flags`]: ‖E‖ = 0, so σΔ, μ and ξ were set to 0
+ (bit 1).
+ */
+#define EHSERVO_FLAG_ZERO_ERROR_NORM 2
+
+/*
+ Flag of [`EhservoSample::flags`]: a measurement was non-finite or beyond
+ `fault.measurement_limit`; the safe command was returned (bit 2).
+ */
+#define EHSERVO_FLAG_MEASUREMENT_FAULT 4
+
+/*
+ Flag of [`EhservoSample::flags`]: the law produced a non-finite u; the
+ safe command was returned (bit 3).
+ */
+#define EHSERVO_FLAG_NON_FINITE_CONTROL 8
+
+/*
+ Flag of [`EhservoSample::flags`]: u was clamped to the valve range (or
+ the controller's own output limit) (bit 4).
+ */
+#define EHSERVO_FLAG_SATURATED 16
+
+/*
+ Flag of [`EhservoSample::flags`]: the state update was non-finite; the
+ safe command was returned (bit 5).
+ */
+#define EHSERVO_FLAG_NON_FINITE_STATE 32
+
+/*
+ Flag of [`EhservoSample::flags`]: an off-board controller's command did
+ not arrive usable (processor-in-the-loop: a corrupted, dropped or late
+ frame, a board reset); the safe command was applied (bit 6).
+ */
+#define EHSERVO_FLAG_LINK_FAULT 64
+
+/*
  What a call did. Negative values are errors.
  */
 typedef enum {
@@ -120,9 +163,8 @@ typedef struct {
    */
   double u_plant;
   /*
-   The law's flags (bit 0 saturated, 1 valve root clamped, 2 ‖E‖ = 0
-   guarded, 3 measurement fault, 4 non-finite control, 5 non-finite
-   state).
+   The law's flags: a bitwise OR of the `EHSERVO_FLAG_*` constants
+   (each documented where it is defined; docs/flags.md lists them).
    */
   uint32_t flags;
 } EhservoSample;

@@ -385,7 +385,8 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             fail("resourcePath is null (the FMU needs resources/scenario.toml)".into())
         })?;
         let path = std::path::Path::new(&res).join("scenario.toml");
-        let toml_text = std::fs::read_to_string(&path)
+        // Bounded as every input file is (a regular file, ≤ 1 MiB).
+        let toml_text = ehservo::input::read_text(&path)
             .map_err(|e| fail(format!("reading {}: {e}", path.display())))?;
         let kind = check_token(&token, &toml_text).map_err(fail)?;
         let scenario = Scenario::load(&path, &[]).map_err(|e| fail(e.to_string()))?;

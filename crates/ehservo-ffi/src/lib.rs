@@ -242,11 +242,72 @@ pub struct EhservoSample {
     pub u: f64,
     /// What the plant receives after the actuator (V).
     pub u_plant: f64,
-    /// The law's flags (bit 0 saturated, 1 valve root clamped, 2 ‖E‖ = 0
-    /// guarded, 3 measurement fault, 4 non-finite control, 5 non-finite
-    /// state).
+    /// The law's flags: a bitwise OR of the `EHSERVO_FLAG_*` constants
+    /// (each documented where it is defined; docs/flags.md lists them).
     pub flags: u32,
 }
+
+/// Flag of [`EhservoSample::flags`]: the valve root of (2) had a negative
+/// argument and was clamped at 0 (bit 0).
+pub const EHSERVO_FLAG_VALVE_ROOT_CLAMPED: u32 = 1;
+/// Flag of [`EhservoSample::flags`]: ‖E‖ = 0, so σΔ, μ and ξ were set to 0
+/// (bit 1).
+pub const EHSERVO_FLAG_ZERO_ERROR_NORM: u32 = 2;
+/// Flag of [`EhservoSample::flags`]: a measurement was non-finite or beyond
+/// `fault.measurement_limit`; the safe command was returned (bit 2).
+pub const EHSERVO_FLAG_MEASUREMENT_FAULT: u32 = 4;
+/// Flag of [`EhservoSample::flags`]: the law produced a non-finite u; the
+/// safe command was returned (bit 3).
+pub const EHSERVO_FLAG_NON_FINITE_CONTROL: u32 = 8;
+/// Flag of [`EhservoSample::flags`]: u was clamped to the valve range (or
+/// the controller's own output limit) (bit 4).
+pub const EHSERVO_FLAG_SATURATED: u32 = 16;
+/// Flag of [`EhservoSample::flags`]: the state update was non-finite; the
+/// safe command was returned (bit 5).
+pub const EHSERVO_FLAG_NON_FINITE_STATE: u32 = 32;
+/// Flag of [`EhservoSample::flags`]: an off-board controller's command did
+/// not arrive usable (processor-in-the-loop: a corrupted, dropped or late
+/// frame, a board reset); the safe command was applied (bit 6).
+pub const EHSERVO_FLAG_LINK_FAULT: u32 = 64;
+
+/// The C constants in the order of `ehservo::core::control::flags::ALL`
+/// (the header's literals, checked against the law's values at compile
+/// time and by `tests/header.rs`).
+///
+/// cbindgen:ignore
+pub const FLAGS: [(&str, u32); 7] = [
+    (
+        "EHSERVO_FLAG_VALVE_ROOT_CLAMPED",
+        EHSERVO_FLAG_VALVE_ROOT_CLAMPED,
+    ),
+    ("EHSERVO_FLAG_ZERO_ERROR_NORM", EHSERVO_FLAG_ZERO_ERROR_NORM),
+    (
+        "EHSERVO_FLAG_MEASUREMENT_FAULT",
+        EHSERVO_FLAG_MEASUREMENT_FAULT,
+    ),
+    (
+        "EHSERVO_FLAG_NON_FINITE_CONTROL",
+        EHSERVO_FLAG_NON_FINITE_CONTROL,
+    ),
+    ("EHSERVO_FLAG_SATURATED", EHSERVO_FLAG_SATURATED),
+    (
+        "EHSERVO_FLAG_NON_FINITE_STATE",
+        EHSERVO_FLAG_NON_FINITE_STATE,
+    ),
+    ("EHSERVO_FLAG_LINK_FAULT", EHSERVO_FLAG_LINK_FAULT),
+];
+
+/// The literals above are the law's flags, or this crate does not build.
+///
+/// cbindgen:ignore
+const _: () = {
+    use ehservo::core::control::flags::ALL;
+    let mut i = 0;
+    while i < ALL.len() {
+        assert!(FLAGS[i].1 == ALL[i].1 as u32);
+        i += 1;
+    }
+};
 
 /// Makes the closed loop of the scenario file `path` (TOML, as `ehservo
 /// run` reads it), at t = 0, into `*out`. On an error `*out` is set to

@@ -177,6 +177,14 @@ pub struct Sensor {
     filled: bool,
 }
 
+/// The largest bias or noise of a channel: 1e300 (rad, rad/s, rad/s²).
+/// Traces write angles in degrees (×57.3), which overflows beyond 3e306.
+pub const MAX_MAGNITUDE: f64 = 1e300;
+
+/// 2⁵²: beyond this many steps of the resolution a value is left as it is
+/// (quantising it could not move it by a whole spacing of doubles).
+const QUANTISE_EXACT: f64 = 4_503_599_627_370_496.0;
+
 impl Sensor {
     /// Exact measurement.
     pub fn identity() -> Sensor {
@@ -190,15 +198,38 @@ impl Sensor {
             if !b.is_finite() {
                 return Err(ParamError::new("bias", "must be finite", b));
             }
+            if b.abs() > MAX_MAGNITUDE {
+                return Err(ParamError::new(
+                    "bias",
+                    "must be within ±1e300 (rad, rad/s, rad/s²: beyond, the measurement in degrees overflows)",
+                    b,
+                ));
+            }
         }
         for &r in &c.resolution {
             if !(r.is_finite() && r >= 0.0) {
                 return Err(ParamError::new("resolution", "must be finite and >= 0", r));
             }
+            // A subnormal step has fewer significant bits than the values
+            // it would quantise (v/r overflows for |v| > 4e-308/r ≥ 1).
+            if r > 0.0 && r < f64::MIN_POSITIVE {
+                return Err(ParamError::new(
+                    "resolution",
+                    "must be 0 (exact) or at least 2.2250738585072014e-308 (a normal double)",
+                    r,
+                ));
+            }
         }
         for &s in &c.noise {
             if !(s.is_finite() && s >= 0.0) {
                 return Err(ParamError::new("noise", "must be finite and >= 0", s));
+            }
+            if s > MAX_MAGNITUDE {
+                return Err(ParamError::new(
+                    "noise",
+                    "must be at most 1e300 (rad, rad/s, rad/s²: beyond, the measurement in degrees overflows)",
+                    s,
+                ));
             }
         }
         if c.delay > MAX_DELAY {
@@ -248,7 +279,15 @@ impl Sensor {
     fn quantise(&self, i: usize, v: f64) -> f64 {
         let r = self.cfg.resolution[i];
         if r > 0.0 {
-            r * (v / r).round()
+            let n = v / r;
+            // From 2⁵² steps on, r is below the spacing of doubles at v: v
+            // is already the nearest double to a multiple of r (and v/r
+            // may overflow, which r·round(v/r) would turn into ±∞).
+            if n.abs() < QUANTISE_EXACT {
+                r * n.round()
+            } else {
+                v
+            }
         } else {
             v
         }
@@ -326,6 +365,26 @@ mod tests {
             .name,
             "resolution"
         );
+    }
+
+    /// A subnormal resolution is refused; the smallest normal one
+    /// (2⁻¹⁰²²) quantises without overflow: 1e10/2⁻¹⁰²² overflows to ∞,
+    /// where r·round(v/r) gave ∞, and v is returned as it is; 1.5 with a
+    /// step of 2⁻¹⁰²² is 1.5·2¹⁰²² steps (> 2⁵²), also left as it is; a
+    /// step of 0.25 still rounds 1.3 to 1.25.
+    #[test]
+    fn tiny_resolutions_never_overflow() {
+        let sub = SensorConfig {
+            resolution: [f64::from_bits(1), 0.0, 0.0],
+            ..Default::default()
+        };
+        assert_eq!(Sensor::try_new(&sub).unwrap_err().name, "resolution");
+        let s = Sensor::try_new(&SensorConfig {
+            resolution: [f64::MIN_POSITIVE, f64::MIN_POSITIVE, 0.25],
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(s.measure([1e10, 1.5, 1.3]), [1e10, 1.5, 1.25]);
     }
 
     /// 200 000 samples of σ = (1e-3, 0.02, 0): the sample mean is within

@@ -405,21 +405,15 @@ pub fn default_binary() -> Option<std::path::PathBuf> {
 
 /// Writes the FMU of `s` to `out` (a temporary sibling renamed into place).
 pub fn write_fmu(out: &Path, kind: FmuKind, s: &Scenario, binary: &Path) -> Result<()> {
+    // The destination and the binary first: no work is done for an FMU
+    // that could not be written.
+    let dir = check_out(out)?;
+    let so = read_binary(binary)?;
     let toml_text = resource_toml(s, kind)?;
     let xml = model_description(kind, s, &toml_text);
-    let so = std::fs::read(binary)
-        .with_context(|| format!("reading the FMU's binary {}", binary.display()))?;
-    if !so.starts_with(b"\x7fELF") {
-        crate::bad_input!(
-            "--binary {}: not an ELF shared library (the FMU's binary is libehservo_ffi.so)",
-            binary.display()
-        );
-    }
-    let dir = match out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
     let tmp = tempfile_in(&dir, out)?;
+    // On SIGINT/SIGTERM the handler removes it (crate::signals).
+    let _listed = crate::signals::TempFile::register(tmp.clone());
     let result = (|| -> Result<()> {
         let f =
             std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
@@ -440,14 +434,86 @@ pub fn write_fmu(out: &Path, kind: FmuKind, s: &Scenario, binary: &Path) -> Resu
         f.sync_all()?;
         Ok(())
     })();
-    match result {
-        Ok(()) => std::fs::rename(&tmp, out)
-            .with_context(|| format!("renaming {} to {}", tmp.display(), out.display())),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e.context(format!("writing {}", out.display())))
-        }
+    let result = result
+        .map_err(|e| e.context(format!("writing {}", out.display())))
+        .and_then(|()| {
+            std::fs::rename(&tmp, out)
+                .with_context(|| format!("renaming {} to {}", tmp.display(), out.display()))
+        });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
     }
+    result
+}
+
+/// Largest FMU binary read: 1 GiB (libehservo_ffi.so is some tens of MB).
+pub const MAX_BINARY_BYTES: u64 = 1 << 30;
+
+/// `--out` of an FMU, checked before any work: not a directory or another
+/// non-file, in a folder that exists. Returns that folder.
+fn check_out(out: &Path) -> Result<std::path::PathBuf> {
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    match std::fs::metadata(out) {
+        Ok(m) if m.is_dir() => crate::bad_input!(
+            "--out {}: is a directory: name the .fmu file to write",
+            out.display()
+        ),
+        Ok(m) if !m.is_file() => crate::bad_input!(
+            "--out {}: exists and is not a regular file: refusing to replace it",
+            out.display()
+        ),
+        _ => {}
+    }
+    match std::fs::metadata(&dir) {
+        Ok(m) if m.is_dir() => Ok(dir),
+        Ok(_) => crate::bad_input!(
+            "--out {}: {} is not a directory",
+            out.display(),
+            dir.display()
+        ),
+        Err(e) => crate::bad_input!(
+            "--out {}: the folder {} cannot be used: {e}",
+            out.display(),
+            dir.display()
+        ),
+    }
+}
+
+/// The FMU's binary: a regular file of at most [`MAX_BINARY_BYTES`],
+/// starting as an ELF file does (a device or a directory is refused before
+/// it is read).
+fn read_binary(binary: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let bad = |why: String| -> Result<Vec<u8>> {
+        crate::bad_input!("--binary {}: {why}", binary.display())
+    };
+    let meta = match std::fs::metadata(binary) {
+        Ok(m) => m,
+        Err(e) => return bad(format!("cannot be read: {e}")),
+    };
+    if !meta.is_file() {
+        return bad("is not a regular file (the FMU's binary is libehservo_ffi.so)".into());
+    }
+    if meta.len() > MAX_BINARY_BYTES {
+        return bad(format!(
+            "is {} bytes; the FMU's binary is at most {MAX_BINARY_BYTES} bytes",
+            meta.len()
+        ));
+    }
+    let mut so = Vec::new();
+    std::fs::File::open(binary)
+        .and_then(|f| f.take(MAX_BINARY_BYTES + 1).read_to_end(&mut so))
+        .with_context(|| format!("reading the FMU's binary {}", binary.display()))?;
+    if so.len() as u64 > MAX_BINARY_BYTES {
+        return bad(format!("is larger than {MAX_BINARY_BYTES} bytes"));
+    }
+    if !so.starts_with(b"\x7fELF") {
+        return bad("not an ELF shared library (the FMU's binary is libehservo_ffi.so)".into());
+    }
+    Ok(so)
 }
 
 /// A fresh temporary file name beside `out`.

@@ -19,14 +19,19 @@
 //! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
 //! | [`identify`] | `ehservo excite` and `ehservo identify`: experiments designed, logged data turned into a scenario (docs/identification.md) |
 //! | [`pil`] | `ehservo pil`: the controller on a board (QEMU or serial), the rest simulated, in lock-step; `ehservo run --float f32` |
+//! | [`cancel`] | stopping long work from a host that stays alive (Python's Ctrl-C) |
+//! | [`limits`] | the work a run, a tune or a league may ask for, counted before any of it |
 
 pub mod analysis;
+pub mod bisection;
+pub mod cancel;
 pub mod error;
 pub mod estimation;
 pub mod fmu;
 pub mod identify;
 pub mod input;
 pub mod league;
+pub mod limits;
 pub mod output;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod pil;

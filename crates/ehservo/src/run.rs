@@ -194,7 +194,8 @@ fn execute<P: Plant, C: Controller>(
     )
     .expect("Setup::new validated the sample period and the policy");
     sim.log_states(states);
-    let outcome = sim.run(&mut |smp: &Sample| {
+    // In chunks, so that a host's Ctrl-C can stop it (crate::cancel).
+    let outcome = crate::cancel::run_chunked(&mut sim, setup, &mut |smp: &Sample| {
         acc.push(smp);
         observe(smp);
     });

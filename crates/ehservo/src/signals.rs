@@ -101,9 +101,14 @@ impl Registry {
     }
 }
 
-/// Removes a directory tree; retried because a thread still writing into it
-/// may add an entry between the listing and the final `rmdir`.
+/// Removes a directory tree (or a single file: `ehservo fmu`'s temporary
+/// archive); retried because a thread still writing into it may add an
+/// entry between the listing and the final `rmdir`.
 pub(crate) fn remove_tree(dir: &std::path::Path) {
+    if std::fs::symlink_metadata(dir).is_ok_and(|m| !m.is_dir()) {
+        let _ = std::fs::remove_file(dir);
+        return;
+    }
     for _ in 0..5 {
         match std::fs::remove_dir_all(dir) {
             Ok(()) => return,
@@ -123,10 +128,38 @@ pub(crate) fn remove_created(created: &[PathBuf]) {
     }
 }
 
+/// A temporary file (not a staging folder) that a signal must remove:
+/// listed until the guard is dropped.
+#[derive(Debug)]
+pub struct TempFile {
+    id: u64,
+}
+
+impl TempFile {
+    /// Lists `path` for removal on a signal.
+    pub fn register(path: std::path::PathBuf) -> TempFile {
+        TempFile {
+            id: registry().add(path, Vec::new()),
+        }
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        registry().remove(self.id);
+    }
+}
+
 /// Installs the handler for `SIGINT`, `SIGTERM` and `SIGHUP`: remove every
 /// live staging directory, then exit with [`EXIT_CODE`]. Call once, early.
+///
+/// It also makes `SIGXFSZ` (a file-size limit, `ulimit -f`, reached)
+/// ignored: a write beyond the limit then fails with `EFBIG`, which is
+/// reported and cleaned up as a full disk is (exit 1), instead of the
+/// signal killing the process with its staging folder half-written.
 #[cfg(feature = "cli")]
 pub fn install() -> Result<(), ctrlc::Error> {
+    ignore_sigxfsz();
     ctrlc::set_handler(|| {
         #[cfg(unix)]
         kill_children();
@@ -136,6 +169,19 @@ pub fn install() -> Result<(), ctrlc::Error> {
         std::process::exit(EXIT_CODE);
     })
 }
+
+/// `SIGXFSZ` ignored (see [`install`]).
+#[cfg(all(feature = "cli", unix))]
+#[allow(unsafe_code)]
+fn ignore_sigxfsz() {
+    use nix::sys::signal::{signal, SigHandler, Signal};
+    // SAFETY: SIG_IGN installs no handler code, so nothing can run in a
+    // signal context; the call only changes the disposition.
+    let _ = unsafe { signal(Signal::SIGXFSZ, SigHandler::SigIgn) };
+}
+
+#[cfg(all(feature = "cli", not(unix)))]
+fn ignore_sigxfsz() {}
 
 /// How many staging directories are alive (for tests).
 pub fn live_staging_dirs() -> usize {

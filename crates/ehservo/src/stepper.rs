@@ -177,7 +177,7 @@ pub struct LawOutput {
     pub flags: u8,
 }
 
-trait LawStep {
+trait LawStep: Send + Sync {
     fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput;
     fn step_parts(&mut self, t: f64, x: [f64; 3], z: [f64; 4], parts: &mut [f64]) -> LawOutput;
     /// `step` on a copy (on the stack, not boxed).
@@ -199,7 +199,10 @@ impl Truth for NoTruth {
     }
 }
 
-impl<C: Controller + Clone + 'static> LawStep for SampledController<C> {
+impl<C> LawStep for SampledController<C>
+where
+    C: Controller<State: Send + Sync> + Clone + Send + Sync + 'static,
+{
     fn step(&mut self, t: f64, x: [f64; 3], z: [f64; 4]) -> LawOutput {
         let o = SampledController::step(self, t, x, z);
         LawOutput {

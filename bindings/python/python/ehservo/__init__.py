@@ -13,6 +13,11 @@ Overrides follow ``ehservo run --set key.path=value``: pass them as a dict
 (``controller__gamma1=200``), or both (keywords last). A value may be a
 Python number, bool, string or list; a string is read as the command line
 reads the text after ``=`` (a TOML value, or a bare word such as ``vsc``).
+
+``run``, ``sweep``, ``tune`` and ``league`` compute on a thread of their
+own: Ctrl-C raises ``KeyboardInterrupt`` within about 0.1 s and leaves
+nothing written. A trace too large for the memory there raises
+``MemoryError`` before the run starts.
 """
 
 from __future__ import annotations
@@ -31,7 +36,10 @@ from ._ehservo import ScenarioError
 __all__ = [
     "run",
     "sweep",
+    "tune",
+    "league",
     "check",
+    "FLAGS",
     "Controller",
     "RunResult",
     "Signal",
@@ -41,6 +49,11 @@ __all__ = [
 ]
 
 __version__: str = _ehservo.__version__
+
+#: The flags of a sample (``Controller.step(...)["flags"]``), name → bit
+#: value, the law's constants: test ``out["flags"] & FLAGS["SATURATED"]``
+#: (docs/flags.md).
+FLAGS: Dict[str, int] = dict(_ehservo.FLAGS)
 
 PathLike = Union[str, "os.PathLike[str]"]
 SetArg = Union[Mapping[str, Any], Iterable[str], None]
@@ -206,6 +219,38 @@ def sweep(
         os.fspath(study), threads, None if out is None else os.fspath(out)
     )
     return _frame(dict(zip(names, cols)), as_frame)
+
+
+def tune(
+    file: PathLike,
+    *,
+    threads: Optional[int] = None,
+    out: Optional[PathLike] = None,
+    plot: bool = True,
+) -> Dict[str, Any]:
+    """Tunes a controller as ``ehservo tune`` does; returns tune.json's
+    ``result`` (``params``, ``objective``, ``defaults``, ``kept_defaults``,
+    ``evaluations``, ``history``). With ``out``, the CLI's output folder is
+    written too. Raises ``ScenarioError`` for a bad tune file (and for one
+    that asks for more work than the limit, stated in the message)."""
+    return json.loads(
+        _ehservo.tune(os.fspath(file), threads, None if out is None else os.fspath(out), plot)
+    )
+
+
+def league(
+    file: PathLike,
+    *,
+    threads: Optional[int] = None,
+    out: Optional[PathLike] = None,
+    plot: bool = True,
+) -> Dict[str, Any]:
+    """Runs a league as ``ehservo league`` does; returns ``standings`` (per
+    controller: its table, tune and margin) and ``rows`` (league.csv's).
+    With ``out``, the CLI's output folder is written too."""
+    return json.loads(
+        _ehservo.league(os.fspath(file), threads, None if out is None else os.fspath(out), plot)
+    )
 
 
 class Signal(NamedTuple):

@@ -25,7 +25,15 @@ def check(path: Optional[str], text: Optional[str], overrides: List[str]) -> str
 def sweep(
     path: str, threads: Optional[int] = None, out: Optional[str] = None
 ) -> Tuple[List[str], List[Any]]: ...
+def tune(
+    path: str, threads: Optional[int] = None, out: Optional[str] = None, plot: bool = True
+) -> str: ...
+def league(
+    path: str, threads: Optional[int] = None, out: Optional[str] = None, plot: bool = True
+) -> str: ...
 def is_file(p: str) -> bool: ...
+
+FLAGS: Dict[str, int]
 
 class RawController:
     kind: str

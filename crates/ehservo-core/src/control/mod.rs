@@ -148,6 +148,47 @@ pub mod flags {
     /// the board's state left as it was before the sample
     /// (`crates/ehservo-wire`, `ehservo pil`).
     pub const LINK_FAULT: u8 = 64;
+
+    /// Every flag as (name, value, meaning), in bit order: what the C
+    /// header's `EHSERVO_FLAG_*` constants and the documentation
+    /// (docs/flags.md) are checked against.
+    pub const ALL: [(&str, u8, &str); 7] = [
+        (
+            "VALVE_ROOT_CLAMPED",
+            VALVE_ROOT_CLAMPED,
+            "the valve root of (2) had a negative argument and was clamped at 0",
+        ),
+        (
+            "ZERO_ERROR_NORM",
+            ZERO_ERROR_NORM,
+            "‖E‖ = 0: σΔ, μ and ξ were set to 0",
+        ),
+        (
+            "MEASUREMENT_FAULT",
+            MEASUREMENT_FAULT,
+            "a measurement was non-finite or beyond its limit: the safe command was returned",
+        ),
+        (
+            "NON_FINITE_CONTROL",
+            NON_FINITE_CONTROL,
+            "the law produced a non-finite u: the safe command was returned",
+        ),
+        (
+            "SATURATED",
+            SATURATED,
+            "u was clamped to the valve range (or the controller's output limit)",
+        ),
+        (
+            "NON_FINITE_STATE",
+            NON_FINITE_STATE,
+            "the state update was non-finite: the safe command was returned",
+        ),
+        (
+            "LINK_FAULT",
+            LINK_FAULT,
+            "an off-board controller's command did not arrive usable (processor-in-the-loop): the safe command was applied",
+        ),
+    ];
 }
 
 /// One named signal of a controller's parts.
@@ -333,8 +374,9 @@ pub trait Config {
     /// `ehservo tune` varies when the tune file names none. Empty: nothing
     /// to tune.
     const TUNABLE: &'static [Tunable] = &[];
-    /// The controller built.
-    type Controller: Controller + Clone;
+    /// The controller built: plain data, so it can be moved to (and shared
+    /// with) another thread (a Python `Controller` stepped from a thread).
+    type Controller: Controller<State: Send + Sync> + Clone + Send + Sync;
     /// Checks every parameter (all of them, whether or not this law reads
     /// them) and builds the controller; the error names the parameter.
     fn build(&self, design: &Design) -> Result<Self::Controller, ParamError>;

@@ -201,7 +201,12 @@ fn theorem2(s: &Scenario, pm: &Matrix3<f64>, sp: [Pole; 3], surface: [f64; 3]) -
     };
     let holds = alpha.map(|al| al > 0.0 && al < bound);
     let decades_over = match (alpha, holds) {
-        (Some(al), Some(false)) if bound > 0.0 && al > 0.0 => Some((al / bound).log10()),
+        // As a difference of logs where α/bound overflows (α = 1e308):
+        // never "by inf decades".
+        (Some(al), Some(false)) if bound > 0.0 && al > 0.0 => Some(match al / bound {
+            r if r.is_finite() => r.log10(),
+            _ => al.log10() - bound.log10(),
+        }),
         _ => None,
     };
     let verdict = match (alpha, holds) {

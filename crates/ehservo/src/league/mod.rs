@@ -333,6 +333,20 @@ impl League {
                 vec![None]
             } else {
                 let first = e.first_seed.unwrap_or(0);
+                // `uncertainty.seed` is a TOML integer: at most 2⁶³ − 1.
+                let last = first
+                    .checked_add(e.draws - 1)
+                    .filter(|&l| l <= i64::MAX as u64);
+                if last.is_none() {
+                    return Err(bad(
+                        &format!("{key}.first_seed"),
+                        format!(
+                            "{first} + {} draws runs past the largest seed, 2^63 − 1 = {}: lower first_seed",
+                            e.draws,
+                            i64::MAX
+                        ),
+                    ));
+                }
                 (0..e.draws).map(|d| Some(first + d)).collect()
             };
             let table = table_of(&key, &scenario)?;
@@ -435,20 +449,30 @@ impl League {
                         format!("low = {} must be < high = {}, both finite", m.low, m.high),
                     ));
                 }
-                if !(m.tolerance.is_finite() && m.tolerance > 0.0 && m.tolerance < m.high - m.low) {
+                if !(m.high - m.low).is_finite() {
                     return Err(bad(
-                        "margin.tolerance",
+                        "margin.high",
                         format!(
-                            "must be > 0 and below high − low = {} (got {})",
-                            m.high - m.low,
-                            m.tolerance
+                            "high − low = {:e} − {:e} overflows: narrow the bracket",
+                            m.high, m.low
                         ),
                     ));
                 }
+                crate::bisection::check_tolerance(m.low, m.high, m.tolerance)
+                    .map_err(|r| bad("margin.tolerance", r))?;
                 if !(m.scale.is_finite() && m.scale != 0.0) {
                     return Err(bad(
                         "margin.scale",
                         format!("must be finite and nonzero (got {:?})", m.scale),
+                    ));
+                }
+                if !((m.scale * m.low).is_finite() && (m.scale * m.high).is_finite()) {
+                    return Err(bad(
+                        "margin.scale",
+                        format!(
+                            "scale·low and scale·high must be finite (got {:?}·[{:e}, {:e}])",
+                            m.scale, m.low, m.high
+                        ),
                     ));
                 }
                 if let Some(l) = m.e_limit_deg {
@@ -468,10 +492,20 @@ impl League {
                     table,
                 };
                 // The keys must exist and take a number at both ends.
+                for k in &m.keys {
+                    if let Some(v) = lookup(&margin.table, k) {
+                        crate::tune::numeric(v).map_err(|what| {
+                            bad(
+                                "margin.keys",
+                                format!("`{k}` is {what}, not a real number: a margin varies numeric keys"),
+                            )
+                        })?;
+                    }
+                }
                 for x in [m.low, m.high] {
                     for c in &contestants {
                         if let Err(r) = margin.build(&c.table, x) {
-                            if r.contains("unknown") || r.contains("not used by") {
+                            if r.contains("unknown") || crate::tune::not_a_result(&r) {
                                 return Err(bad("margin.keys", r));
                             }
                         }
@@ -480,12 +514,78 @@ impl League {
                 Some(margin)
             }
         };
-        Ok(League {
+        let league = League {
             file: sf,
             contestants,
             cases,
             margin,
-        })
+        };
+        league
+            .work_asked()
+            .check("league")
+            .map_err(|(k, r)| bad(&k, r))?;
+        Ok(league)
+    }
+
+    /// The evaluations the league asks for, by the key that asks: the
+    /// tunes, every run of every scenario, the margins' bisections.
+    fn work_asked(&self) -> crate::limits::Batch {
+        use crate::limits::{run_evaluations, RUN_OVERHEAD};
+        let mut b = crate::limits::Batch::default();
+        let n = self.contestants.len() as f64;
+        let tuned: Vec<&Tune> = self
+            .contestants
+            .iter()
+            .filter_map(|c| match &c.source {
+                Source::Tuned(t) => Some(&**t),
+                Source::Given => None,
+            })
+            .collect();
+        if let Some(t) = tuned.first() {
+            let per: f64 = t
+                .scenarios
+                .iter()
+                .map(|s| run_evaluations(s) + RUN_OVERHEAD)
+                .sum::<f64>()
+                * t.file.draws as f64;
+            b.add(
+                "tuning.budget",
+                tuned.len() as f64 * (t.file.budget + 1) as f64,
+                per - RUN_OVERHEAD,
+                format!(
+                    "tuning {} controllers × {} evaluations × {} runs each",
+                    tuned.len(),
+                    t.file.budget,
+                    t.scenarios.len() as u64 * t.file.draws
+                ),
+            );
+        }
+        for (i, c) in self.cases.iter().enumerate() {
+            b.add(
+                &format!("scenario[{i}].draws"),
+                n * c.seeds.len() as f64,
+                run_evaluations(&c.scenario),
+                format!(
+                    "scenario `{}`: {} controllers × {} draws",
+                    c.name,
+                    self.contestants.len(),
+                    c.seeds.len()
+                ),
+            );
+        }
+        if let Some(m) = &self.margin {
+            b.add(
+                "margin.tolerance",
+                n * m.steps() as f64,
+                run_evaluations(&m.scenario),
+                format!(
+                    "the margin: {} controllers × {} bisection runs",
+                    self.contestants.len(),
+                    m.steps()
+                ),
+            );
+        }
+        b
     }
 
     /// The runs of the league, in report order: (controller, scenario,
@@ -520,6 +620,16 @@ impl League {
             .unwrap_or(0);
         tunes + self.cells().len() as u64 + margin
     }
+}
+
+/// The value at a dotted key path of a table (`uncertainty.a_bias`).
+fn lookup<'a>(t: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
+    let mut parts = path.split('.');
+    let mut v = t.get(parts.next()?.trim())?;
+    for p in parts {
+        v = v.as_table()?.get(p.trim())?;
+    }
+    Some(v)
 }
 
 /// A label used as a file name and a CSV cell.
@@ -622,8 +732,7 @@ impl Margin {
 
     /// Bisection steps at most (the two ends and the halvings).
     fn steps(&self) -> u32 {
-        let span = (self.cfg.high - self.cfg.low) / self.cfg.tolerance;
-        2 + span.log2().ceil().max(0.0) as u32
+        2 + crate::bisection::halvings(self.cfg.low, self.cfg.high, self.cfg.tolerance)
     }
 
     /// Whether the run at x stays bounded.
@@ -639,7 +748,7 @@ impl Margin {
 
     /// The margin of the controller with `table`.
     fn bisect(&self, table: &toml::Table, progress: &indicatif::ProgressBar) -> MarginResult {
-        let (mut lo, mut hi) = (self.cfg.low, self.cfg.high);
+        let (lo, hi) = (self.cfg.low, self.cfg.high);
         let mut runs = 2;
         progress.inc(2);
         if self.bounded(table, hi) {
@@ -660,16 +769,12 @@ impl Margin {
                 runs,
             };
         }
-        while hi - lo > self.cfg.tolerance {
-            let mid = 0.5 * (lo + hi);
-            runs += 1;
+        let (lo, hi, n) = crate::bisection::bisect(lo, hi, self.cfg.tolerance, |mid| {
             progress.inc(1);
-            if self.bounded(table, mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
+            Ok::<_, std::convert::Infallible>(self.bounded(table, mid))
+        })
+        .unwrap_or_else(|e| match e {});
+        runs += n;
         MarginResult {
             value: Some(lo),
             unbounded_at: Some(hi),
@@ -824,6 +929,9 @@ pub fn play(
             });
         }
         // Every run, in parallel, collected in order.
+        if crate::cancel::requested() {
+            return Err(crate::cancel::Cancelled.into());
+        }
         let cells: Vec<Cell> = l
             .cells()
             .par_iter()
@@ -870,6 +978,10 @@ pub fn play(
             for (s, r) in standings.iter_mut().zip(margins) {
                 s.margin = Some(r);
             }
+        }
+        // Runs cut short by an interruption are no result.
+        if crate::cancel::requested() {
+            return Err(crate::cancel::Cancelled.into());
         }
         Ok(LeagueResult { standings, cells })
     })

@@ -613,7 +613,7 @@ pub fn run_to_dir_with(
     let (outcome, metrics) = hooks.run(s, stage.path(), &mut |smp| {
         if failure.is_none() && smp.k % decimate == 0 {
             if let Err(e) = w.write(smp) {
-                failure = Some(e);
+                failure = Some(e.context(format!("writing {}", dir.join("trace.csv").display())));
             }
         }
         if smp.k % keep_every == 0 {
@@ -637,8 +637,9 @@ pub fn run_to_dir_with(
             diag.push(&l);
         }
     }
-    let mut inner = w.finish()?;
-    inner.flush()?;
+    let writing = || format!("writing {}", dir.join("trace.csv").display());
+    let mut inner = w.finish().with_context(writing)?;
+    inner.flush().with_context(writing)?;
     let run = RunResult {
         outcome,
         metrics,

@@ -6,16 +6,98 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// The files that mark a folder as an ehservo output (of `run`, `sweep` or
-/// `merge`, `reproduce`): only such a folder, or an empty one, is replaced.
-pub const OUTPUT_MARKERS: [&str; 6] = [
-    "summary.json",
-    "study.json",
-    "report.md",
-    "claims.csv",
-    "identify.json",
-    "excite.json",
+/// The files that mark a folder as an ehservo output: only such a folder,
+/// or an empty one, is replaced. The one list every writer registers with:
+/// [`Staging::commit`] refuses a folder that holds none of them, so a new
+/// command's output cannot go without its marker (and then be refused
+/// when it is written again).
+pub const OUTPUT_MARKERS: [&str; 8] = [
+    "summary.json",  // ehservo run, ehservo pil
+    "study.json",    // ehservo sweep, ehservo merge
+    "report.md",     // ehservo reproduce
+    "claims.csv",    // ehservo reproduce
+    "tune.json",     // ehservo tune
+    "league.json",   // ehservo league
+    "identify.json", // ehservo identify
+    "excite.json",   // ehservo excite
 ];
+
+/// How long a commit waits for another process's commit into the same
+/// folder to finish (each holds the parent folder's lock for a rename or
+/// two and the removal of the old output).
+const LOCK_WAIT: std::time::Duration = std::time::Duration::from_secs(120);
+
+/// A lock on the folder that holds outputs (`flock` on the directory
+/// itself: nothing is created, and it is released when the process ends,
+/// however it ends). Shared while a destination is checked, exclusive while
+/// one is replaced, so that no check sees a folder half-way through
+/// another process's replace. Where the file system cannot lock (some
+/// network file systems), it is not taken.
+struct ParentLock {
+    #[cfg(unix)]
+    _lock: Option<nix::fcntl::Flock<fs::File>>,
+}
+
+impl ParentLock {
+    fn take(parent: &Path, exclusive: bool) -> Result<Self> {
+        #[cfg(unix)]
+        {
+            use nix::errno::Errno;
+            use nix::fcntl::{Flock, FlockArg};
+            let Ok(mut dir) = fs::File::open(parent) else {
+                // Not there (nothing to race over) or unreadable: no lock.
+                return Ok(Self { _lock: None });
+            };
+            let arg = if exclusive {
+                FlockArg::LockExclusiveNonblock
+            } else {
+                FlockArg::LockSharedNonblock
+            };
+            let start = std::time::Instant::now();
+            loop {
+                match Flock::lock(dir, arg) {
+                    Ok(l) => return Ok(Self { _lock: Some(l) }),
+                    Err((d, Errno::EWOULDBLOCK | Errno::EINTR)) => {
+                        if start.elapsed() > LOCK_WAIT {
+                            anyhow::bail!(
+                                "{}: another process has been replacing an output in this folder for over {} s; nothing was written (try again when it is done)",
+                                parent.display(),
+                                LOCK_WAIT.as_secs()
+                            );
+                        }
+                        dir = d;
+                        std::thread::sleep(std::time::Duration::from_millis(5));
+                    }
+                    // The file system does not lock: go on without.
+                    Err(_) => return Ok(Self { _lock: None }),
+                }
+            }
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = (parent, exclusive);
+            Ok(Self {})
+        }
+    }
+}
+
+/// The folder `dest` is written in.
+fn parent_of(dest: &Path) -> &Path {
+    match dest.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// The folder whose lock guards `dest` (normalised): the real parent of
+/// what it resolves to, so that two paths to one folder (a symbolic link)
+/// share the lock.
+fn lock_dir(norm: &Path) -> PathBuf {
+    fs::canonicalize(norm)
+        .ok()
+        .and_then(|r| r.parent().map(Path::to_path_buf))
+        .unwrap_or_else(|| parent_of(norm).to_path_buf())
+}
 
 /// Checks that `dest` may receive an output, which replaces it whole: it
 /// does not exist yet (and names a folder), or it is a directory that is
@@ -26,6 +108,14 @@ pub const OUTPUT_MARKERS: [&str; 6] = [
 pub fn check_destination(dest: &Path) -> Result<PathBuf> {
     // `a/./b/` → `a/b`, so that parent and file name are the real ones.
     let norm: PathBuf = dest.components().collect();
+    // No other process is half-way through replacing an output here.
+    let _lock = ParentLock::take(&lock_dir(&norm), false)?;
+    check_unlocked(dest, norm)
+}
+
+/// [`check_destination`] of `dest` (normalised as `norm`) under a lock the
+/// caller holds.
+fn check_unlocked(dest: &Path, norm: PathBuf) -> Result<PathBuf> {
     if norm.as_os_str().is_empty() {
         crate::bad_input!("--out: an empty path");
     }
@@ -72,6 +162,16 @@ pub fn check_destination(dest: &Path) -> Result<PathBuf> {
         );
     }
     Ok(real)
+}
+
+/// Whether a rename failed because its target is taken (`EEXIST`,
+/// `ENOTEMPTY`, `ENOTDIR`, `EISDIR`): someone else put something there.
+fn is_occupied(e: &std::io::Error) -> bool {
+    use std::io::ErrorKind as K;
+    matches!(
+        e.kind(),
+        K::AlreadyExists | K::DirectoryNotEmpty | K::NotADirectory | K::IsADirectory
+    )
 }
 
 /// Whether a lookup failed because the path is not there (`ENOENT`) or
@@ -180,6 +280,19 @@ impl Staging {
     /// during the run), renamed aside, replaced and then removed: no file of
     /// an earlier output survives.
     pub fn commit(mut self) -> Result<()> {
+        // Every output carries its marker (registered in OUTPUT_MARKERS):
+        // otherwise it could not be replaced by its own command later.
+        if !OUTPUT_MARKERS.iter().any(|m| self.tmp.join(m).is_file()) {
+            anyhow::bail!(
+                "internal error: the output for {} holds none of {}: its writer must write (and register in output::OUTPUT_MARKERS) its marker file",
+                self.dest.display(),
+                OUTPUT_MARKERS.join(", ")
+            );
+        }
+        // A Python call interrupted by Ctrl-C leaves nothing behind.
+        if crate::cancel::requested() {
+            return Err(crate::cancel::Cancelled.into());
+        }
         // A signal arriving now waits until the output is in place.
         let mut reg = crate::signals::registry();
         let moved = self.move_into_place();
@@ -191,17 +304,43 @@ impl Staging {
         moved
     }
 
+    /// Under the parent folder's exclusive lock: the destination checked
+    /// again, the old output renamed aside, the new one renamed in, the old
+    /// one removed. Two ehservo processes replacing one folder take turns
+    /// (the last one's output stays); a change made meanwhile by anything
+    /// else is an I/O error (exit 1) that says what happened, and leaves
+    /// the folder as that change left it.
     fn move_into_place(&self) -> Result<()> {
-        let dest = check_destination(&self.dest)?;
+        let norm: PathBuf = self.dest.components().collect();
+        let lock = ParentLock::take(&lock_dir(&norm), true)?;
+        let dest = match check_unlocked(&self.dest, norm) {
+            Ok(d) => d,
+            // It was a valid destination when the command began
+            // (Staging::new): something else changed it during the run.
+            Err(e) if crate::error::is_bad_input(&e) => anyhow::bail!(
+                "{} was changed by another process while this command ran ({e:#}): this output was not written",
+                self.dest.display()
+            ),
+            Err(e) => return Err(e),
+        };
         let moving = || format!("moving {} to {}", self.tmp.display(), dest.display());
+        let lost = |e: std::io::Error| {
+            anyhow::anyhow!(
+                "{}: another process wrote this folder while this one was putting its output there ({e}): this output was not written",
+                dest.display()
+            )
+        };
         if fs::symlink_metadata(&dest).is_err() {
-            return fs::rename(&self.tmp, &dest).with_context(moving);
+            return fs::rename(&self.tmp, &dest).map_err(|e| {
+                if is_occupied(&e) {
+                    lost(e)
+                } else {
+                    anyhow::Error::from(e).context(moving())
+                }
+            });
         }
         // Beside `dest`: renaming it aside never crosses a file system.
-        let parent = match dest.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
+        let parent = parent_of(&dest);
         let mut i = 0u32;
         let aside = loop {
             let cand = sibling(parent, "old", i);
@@ -213,9 +352,20 @@ impl Staging {
         fs::rename(&dest, &aside)
             .with_context(|| format!("moving the previous {} aside", dest.display()))?;
         if let Err(e) = fs::rename(&self.tmp, &dest) {
-            fs::rename(&aside, &dest).ok();
-            return Err(e).with_context(moving);
+            // Put the previous output back; if something took its place
+            // meanwhile, keep the previous one rather than strand it.
+            return match fs::rename(&aside, &dest) {
+                Ok(()) if is_occupied(&e) => Err(lost(e)),
+                Ok(()) => Err(anyhow::Error::from(e).context(moving())),
+                Err(back) => {
+                    crate::signals::remove_tree(&aside);
+                    Err(lost(e).context(format!(
+                        "the previous output could not be put back ({back}) and was removed"
+                    )))
+                }
+            };
         }
+        drop(lock);
         crate::signals::remove_tree(&aside);
         Ok(())
     }

@@ -216,19 +216,15 @@ fn point(base: &Scenario, set: &[String], x: f64) -> Result<ScanPoint> {
 fn bisect(
     eval: &(dyn Fn(f64) -> Result<PointStatus> + Sync),
     pass: impl Fn(PointStatus) -> bool,
-    mut lo: f64,
-    mut hi: f64,
+    lo: f64,
+    hi: f64,
     tol: f64,
 ) -> Result<(f64, f64)> {
     let left = pass(eval(lo)?);
-    while hi - lo > tol {
-        let mid = 0.5 * (lo + hi);
-        if pass(eval(mid)?) == left {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
+    // Bounded whatever `tol` is ([`crate::bisection`]).
+    let (lo, hi, _) = crate::bisection::bisect(lo, hi, tol, |mid| {
+        Ok::<_, anyhow::Error>(pass(eval(mid)?) == left)
+    })?;
     Ok((lo, hi))
 }
 

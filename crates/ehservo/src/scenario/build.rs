@@ -20,10 +20,6 @@ use ehservo_sim::sensor::Sensor;
 use ehservo_sim::simulation::Mode;
 use ehservo_sim::simulation::{SimConfig, Stages};
 
-/// Most evaluations (law or plant RK4 steps) one run may ask for: 4·10⁸,
-/// about a minute or two of computing.
-pub const MAX_WORK: f64 = 4.0e8;
-
 /// Most draws of the random variation one run may ask for (horizon/hold).
 pub const MAX_DRAWS: f64 = 1.0e8;
 
@@ -110,22 +106,8 @@ impl Setup {
                 format!("must be in 1..=10000 (got {})", sim.substeps),
             );
         }
-        // The work, bounded up front: plant RK4 steps (four law evaluations
-        // each in continuous mode; one law evaluation per sample in sampled).
-        let steps = n.round();
-        let work = match sim.mode {
-            ehservo_sim::simulation::Mode::Sampled => steps * (1.0 + sim.substeps as f64),
-            ehservo_sim::simulation::Mode::Continuous => 4.0 * steps,
-        };
-        if work > MAX_WORK {
-            return bad(
-                "simulation.substeps",
-                format!(
-                    "{steps:.3e} steps × {} sub-steps is about {work:.2e} evaluations, more than the limit of {MAX_WORK:.0e} (minutes of computing): lower the horizon or the sub-steps",
-                    sim.substeps
-                ),
-            );
-        }
+        // The work, bounded up front (law, RK4 and estimator evaluations).
+        crate::limits::check_run(s)?;
         // settle ≥ horizon is allowed: the windowed metrics are then absent.
         if !(sim.settle.is_finite() && sim.settle >= 0.0) {
             return bad(

@@ -796,6 +796,22 @@ pub fn read_csv_on(path: &Path, axis: Axis) -> Result<Vec<Knot>, String> {
                     v[0], prev.t
                 ));
             }
+            // The interpolation divides by the rows' time step and
+            // measures time from the first row: both must be finite.
+            if !(v[0] - knots[0].t).is_finite() {
+                return Err(format!(
+                    "{at}: t = {:e} is too far from the first row's t = {:e}: the time span overflows",
+                    v[0], knots[0].t
+                ));
+            }
+            let slope = (v[1] * DR - prev.v) / (v[0] - prev.t);
+            if !slope.is_finite() {
+                return Err(format!(
+                    "{at}: θd changes by {:e}° in {:e} s from the row before: the slope overflows",
+                    v[1] - prev.v / DR,
+                    v[0] - prev.t
+                ));
+            }
         }
         knots.push(Knot {
             t: v[0],

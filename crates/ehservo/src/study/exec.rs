@@ -30,12 +30,25 @@ pub fn execute(
     progress: &indicatif::ProgressBar,
 ) -> Result<Vec<RunRow>> {
     use rayon::prelude::*;
+    // The work of these runs, bounded before any of them.
+    crate::limits::check_study(plan, range.clone())?;
     let work = || -> Vec<RunRow> {
         range
             .clone()
             .into_par_iter()
             .map(|i| {
                 let (values, sets, seed) = plan.run_values(i);
+                if crate::cancel::requested() {
+                    // Interrupted (crate::cancel): no run is started, and
+                    // these rows are never returned.
+                    return RunRow {
+                        index: i,
+                        values,
+                        seed,
+                        metrics: None,
+                        error: None,
+                    };
+                }
                 let row = match plan.build_run(&sets) {
                     // Validation built the Setup: run it, not the scenario again.
                     Ok((_, setup)) => RunRow {
@@ -58,16 +71,20 @@ pub fn execute(
             })
             .collect()
     };
-    match threads {
+    let rows = match threads {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n.max(1))
                 .build()
                 .context("building the thread pool")?;
-            Ok(pool.install(work))
+            pool.install(work)
         }
-        None => Ok(work()),
+        None => work(),
+    };
+    if crate::cancel::requested() {
+        return Err(crate::cancel::Cancelled.into());
     }
+    Ok(rows)
 }
 
 /// Options of a sweep.

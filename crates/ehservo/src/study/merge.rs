@@ -136,6 +136,9 @@ fn read_record(d: &Path) -> Result<StudyRecord> {
     read_record_text(d).map(|(_, r)| r)
 }
 
+/// The longest row of a shard's results.csv read (bytes).
+const MAX_ROW_BYTES: u64 = 16 << 10;
+
 /// The rows of shard folder `d`'s results.csv, each checked against its
 /// record `r` (the rows its range promises, in order, with their seeds,
 /// under the study's header).
@@ -145,6 +148,19 @@ fn shard_rows(d: &Path, r: &StudyRecord) -> Result<Vec<csv::StringRecord>> {
     let head = header(columns);
     let p = d.join("results.csv");
     let shown = p.display().to_string();
+    // A regular file of a bounded size (a device or a FIFO in its place
+    // would be read until memory runs out): a row of results.csv is far
+    // below 16 KiB.
+    let most = (r.range[1].saturating_sub(r.range[0]) + 1).saturating_mul(MAX_ROW_BYTES);
+    match std::fs::metadata(&p) {
+        Ok(m) if !m.is_file() => crate::bad_input!("{shown}: is not a regular file"),
+        Ok(m) if m.len() > most => crate::bad_input!(
+            "{shown}: is {} bytes, more than {most} for the {} rows its study.json promises",
+            m.len(),
+            r.range[1].saturating_sub(r.range[0])
+        ),
+        _ => {}
+    }
     let bytes = match std::fs::read(&p) {
         Ok(b) => b,
         // study.json without results.csv: not a whole shard.

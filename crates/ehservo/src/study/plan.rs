@@ -55,6 +55,8 @@ impl Draw {
 /// A study, checked, with its base scenario and expanded axes.
 #[derive(Debug, Clone)]
 pub struct Plan {
+    /// The study file, as its errors name it.
+    pub file: String,
     /// The study as written.
     pub study: Study,
     /// The base scenario with `set` applied.

@@ -593,6 +593,7 @@ impl Plan {
                 .is_ok_and(|(s, _)| s == base)
         });
         Ok(Plan {
+            file: file.to_string(),
             study,
             base_table,
             seed_only_typed,

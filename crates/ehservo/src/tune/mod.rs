@@ -308,10 +308,24 @@ impl Tune {
                 format!("controller kind `{kind}` declares no tunable parameters: list them as [[param]]"),
             ));
         }
+        let defaults = ControllerCfg::default_of(kind)
+            .map(|c| c.to_table())
+            .unwrap_or_default();
         for (i, r) in params.iter().enumerate() {
             let key = format!("param[{i}]");
             if params[..i].iter().any(|q| q.key == r.key) {
                 return Err(bad(&key, format!("`{}` is listed twice", r.key)));
+            }
+            if let Some(v) = defaults.get(&r.key) {
+                numeric(v).map_err(|what| {
+                    bad(
+                        &key,
+                        format!(
+                            "`{}` of `{kind}` is {what}, not a real number: only numeric parameters can be tuned",
+                            r.key
+                        ),
+                    )
+                })?;
             }
             if !(r.low.is_finite() && r.high.is_finite()) {
                 return Err(bad(
@@ -334,7 +348,43 @@ impl Tune {
                     ),
                 ));
             }
+            // The swarm draws velocities up to ±(high − low) and moves a
+            // particle by at most (c1 + c2)/(1 − w) ≈ 8.6 times that
+            // (argmin's SPSO 2011 weights): with a margin, all it computes
+            // must stay finite.
+            let (lo, hi) = r.bounds();
+            let reach = lo.abs().max(hi.abs()) + SWARM_REACH * (hi - lo);
+            if !reach.is_finite() {
+                return Err(bad(
+                    &key,
+                    format!(
+                        "`{}`: the swarm computes up to {SWARM_REACH}·(high − low) beyond the range, which overflows for [{:e}, {:e}]: narrow it (or use scale = \"log\")",
+                        r.key, r.low, r.high
+                    ),
+                ));
+            }
         }
+        // The work asked for, bounded before any of it: every evaluation of
+        // the objective runs every scenario × draw (and the defaults once).
+        let mut work = crate::limits::Batch::default();
+        let per: f64 = scenarios
+            .iter()
+            .map(|s| crate::limits::run_evaluations(s) + crate::limits::RUN_OVERHEAD)
+            .sum::<f64>()
+            * tf.draws as f64;
+        let runs = (scenarios.len() as u64 * tf.draws) as f64;
+        work.add(
+            "budget",
+            (tf.budget + 1) as f64,
+            per - crate::limits::RUN_OVERHEAD,
+            format!(
+                "{} evaluations of the objective × {runs} runs each ({} scenario(s) × {} draw(s))",
+                tf.budget,
+                scenarios.len(),
+                tf.draws
+            ),
+        );
+        work.check("tune").map_err(|(k, r)| bad(&k, r))?;
         let tables = scenarios
             .iter()
             .map(|s| s.table().map_err(|e| StudyError(format!("{file}: {e}"))))
@@ -354,7 +404,7 @@ impl Tune {
                 if let Err(e) = t.build_run(i, sets) {
                     // A refused parameter value inside its range is a
                     // result (+∞), an unknown key is not.
-                    if e.reason.contains("unknown field") || e.reason.contains("not used by") {
+                    if not_a_result(&e.reason) {
                         return Err(bad(&e.key, e.reason));
                     }
                 }
@@ -471,6 +521,33 @@ impl Tune {
     }
 }
 
+/// How far beyond its range the swarm computes, in widths of the range
+/// (with a margin over argmin's bound of about 8.6).
+const SWARM_REACH: f64 = 16.0;
+
+/// Whether a value of a parameter's default table is a number the tune
+/// can set; otherwise what it is.
+pub(crate) fn numeric(v: &toml::Value) -> Result<(), &'static str> {
+    match v {
+        toml::Value::Float(_) => Ok(()),
+        toml::Value::Integer(_) => Err("an integer"),
+        toml::Value::Boolean(_) => Err("a boolean"),
+        toml::Value::String(_) => Err("a string (a choice of names)"),
+        toml::Value::Array(_) => Err("an array"),
+        toml::Value::Table(_) => Err("a table"),
+        toml::Value::Datetime(_) => Err("a date"),
+    }
+}
+
+/// Whether a refusal of a trial value is the key's fault (unknown, unused,
+/// or not a number at all) rather than a result (a value the controller
+/// refuses inside its range, scored +∞).
+pub(crate) fn not_a_result(reason: &str) -> bool {
+    reason.contains("unknown field")
+        || reason.contains("not used by")
+        || reason.contains("invalid type")
+}
+
 impl ParamRange {
     /// The value at fraction `x` of the range (on its scale).
     fn at(&self, x: f64) -> f64 {
@@ -502,6 +579,10 @@ impl CostFunction for Problem<'_> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
+        // Interrupted (crate::cancel): the swarm stops here.
+        if crate::cancel::requested() {
+            return Err(crate::cancel::Cancelled.into());
+        }
         let v = self.tune.objective(&self.tune.values(p));
         self.progress.inc(1);
         self.count
@@ -570,7 +651,13 @@ pub fn search(
             .configure(|s| s.max_iters(iters))
             .add_observer(history.clone(), ObserverMode::Always)
             .run()
-            .map_err(|e| anyhow::anyhow!("the particle swarm failed: {e}"))?;
+            .map_err(|e| {
+                if crate::cancel::requested() {
+                    anyhow::Error::from(crate::cancel::Cancelled)
+                } else {
+                    anyhow::anyhow!("the particle swarm failed: {e}")
+                }
+            })?;
         let state = res.state();
         let best = state
             .get_best_param()
@@ -597,6 +684,9 @@ pub fn search(
     };
     // A tune never returns worse than where it starts: the defaults.
     r.defaults = t.objective_of(None);
+    if crate::cancel::requested() {
+        return Err(crate::cancel::Cancelled.into());
+    }
     if r.objective > r.defaults || r.objective.is_nan() {
         r.kept_defaults = true;
         r.objective = r.defaults;

@@ -26,6 +26,7 @@ mod outputs;
 mod pil;
 mod properties;
 mod realistic;
+mod reliability;
 mod reproduce_bad_input;
 mod reproduction;
 mod sampled_loop;

@@ -1,0 +1,338 @@
+//! The work a command may ask for, counted before any of it is done.
+//!
+//! One run is counted in *evaluations*: a law evaluation, an RK4 step of
+//! the plant, a sub-step of an estimator. A sampled run of N steps with
+//! `simulation.substeps` = m and an estimator of `substeps` = e makes
+//! N·(1 + m + e) of them; a continuous run 4·N (the law in each RK4 stage).
+//! The paper's Fig. 2 (10 s at 10 ms, sampled) is 2·10³ evaluations and runs
+//! in 0.59 ms (BENCHMARKS.md, `fig2/sampled_0.01_run`): about 0.3 µs each.
+//!
+//! - A run: at most [`MAX_RUN_WORK`] = 4·10⁸ evaluations (a minute or two).
+//! - A tune or a league: at most [`MAX_BATCH_WORK`] = 10¹² evaluations in all
+//!   (about 80 core-hours), every run counted with a fixed
+//!   [`RUN_OVERHEAD`] for building it; the message names the key that asks
+//!   for most of it and the figure asked.
+
+use crate::scenario::{EstimatorCfg, Scenario};
+use crate::simulation::Mode;
+
+/// Most evaluations one run may ask for (checked by `Setup::new`, through
+/// [`check_run`]).
+pub const MAX_RUN_WORK: f64 = 4.0e8;
+
+/// Most evaluations one tune or one league may ask for, every run counted:
+/// 10¹², about 3·10⁵ s (80 hours) of one core at 0.3 µs an evaluation.
+pub const MAX_BATCH_WORK: f64 = 1.0e12;
+
+/// What building one run costs besides its evaluations, in evaluations: a
+/// set-up made from a TOML table with overrides takes some hundred
+/// microseconds, a few hundred evaluations (1000 is counted).
+pub const RUN_OVERHEAD: f64 = 1.0e3;
+
+/// The evaluations of one run of `s` (whose step, horizon and sub-steps
+/// are valid): N·(1 + m + e) sampled, 4·N continuous.
+pub fn run_evaluations(s: &Scenario) -> f64 {
+    let sim = &s.simulation;
+    let steps = (sim.horizon / sim.step).round();
+    match sim.mode {
+        Mode::Sampled => steps * (1.0 + f64::from(sim.substeps) + estimator_substeps(s)),
+        Mode::Continuous => 4.0 * steps,
+    }
+}
+
+/// The estimator's sub-steps per sample (0 without a sub-stepped estimator).
+fn estimator_substeps(s: &Scenario) -> f64 {
+    match &s.estimator {
+        Some(EstimatorCfg::Levant { substeps, .. }) => f64::from(*substeps),
+        _ => 0.0,
+    }
+}
+
+/// The evaluations of one sample of a built loop (as [`run_evaluations`]
+/// counts them per step).
+pub fn sample_evaluations(
+    sim: &crate::simulation::SimConfig,
+    stages: &crate::simulation::Stages,
+) -> u64 {
+    let est = match &stages.estimator {
+        Some(ehservo_sim::estimator::AnyEstimator::Levant(l)) => u64::from(l.substeps()),
+        _ => 0,
+    };
+    match sim.mode {
+        Mode::Sampled => 1 + u64::from(sim.substeps) + est,
+        Mode::Continuous => 4,
+    }
+}
+
+/// The largest |θ|, |θ̇|, |θ̈| a run may start from or be bounded by
+/// (`simulation.x0`, `simulation.theta_limit`): 1e300 (rad, rad/s,
+/// rad/s²). A trace writes them in degrees (×57.3), which overflows
+/// beyond 3e306; the sensors' bias and noise have the same bound.
+pub const MAX_MAGNITUDE: f64 = ehservo_sim::sensor::MAX_MAGNITUDE;
+
+/// Refuses a run of more than [`MAX_RUN_WORK`] evaluations: the key is the
+/// multiplier that asks for most (the estimator's sub-steps, the plant's
+/// sub-steps, or the horizon), the reason the figure. Also refuses a
+/// finite x0 or θ limit beyond [`MAX_MAGNITUDE`] (the non-finite ones are
+/// refused by their own checks).
+pub fn check_run(s: &Scenario) -> Result<(), (String, String)> {
+    let sim = &s.simulation;
+    let huge = |v: f64| v.is_finite() && v.abs() > MAX_MAGNITUDE;
+    if huge(sim.theta_limit) {
+        return Err((
+            "simulation.theta_limit".into(),
+            format!(
+                "must be at most 1e300 rad (beyond, θ in degrees overflows; got {:e})",
+                sim.theta_limit
+            ),
+        ));
+    }
+    if let Some(v) = sim.x0.iter().find(|v| huge(**v)) {
+        return Err((
+            "simulation.x0".into(),
+            format!(
+                "must be within ±1e300 (rad, rad/s, rad/s²: beyond, the trace in degrees overflows; got {v:e})"
+            ),
+        ));
+    }
+    let work = run_evaluations(s);
+    if work <= MAX_RUN_WORK {
+        return Ok(());
+    }
+    let sim = &s.simulation;
+    let steps = (sim.horizon / sim.step).round();
+    let est = estimator_substeps(s);
+    let key = if sim.mode == Mode::Continuous {
+        "simulation.horizon"
+    } else if est > f64::from(sim.substeps) {
+        "estimator.substeps"
+    } else if sim.substeps > 1 {
+        "simulation.substeps"
+    } else {
+        "simulation.horizon"
+    };
+    let per = match sim.mode {
+        Mode::Sampled if est > 0.0 => format!(
+            "(1 + {} plant sub-steps + {est} estimator sub-steps)",
+            sim.substeps
+        ),
+        Mode::Sampled => format!("(1 + {} sub-steps)", sim.substeps),
+        Mode::Continuous => "4 (the law in each RK4 stage)".to_string(),
+    };
+    Err((
+        key.to_string(),
+        format!(
+            "{steps:.3e} steps × {per} is about {work:.2e} evaluations, more than the limit of \
+             {MAX_RUN_WORK:.0e} for one run (minutes of computing): lower the horizon or the sub-steps"
+        ),
+    ))
+}
+
+/// The keys that change a run's evaluations (the others change only what
+/// each evaluation computes).
+const WORK_KEYS: [&str; 5] = [
+    "simulation.horizon",
+    "simulation.step",
+    "simulation.substeps",
+    "simulation.mode",
+    "estimator.substeps",
+];
+
+/// Refuses a sweep of runs `range` of a study beyond [`MAX_BATCH_WORK`]
+/// evaluations (a shard is counted alone: `--shard K/N` splits the work).
+/// Each run is counted from the base scenario with the run's values of the
+/// keys that change its evaluations ([`WORK_KEYS`]); a value that does not
+/// read as such counts as the base's (its run then reports its error).
+pub fn check_study(
+    plan: &crate::study::Plan,
+    range: std::ops::Range<u64>,
+) -> Result<(), crate::study::StudyError> {
+    let mut keys: Vec<String> = plan.axes.iter().flat_map(|(a, _)| a.keys()).collect();
+    if let Some(mc) = &plan.study.monte_carlo {
+        keys.extend(mc.draw.iter().map(|d| d.key.clone()));
+    }
+    let varied = keys.iter().any(|k| WORK_KEYS.contains(&k.trim()));
+    // A run beyond a run's own limit (or with an invalid step) is refused
+    // by its validation and costs nothing.
+    let of = |s: &Scenario| match run_evaluations(s) {
+        e if e.is_finite() && e <= MAX_RUN_WORK => e,
+        _ => 0.0,
+    };
+    let runs = (range.end - range.start) as f64;
+    let mut b = Batch::default();
+    if !varied {
+        b.add("runs", runs, of(&plan.base), String::new());
+    } else {
+        let mut s = plan.base.clone();
+        for i in range {
+            let (_, sets, _) = plan.run_values(i);
+            s.simulation = plan.base.simulation.clone();
+            s.estimator = plan.base.estimator;
+            for (k, v) in &sets {
+                set_work_key(&mut s, k.trim(), v);
+            }
+            b.add("runs", 1.0, of(&s), String::new());
+        }
+    }
+    let total = b.total();
+    if total <= MAX_BATCH_WORK {
+        return Ok(());
+    }
+    let key = if plan.study.monte_carlo.is_some() {
+        "monte_carlo.runs"
+    } else {
+        "axis"
+    };
+    Err(crate::study::StudyError(format!(
+        "{}: `{key}`: {runs} runs of about {:.2e} evaluations each are {total:.2e} evaluations, more than the limit of {MAX_BATCH_WORK:.0e} for one sweep (about {:.0} core-hours): split it with --shard K/N (each shard is counted alone) or ask for less",
+        plan.file,
+        total / runs.max(1.0) - RUN_OVERHEAD,
+        MAX_BATCH_WORK * 0.3e-6 / 3600.0
+    )))
+}
+
+/// Sets one of [`WORK_KEYS`] on `s` from a study's value, if it reads as one.
+fn set_work_key(s: &mut Scenario, key: &str, v: &toml::Value) {
+    let num = v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+    let sim = &mut s.simulation;
+    match key {
+        "simulation.horizon" => sim.horizon = num.unwrap_or(sim.horizon),
+        "simulation.step" => sim.step = num.unwrap_or(sim.step),
+        "simulation.substeps" => {
+            if let Some(n) = v.as_integer().and_then(|i| u32::try_from(i).ok()) {
+                sim.substeps = n;
+            }
+        }
+        "simulation.mode" => match v.as_str() {
+            Some("sampled") => sim.mode = Mode::Sampled,
+            Some("continuous") => sim.mode = Mode::Continuous,
+            _ => {}
+        },
+        "estimator.substeps" => {
+            if let (Some(EstimatorCfg::Levant { substeps, .. }), Some(n)) = (
+                &mut s.estimator,
+                v.as_integer().and_then(|i| u32::try_from(i).ok()),
+            ) {
+                *substeps = n;
+            }
+        }
+        _ => {}
+    }
+}
+
+/// The work of a batch of runs (a tune, a league), by the key that asks
+/// for each part.
+#[derive(Debug, Clone, Default)]
+pub struct Batch {
+    parts: Vec<(String, f64, String)>,
+}
+
+impl Batch {
+    /// Adds `runs` runs of `evaluations` each, asked for by `key`, described
+    /// (for the message) as `what`.
+    pub fn add(&mut self, key: &str, runs: f64, evaluations: f64, what: String) {
+        let work = runs * (evaluations + RUN_OVERHEAD);
+        self.parts.push((key.to_string(), work, what));
+    }
+
+    /// The evaluations of the whole batch.
+    pub fn total(&self) -> f64 {
+        self.parts.iter().map(|p| p.1).sum()
+    }
+
+    /// Refuses a batch beyond [`MAX_BATCH_WORK`]: `(key, reason)` naming the
+    /// key of the largest part, what it asks for and the total.
+    pub fn check(&self, command: &str) -> Result<(), (String, String)> {
+        let total = self.total();
+        if total <= MAX_BATCH_WORK {
+            return Ok(());
+        }
+        let (key, work, what) = self
+            .parts
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .cloned()
+            .unwrap_or_default();
+        Err((
+            key,
+            format!(
+                "{what} is about {work:.2e} evaluations ({total:.2e} for the whole {command}), \
+                 more than the limit of {MAX_BATCH_WORK:.0e} for one {command} (about {:.0} core-hours): \
+                 ask for fewer",
+                MAX_BATCH_WORK * 0.3e-6 / 3600.0
+            ),
+        ))
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // the counts are exact in doubles
+mod tests {
+    use super::*;
+
+    /// Fig. 2: 10 s / 0.01 s = 1000 steps, sampled, one sub-step: 2000
+    /// evaluations; a Levant differentiator of 10 sub-steps adds 10 000;
+    /// continuous, 4000.
+    #[test]
+    fn evaluations_by_hand() {
+        let mut s = Scenario::parse("name = \"x\"").unwrap();
+        assert_eq!(run_evaluations(&s), 2000.0);
+        s.estimator = Some(EstimatorCfg::Levant {
+            lipschitz: 10.0,
+            substeps: 10,
+        });
+        assert_eq!(run_evaluations(&s), 12_000.0);
+        s.estimator = None;
+        s.simulation.mode = Mode::Continuous;
+        assert_eq!(run_evaluations(&s), 4000.0);
+    }
+
+    /// 1000 steps × (1 + 1 + 10⁶) ≈ 1.0e9 > 4e8: the estimator's sub-steps
+    /// are named; at 10⁵ they are 1.0e8 and pass.
+    #[test]
+    fn an_estimator_s_sub_steps_count() {
+        let mut s = Scenario::parse("name = \"x\"").unwrap();
+        s.estimator = Some(EstimatorCfg::Levant {
+            lipschitz: 10.0,
+            substeps: 1_000_000,
+        });
+        let (key, reason) = check_run(&s).unwrap_err();
+        assert_eq!(key, "estimator.substeps");
+        assert!(reason.contains("1.00e9"), "{reason}");
+        s.estimator = Some(EstimatorCfg::Levant {
+            lipschitz: 10.0,
+            substeps: 100_000,
+        });
+        assert!(check_run(&s).is_ok());
+    }
+
+    /// tests/bad-input-study/31: 2·10⁶ runs of 1000·(1 + 9999) = 10⁷
+    /// evaluations (+10³) = 2.0e13, refused whole; its shard 0/40 (5·10⁴
+    /// runs, 5.0e11) is within the limit.
+    #[test]
+    fn a_study_is_counted_per_shard() {
+        let f = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/bad-input-study/31-work-beyond-limit.toml");
+        let plan = crate::study::Plan::load(&f).unwrap();
+        let e = check_study(&plan, 0..plan.runs).unwrap_err().0;
+        assert!(e.contains("2.00e13 evaluations"), "{e}");
+        assert!(check_study(&plan, plan.shard_range(0, 40)).is_ok());
+    }
+
+    /// 10⁶ runs of 2000 evaluations (+1000 each) = 3e9: fine; 10⁹ of them
+    /// = 3e12 > 1e12: refused, naming the key.
+    #[test]
+    fn a_batch_is_counted_and_refused_by_its_largest_part() {
+        let mut b = Batch::default();
+        b.add("budget", 1e6, 2000.0, "x".into());
+        assert_eq!(b.total(), 3e9);
+        assert!(b.check("tune").is_ok());
+        b.add("draws", 1e9, 2000.0, "many draws".into());
+        let (key, reason) = b.check("tune").unwrap_err();
+        assert_eq!(key, "draws");
+        assert!(
+            reason.starts_with("many draws is about 3.00e12"),
+            "{reason}"
+        );
+    }
+}
