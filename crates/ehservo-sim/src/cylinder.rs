@@ -1029,7 +1029,36 @@ impl PlantConfig for CylinderCfg {
     fn build(&self, ctx: &PlantContext) -> Result<CylinderPlant, (String, String)> {
         let c = self.resolve(ctx)?;
         let y = self.nominal.position.unwrap_or(0.5 * c.stroke);
-        Ok(CylinderPlant::new(c, y))
+        let p = CylinderPlant::new(c, y);
+        // Values each finite can still make the model's constants overflow
+        // (an area of 1e308, a subnormal mass): what the controller would
+        // be designed on must be numbers.
+        let m = p.nominal();
+        let derived = m
+            .coeffs
+            .as_array()
+            .into_iter()
+            .chain([m.b_at_rest(), m.offset()]);
+        if let Err(e) = m.params.validate() {
+            return Err((
+                "plant".into(),
+                format!(
+                    "the cylinder's nominal model is not a model: its {} is {:?} ({}); check the sizes of the plant's keys",
+                    e.name, e.value, e.reason
+                ),
+            ));
+        }
+        if derived.into_iter().any(|v| !v.is_finite()) {
+            return Err((
+                "plant".into(),
+                format!(
+                    "the cylinder's nominal model overflows (a1, a2, a3 = {:?}, b at rest = {:e}): check the sizes of the plant's keys",
+                    m.coeffs.as_array(),
+                    m.b_at_rest()
+                ),
+            ));
+        }
+        Ok(p)
     }
 }
 

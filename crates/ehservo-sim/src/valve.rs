@@ -191,6 +191,16 @@ impl SpoolValve {
             if !l.is_finite() {
                 return err("lap", format!("edge {}: must be finite (got {l})", i + 1));
             }
+            if *l <= -x_max {
+                return err(
+                    "lap",
+                    format!(
+                        "edge {} underlaps by {} m, as much as the spool travel ({x_max} m): the edge never closes",
+                        i + 1,
+                        -l
+                    ),
+                );
+            }
             if *l >= x_max {
                 return err(
                     "lap",

@@ -311,7 +311,10 @@ fn a_folder_that_is_not_an_output_is_refused_whole() {
     };
     refuse(
         "mine",
-        "exists and is not an ehservo output folder (it has none of summary.json, study.json, report.md, claims.csv, tune.json, league.json): refusing to replace it",
+        &format!(
+            "exists and is not an ehservo output folder (it has none of {}): refusing to replace it",
+            ehservo::output::OUTPUT_MARKERS.join(", ")
+        ),
     );
     refuse("file", "exists and is not a directory");
     refuse("file/out", "is not a directory");

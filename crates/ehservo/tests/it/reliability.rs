@@ -85,7 +85,6 @@ fn bases() -> Vec<String> {
             "[reference]\nkind = \"chirp\"\nf0_hz = 1.0\nf1_hz = 5.0\nduration = 1.0\n",
             "[reference]\nkind = \"multisine\"\ncomponents = [{amplitude_deg = 1.0, frequency_hz = 1.0, phase_deg = 10.0}]\n",
             "[plant]\nmodel = \"physical\"\n",
-            "[plant]\nmodel = \"cylinder\"\n",
             "[simulation]\nsubsteps = 4\n[actuator]\nlimit = 10.0\ntime_constant = 0.002\nrate_limit = 2000.0\ndead_band = 0.01\nnull_bias = 0.01\n",
             "[simulation]\nsubsteps = 4\n[actuator]\nbandwidth_hz = 100.0\norder = 2\ndamping = 0.7\n",
             "[sensor]\nmeasured = [\"theta\"]\n[estimator]\nkind = \"levant\"\nlipschitz = 100.0\nsubsteps = 2\n",
@@ -98,6 +97,11 @@ fn bases() -> Vec<String> {
             "[simulation]\nmode = \"continuous\"\n",
         ]
         .map(String::from),
+    );
+    // A cylinder: Hopsan's Position Servo, every key of the linear axis.
+    b.push(
+        std::fs::read_to_string(crate::common::repo().join("scenarios/hopsan/position-servo.toml"))
+            .unwrap(),
     );
     b
 }
