@@ -3,7 +3,7 @@
 //! Thin on purpose: every number comes from the same functions the command
 //! line calls (`Scenario::load` with `--set` overrides, `run::run_observed`,
 //! `output::TraceLayout`, `study::execute`/`study::sweep`,
-//! `stepper::ControllerStepper`, as the C ABI and the FMU), so the Python results are the CLI's
+//! `stepper::ControllerStepper`, as the C ABI and the FMU; `freq::linearise`), so the Python results are the CLI's
 //! bits. The Python side (`python/ehservo/__init__.py`) turns the keyword
 //! overrides into `key=value` strings and the columns into a DataFrame.
 //!
@@ -683,6 +683,55 @@ impl RawController {
     }
 }
 
+/// Linearises a scenario's loop as `ehservo linearize` does: its JSON text.
+/// `at`: a time along the run (s); `trim`: θ0 (deg) of a trim point; with
+/// neither, a trim at θd(0). `side` ("minus"/"plus"): the one-sided model
+/// at a point that is not differentiable. `discretise`: "zoh" or "rk4".
+#[pyfunction]
+#[pyo3(signature = (path, text, overrides, at=None, trim=None, side=None, discretise="zoh"))]
+#[allow(clippy::too_many_arguments)]
+fn linearize(
+    py: Python<'_>,
+    path: Option<PathBuf>,
+    text: Option<String>,
+    overrides: Vec<String>,
+    at: Option<f64>,
+    trim: Option<f64>,
+    side: Option<String>,
+    discretise: &str,
+) -> PyResult<String> {
+    use ehservo::freq::cli;
+    let file = path
+        .as_ref()
+        .map_or("<string>".to_string(), |p| p.display().to_string());
+    let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
+    if !matches!(side.as_deref(), None | Some("minus") | Some("plus")) {
+        return Err(PyValueError::new_err(
+            "side: expected \"minus\" or \"plus\"",
+        ));
+    }
+    if !matches!(discretise, "zoh" | "rk4") {
+        return Err(PyValueError::new_err(
+            "discretise: expected \"zoh\" or \"rk4\"",
+        ));
+    }
+    let l = ehservo::freq::linearise(
+        &s,
+        &file,
+        cli::operating_point(at, trim.map(Some)),
+        cli::side(side.as_deref()),
+        cli::discretisation(discretise),
+    )
+    .map_err(|e| scenario_error(py, &e))?;
+    if !ehservo::freq::all_finite(&l) {
+        return Err(PyValueError::new_err(format!(
+            "{file}: the linearised models are not finite"
+        )));
+    }
+    serde_json::to_string(&ehservo::freq::linearisation_json(&s, &l))
+        .map_err(|e| PyOSError::new_err(e.to_string()))
+}
+
 /// Whether `p` is a regular file (the Python side's path/text choice).
 #[pyfunction]
 fn is_file(p: PathBuf) -> bool {
@@ -705,6 +754,7 @@ fn _ehservo(m: &Bound<'_, PyModule>) -> PyResult<()> {
     }
     m.add("FLAGS", flags)?;
     m.add_function(wrap_pyfunction!(is_file, m)?)?;
+    m.add_function(wrap_pyfunction!(linearize, m)?)?;
     m.add_class::<RawController>()?;
     Ok(())
 }

@@ -451,7 +451,7 @@ pub const MAX_BINARY_BYTES: u64 = 1 << 30;
 
 /// `--out` of an FMU, checked before any work: not a directory or another
 /// non-file, in a folder that exists. Returns that folder.
-fn check_out(out: &Path) -> Result<std::path::PathBuf> {
+pub fn check_out(out: &Path) -> Result<std::path::PathBuf> {
     let dir = match out.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => std::path::PathBuf::from("."),

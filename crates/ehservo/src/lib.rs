@@ -21,6 +21,7 @@
 //! | [`pil`] | `ehservo pil`: the controller on a board (QEMU or serial), the rest simulated, in lock-step; `ehservo run --float f32` |
 //! | [`cancel`] | stopping long work from a host that stays alive (Python's Ctrl-C) |
 //! | [`limits`] | the work a run, a tune or a league may ask for, counted before any of it |
+//! | [`freq`] | `ehservo linearize` and `ehservo freq`: linear models, frequency responses and margins, computed and measured |
 
 pub mod analysis;
 pub mod bisection;
@@ -28,6 +29,7 @@ pub mod cancel;
 pub mod error;
 pub mod estimation;
 pub mod fmu;
+pub mod freq;
 pub mod identify;
 pub mod input;
 pub mod league;

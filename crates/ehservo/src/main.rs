@@ -256,6 +256,97 @@ enum Command {
     Excite(ExciteArgs),
     /// Identify a servo from logged (t, u, y) data: frequency response, linear and grey-box fits, identified.toml (docs/identification.md).
     Identify(Box<IdentifyArgs>),
+    /// Linearise the loop at an operating point: plant, actuator, delays and a linear controller as state-space models, with poles, zeros, DC gain and damping (JSON; docs/frequency.md).
+    Linearize {
+        /// The scenario file (TOML).
+        scenario: PathBuf,
+        /// At this time along the run (s).
+        #[arg(long, conflicts_with = "trim")]
+        at: Option<f64>,
+        /// At a trim point for the constant reference θ0 (deg; without a value θd(0), the default).
+        #[arg(long, value_name = "DEG", num_args = 0..=1)]
+        trim: Option<Option<f64>>,
+        /// At a point that is not differentiable, the one-sided model from below or above.
+        #[arg(long, value_parser = ["minus", "plus"])]
+        side: Option<String>,
+        /// The plant's discretisation: exact under a zero-order hold, or the simulator's RK4 map.
+        #[arg(long, default_value = "zoh", value_parser = ["zoh", "rk4"])]
+        discretise: String,
+        /// Also write DIR/linearization.json.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Override a key (repeatable).
+        #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+        set: Vec<String>,
+    },
+    /// Frequency responses of the loop (G, C, L, S, T, θ/θd, θ/d) with margins, computed and measured on the simulator: freq.json, CSVs, Bode and Nyquist plots (docs/frequency.md).
+    Freq {
+        /// The scenario file (TOML).
+        scenario: PathBuf,
+        /// Output directory (default: out/<scenario name>-freq).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Linearise at this time along the run (s).
+        #[arg(long, conflicts_with = "trim")]
+        at: Option<f64>,
+        /// Linearise at a trim point for the constant reference θ0 (deg; without a value θd(0), the default); the measurements excite the loop about it.
+        #[arg(long, value_name = "DEG", num_args = 0..=1)]
+        trim: Option<Option<f64>>,
+        /// At a point that is not differentiable, the one-sided model from below or above.
+        #[arg(long, value_parser = ["minus", "plus"])]
+        side: Option<String>,
+        /// The plant's discretisation: exact under a zero-order hold, or the simulator's RK4 map.
+        #[arg(long, default_value = "zoh", value_parser = ["zoh", "rk4"])]
+        discretise: String,
+        /// Lowest computed frequency (Hz).
+        #[arg(long, default_value_t = 0.01)]
+        f_min: f64,
+        /// Highest computed frequency (Hz; default 0.99 of Nyquist).
+        #[arg(long)]
+        f_max: Option<f64>,
+        /// Computed frequencies, log-spaced.
+        #[arg(long, default_value_t = 400)]
+        points: usize,
+        /// Measurements on the simulator: sine (a sinestream), multisine, chirp (Welch's H1 and coherence), none; comma-separated.
+        #[arg(long, default_value = "sine")]
+        measure: Vec<String>,
+        /// Lowest measured frequency (Hz).
+        #[arg(long, default_value_t = 0.1)]
+        measure_f_min: f64,
+        /// Highest measured frequency (Hz; default 0.9 of Nyquist).
+        #[arg(long)]
+        measure_f_max: Option<f64>,
+        /// Measured frequencies (sinestream) or bins (Welch), log-spaced.
+        #[arg(long, default_value_t = 40)]
+        measure_points: usize,
+        /// Amplitude of the tracking excitation (deg).
+        #[arg(long, default_value_t = 0.5)]
+        amplitude_deg: f64,
+        /// Amplitude of the disturbance on the command (V).
+        #[arg(long, default_value_t = 0.05)]
+        disturbance: f64,
+        /// Settling time before each measurement window (s; at least two periods).
+        #[arg(long, default_value_t = 2.0)]
+        settle: f64,
+        /// Periods in each sinestream window.
+        #[arg(long, default_value_t = 4)]
+        cycles: u32,
+        /// Segments (periods) of a Welch measurement.
+        #[arg(long, default_value_t = 4)]
+        periods: u64,
+        /// Worker threads, 1 to 1024 (default: every core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Do not draw the figures.
+        #[arg(long)]
+        no_plot: bool,
+        /// Print nothing but errors.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Override a key (repeatable).
+        #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+        set: Vec<String>,
+    },
     /// Export the scenario's controller (or, with --closed-loop, its whole loop) as an FMI 3.0 co-simulation FMU.
     Fmu {
         /// The scenario file (TOML).
@@ -950,14 +1041,17 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
             } else {
                 FmuKind::Controller
             };
+            // The destination first (a directory, a missing folder), then
+            // the binary: both before any work.
+            ehservo::fmu::check_out(&out)?;
+            if out.extension().and_then(|e| e.to_str()) != Some("fmu") {
+                ehservo::bad_input!("--out {}: an FMU's file name ends in .fmu", out.display());
+            }
             let Some(binary) = binary.or_else(ehservo::fmu::default_binary) else {
                 ehservo::bad_input!(
                     "the FMU's binary libehservo_ffi.so is not beside this ehservo: build it (cargo build -p ehservo-ffi, same profile) or pass --binary PATH"
                 );
             };
-            if out.extension().and_then(|e| e.to_str()) != Some("fmu") {
-                ehservo::bad_input!("--out {}: an FMU's file name ends in .fmu", out.display());
-            }
             write_fmu(&out, kind, &s, &binary)?;
             note!(
                 "{}: the {} FMU of {} (FMI 3.0 co-simulation, step {} s)",
@@ -1086,6 +1180,88 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                     a.out.display(),
                     names.join(", ")
                 );
+            }
+            Ok(())
+        }
+        Command::Linearize {
+            scenario,
+            at,
+            trim,
+            side,
+            discretise,
+            out,
+            set,
+        } => {
+            use ehservo::freq::cli;
+            let text = cli::linearize_cmd(
+                &scenario,
+                &set,
+                cli::operating_point(at, trim),
+                cli::side(side.as_deref()),
+                cli::discretisation(&discretise),
+                out.as_deref(),
+            )?;
+            put!(w, "{text}");
+            Ok(())
+        }
+        Command::Freq {
+            scenario,
+            out,
+            at,
+            trim,
+            side,
+            discretise,
+            f_min,
+            f_max,
+            points,
+            measure,
+            measure_f_min,
+            measure_f_max,
+            measure_points,
+            amplitude_deg,
+            disturbance,
+            settle,
+            cycles,
+            periods,
+            threads,
+            no_plot,
+            quiet,
+            set,
+        } => {
+            use ehservo::freq::cli;
+            check_threads(threads)?;
+            let s = load(&scenario, &set)?;
+            let dir = match out {
+                Some(d) => d,
+                None => default_out(&format!("{}-freq", s.name))?,
+            };
+            let mut o = ehservo::freq::report::FreqOptions::defaults();
+            o.at = cli::operating_point(at, trim);
+            o.side = cli::side(side.as_deref());
+            o.discretisation = cli::discretisation(&discretise);
+            (o.f_min, o.f_max, o.points) = (f_min, f_max, points);
+            o.methods = cli::methods(&measure, &scenario.display().to_string())?;
+            (o.measure_f_min, o.measure_f_max, o.measure_points) =
+                (measure_f_min, measure_f_max, measure_points);
+            o.settings.amplitude = amplitude_deg * ehservo::core::math::DR;
+            o.settings.disturbance = disturbance;
+            o.settings.settle_s = settle;
+            o.settings.cycles = cycles;
+            o.periods = periods;
+            o.plots = !no_plot;
+            let start = Instant::now();
+            let r = cli::freq_cmd(&s, &scenario, &o, &dir, threads)?;
+            if !quiet {
+                put!(
+                    w,
+                    "{}: {} ({:.2} s)\n{}",
+                    s.name,
+                    s.controller.kind(),
+                    start.elapsed().as_secs_f64(),
+                    r.text
+                );
+                let names: Vec<String> = r.files.iter().map(|f| f.display().to_string()).collect();
+                out!(w, "wrote {}/{{{}}}", dir.display(), names.join(", "));
             }
             Ok(())
         }

@@ -20,9 +20,11 @@ use std::sync::Once;
 
 #[cfg(not(target_arch = "wasm32"))]
 const FONT: &[u8] = include_bytes!("../../../assets/DejaVuSans.ttf");
-const FAMILY: &str = "sans-serif";
+/// The embedded font's family name (also for `freq::report`'s figures).
+pub(crate) const FAMILY: &str = "sans-serif";
 
-fn ensure_font() {
+/// Registers the embedded font once.
+pub(crate) fn ensure_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The font is part of the source tree: failure here is a build defect.
@@ -165,7 +167,7 @@ impl<B: DrawingBackend> DrawingBackend for Stroked<B> {
 /// for Fig. 2's 1400×1500 trace.png), and 17 % fewer instructions for the
 /// whole `ehservo run` (154 M against 185 M, callgrind).
 #[cfg(not(target_arch = "wasm32"))]
-fn png_file<F>(path: &Path, size: (u32, u32), draw: F) -> Result<()>
+pub(crate) fn png_file<F>(path: &Path, size: (u32, u32), draw: F) -> Result<()>
 where
     F: FnOnce(DrawingArea<Stroked<BitMapBackend<'_>>, Shift>) -> Result<()>,
 {
@@ -190,7 +192,7 @@ where
 /// PNG files are not written on wasm32 (the browser playground,
 /// crates/ehservo-web, draws with uPlot instead).
 #[cfg(target_arch = "wasm32")]
-fn png_file<F>(path: &Path, _size: (u32, u32), _draw: F) -> Result<()>
+pub(crate) fn png_file<F>(path: &Path, _size: (u32, u32), _draw: F) -> Result<()>
 where
     F: FnOnce(DrawingArea<Stroked<BitMapBackend<'_>>, Shift>) -> Result<()>,
 {

@@ -41,6 +41,8 @@ __all__ = [
     "check",
     "FLAGS",
     "Controller",
+    "linearize",
+    "Linearization",
     "RunResult",
     "Signal",
     "ScenarioError",
@@ -403,3 +405,104 @@ class Controller:
 
     def __repr__(self) -> str:
         return f"ehservo.Controller({self.name!r}, kind={self.kind!r}, dt={self.dt})"
+
+
+def _ss(model: Optional[Mapping[str, Any]], name: str) -> Any:
+    """A python-control ``ss`` of a model of ``ehservo linearize``'s JSON."""
+    import control  # python-control; not a dependency of ehservo
+
+    if model is None:
+        return None
+    m = model["ss"] if "ss" in model else model
+    n = len(m["states"])
+    p, q = len(m["outputs"]), len(m["inputs"])
+
+    def mat(rows: Any, r: int, c: int) -> "np.ndarray":
+        return np.array(rows, dtype=float).reshape(r, c)
+
+    return control.ss(
+        mat(m["A"], n, n),
+        mat(m["B"], n, q),
+        mat(m["C"], p, n),
+        mat(m["D"], p, q),
+        0 if m["dt_s"] is None else float(m["dt_s"]),
+        states=[s["name"] for s in m["states"]] or None,
+        inputs=[s["name"] for s in m["inputs"]],
+        outputs=[s["name"] for s in m["outputs"]],
+        name=name,
+    )
+
+
+class Linearization:
+    """What :func:`linearize` returns: the loop's models as python-control
+    ``ss`` objects (None where the scenario has none), and ``data``, the
+    JSON of ``ehservo linearize`` (the operating point, poles, zeros, DC
+    gains, damping, the kinks and notes, the units of every signal).
+
+    ``plant`` is the plant with its actuator, continuous, from the command
+    u (V) to θ (rad); ``plant_alone`` and ``actuator`` its two parts;
+    ``plant_discrete`` G at the sample period (ZOH, or the simulator's RK4
+    map with ``discretise="rk4"``); ``sensor_delay`` and
+    ``computation_delay`` the z⁻ⁿ of ``sensor.delay`` and
+    ``simulation.computation_delay``; ``controller`` a linear law (PID,
+    ADRC) in the loop's time base with inputs (θm, θd, θ̇d, θ̈d, θ⃛d) and
+    output u; ``feedback`` its path C = −u/θm; ``loop`` L =
+    C·z⁻ⁿˢ·G_d·z⁻ⁿᶜ; ``parts`` the ADRC's ``observer`` and ``law``;
+    ``estimator`` a Luenberger or Kalman observer (inputs θm, u_prev)."""
+
+    def __init__(self, data: Dict[str, Any]) -> None:
+        self.data = data
+        ctrl = data.get("controller") or {}
+        self.plant = _ss(data["plant_with_actuator"], "G")
+        self.plant_alone = _ss(data["plant"], "plant")
+        self.actuator = _ss(data["actuator"], "actuator")
+        self.plant_discrete = _ss(data.get("plant_discrete"), "Gd")
+        self.sensor_delay = _ss((data.get("sensor_delay") or {}).get("model"), "sensor_delay")
+        self.computation_delay = _ss(
+            (data.get("computation_delay") or {}).get("model"), "computation_delay"
+        )
+        self.controller = _ss(ctrl.get("in_loop"), "controller")
+        self.controller_law = _ss(ctrl.get("law"), "law")
+        self.feedback = _ss(ctrl.get("feedback"), "C")
+        self.parts = {k: _ss(v, k) for k, v in (ctrl.get("parts") or {}).items()}
+        self.loop = _ss((data.get("loop") or {}).get("model"), "L")
+        self.estimator = _ss(data.get("estimator"), "estimator")
+
+    @property
+    def operating_point(self) -> Dict[str, Any]:
+        """Where the loop was linearised (``data["operating_point"]``)."""
+        return self.data["operating_point"]
+
+    def __repr__(self) -> str:
+        op = self.operating_point
+        return (
+            f"ehservo.Linearization({self.data['scenario']!r}, {op['kind']} at "
+            f"θ = {op['theta_deg']:.6g}°, controller={'none' if self.controller is None else 'linear'})"
+        )
+
+
+def linearize(
+    scenario: Optional[PathLike] = None,
+    *,
+    at: Optional[float] = None,
+    trim: Optional[float] = None,
+    side: Optional[str] = None,
+    discretise: str = "zoh",
+    set: SetArg = None,
+    **keywords: Any,
+) -> Linearization:
+    """Linearises a scenario's loop as ``ehservo linearize`` does and returns
+    its models as python-control ``ss`` objects (:class:`Linearization`).
+
+    ``at``: a time along the run (s); ``trim``: θ0 (deg) of a trim point for
+    a constant reference; neither: a trim at θd(0). ``side`` ("minus" or
+    "plus"): the one-sided model at a point that is not differentiable
+    (otherwise such a point raises ``ScenarioError`` naming it).
+    ``discretise``: "zoh" (exact) or "rk4" (the simulator's map). Needs
+    python-control (``pip install control``).
+    """
+    path, text = _source(scenario)
+    raw = _ehservo.linearize(
+        path, text, overrides(set, **keywords), at, trim, side, discretise
+    )
+    return Linearization(json.loads(raw))

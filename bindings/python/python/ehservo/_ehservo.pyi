@@ -32,6 +32,15 @@ def league(
     path: str, threads: Optional[int] = None, out: Optional[str] = None, plot: bool = True
 ) -> str: ...
 def is_file(p: str) -> bool: ...
+def linearize(
+    path: Optional[str],
+    text: Optional[str],
+    overrides: List[str],
+    at: Optional[float] = None,
+    trim: Optional[float] = None,
+    side: Optional[str] = None,
+    discretise: str = "zoh",
+) -> str: ...
 
 FLAGS: Dict[str, int]
 

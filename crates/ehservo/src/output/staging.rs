@@ -11,15 +11,17 @@ use std::path::{Path, PathBuf};
 /// [`Staging::commit`] refuses a folder that holds none of them, so a new
 /// command's output cannot go without its marker (and then be refused
 /// when it is written again).
-pub const OUTPUT_MARKERS: [&str; 8] = [
-    "summary.json",  // ehservo run, ehservo pil
-    "study.json",    // ehservo sweep, ehservo merge
-    "report.md",     // ehservo reproduce
-    "claims.csv",    // ehservo reproduce
-    "tune.json",     // ehservo tune
-    "league.json",   // ehservo league
-    "identify.json", // ehservo identify
-    "excite.json",   // ehservo excite
+pub const OUTPUT_MARKERS: [&str; 10] = [
+    "summary.json",       // ehservo run, ehservo pil
+    "study.json",         // ehservo sweep, ehservo merge
+    "report.md",          // ehservo reproduce
+    "claims.csv",         // ehservo reproduce
+    "tune.json",          // ehservo tune
+    "league.json",        // ehservo league
+    "identify.json",      // ehservo identify
+    "excite.json",        // ehservo excite
+    "freq.json",          // ehservo freq
+    "linearization.json", // ehservo linearize
 ];
 
 /// How long a commit waits for another process's commit into the same

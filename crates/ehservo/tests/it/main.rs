@@ -14,6 +14,7 @@ mod cli;
 mod cluster;
 mod controllers;
 mod faults;
+mod freq;
 mod golden;
 mod hopsan;
 mod identify;

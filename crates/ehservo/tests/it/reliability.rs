@@ -433,6 +433,19 @@ fn a_file_size_limit_fails_every_writer_cleanly() {
     .unwrap();
     let work = tmp.path().join("work");
     std::fs::create_dir(&work).unwrap();
+    // The FMU's binary, given (a clean checkout's `cargo test` leaves
+    // libehservo_ffi.so in deps/, not beside ehservo): 64 KiB that do not
+    // deflate below the limit.
+    let binary = tmp.path().join("fake.so");
+    let mut x = 0x2545_f491_4f6c_dd1du64;
+    let mut bytes = b"\x7fELF".to_vec();
+    bytes.extend((0..64 << 10).map(|_| {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x as u8
+    }));
+    std::fs::write(&binary, bytes).unwrap();
     let fig2 = fig2();
     let cases: Vec<(&str, Vec<&std::ffi::OsStr>)> = vec![
         (
@@ -476,6 +489,8 @@ fn a_file_size_limit_fails_every_writer_cleanly() {
             vec![
                 "fmu".as_ref(),
                 fig2.as_os_str(),
+                "--binary".as_ref(),
+                binary.as_os_str(),
                 "--out".as_ref(),
                 "o.fmu".as_ref(),
             ],
