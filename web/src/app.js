@@ -275,11 +275,17 @@ function setStatus(kind, text) {
 function metricsCards(run) {
   const box = $('metrics');
   box.replaceChildren();
-  for (const [key, label, unit, doc] of METRICS) {
+  // A linear axis's errors are e_max, e_final, e_rms in mm (run.unit); a
+  // rotary one's e_max_deg, ... in degrees.
+  const linear = run.unit === 'mm';
+  for (const [rotaryKey, label, rotaryUnit, doc] of METRICS) {
+    const angle = rotaryKey.endsWith('_deg');
+    const key = linear && angle ? rotaryKey.slice(0, -4) : rotaryKey;
+    const unit = linear && angle ? 'mm' : rotaryUnit;
     const v = run.metrics[key];
     if ((v === null || v === undefined) && key.startsWith('w_norm')) continue;
     const card = document.createElement('div');
-    card.className = 'metric' + (key === 'e_max_deg' ? ' headline' : '');
+    card.className = 'metric' + (rotaryKey === 'e_max_deg' ? ' headline' : '');
     card.dataset.metric = key;
     card.dataset.value = v === null || v === undefined ? '' : JSON.stringify(v);
     card.title = doc;
@@ -292,12 +298,14 @@ function metricsCards(run) {
 
 function chartSpecs(run) {
   const tr = run.trace;
+  // The position's letter and unit follow the plant's axis.
+  const [p, unit] = run.unit === 'mm' ? ['y', 'mm'] : ['θ', 'deg'];
   const specs = [
-    { title: 'θd and θ', unit: 'deg', series: [
-      { label: 'θd', data: tr.theta_d, stroke: '#94a3b8', dash: [6, 4] },
-      { label: 'θ', data: tr.theta, stroke: PALETTE[0] },
+    { title: `${p}d and ${p}`, unit, series: [
+      { label: `${p}d`, data: tr.theta_d, stroke: '#94a3b8', dash: [6, 4] },
+      { label: p, data: tr.theta, stroke: PALETTE[0] },
     ] },
-    { title: 'tracking error e = θd − θ', unit: 'deg', series: [{ label: 'e', data: tr.e, stroke: PALETTE[1] }] },
+    { title: `tracking error e = ${p}d − ${p}`, unit, series: [{ label: 'e', data: tr.e, stroke: PALETTE[1] }] },
     { title: 'control u', unit: 'V', series: [{ label: 'u', data: tr.u, stroke: PALETTE[2] }] },
   ];
   let c = 3;

@@ -179,10 +179,15 @@ fn load(
 }
 
 /// The metrics as summary.json writes them: `None` for an undefined one,
-/// `diverged` a bool, `samples` an int.
+/// `diverged` a bool, `samples` an int; on a linear axis the errors are
+/// `e_max`, `e_final`, `e_rms` with `unit = "mm"` beside them (a rotary
+/// axis's say `e_max_deg`).
 fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for name in Metrics::NAMES {
+    if m.axis == ehservo::axis::Axis::Linear {
+        d.set_item("unit", m.axis.unit())?;
+    }
+    for name in Metrics::names(m.axis).iter().copied() {
         match name {
             "diverged" => d.set_item(name, m.diverged)?,
             "samples" => d.set_item(name, m.samples)?,
@@ -447,7 +452,10 @@ fn sweep<'py>(
     let varied = plan.columns();
     names.extend(varied.iter().cloned());
     names.push("seed".into());
-    names.extend(Metrics::NAMES.iter().map(|s| s.to_string()));
+    // The metric columns of results.csv on the study's axis (e_max_mm on
+    // a linear one).
+    let metric_names = Metrics::csv_names(plan.axis());
+    names.extend(metric_names.iter().map(|s| s.to_string()));
     names.push("error".into());
 
     let mut cols: Vec<Column> = vec![Column::Int(rows.iter().map(|r| r.index as i64).collect())];
@@ -455,7 +463,7 @@ fn sweep<'py>(
         cols.push(varied_column(rows.iter().map(|r| &r.values[j]).collect()));
     }
     cols.push(Column::UInt(rows.iter().map(|r| r.seed).collect()));
-    for name in Metrics::NAMES {
+    for name in metric_names.iter().copied() {
         cols.push(match name {
             // An invalid run has no metrics: diverged is then missing too,
             // which results.csv writes as an empty cell.

@@ -174,7 +174,7 @@ impl Instance {
                         vr::U_PLANT => Ok(last.u_plant),
                         vr::THETA_D => Ok(last.z[0]),
                         vr::E => Ok(last.e),
-                        vr::E_DEG => Ok(last.e_deg()),
+                        vr::E_DEG => Ok(sim.axis().display(last.e)),
                         vr::E_MAX_DEG => Ok(sim.metrics().e_max.unwrap_or(0.0)),
                         _ => Err(format!("no Float64 variable has value reference {r}")),
                     };

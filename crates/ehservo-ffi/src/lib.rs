@@ -418,10 +418,14 @@ pub unsafe extern "C" fn ehservo_sim_step(
     })
 }
 
-/// A metric of the samples so far, as `summary.json` names it
-/// (`e_max_deg`, `e_rms_deg`, `e_final_deg`, `u_max`, `u_rms`, `samples`, …),
-/// computed as `ehservo run` computes it at the end of its run. A metric
-/// not defined yet writes NaN and returns `EHSERVO_STATUS_UNAVAILABLE`.
+/// A metric of the samples so far, as `summary.json` names it on the
+/// scenario's axis (rotary: `e_max_deg`, `e_rms_deg`, `e_final_deg`; linear:
+/// `e_max`, `e_rms`, `e_final` in mm, also spelled `e_max_mm` …; any axis:
+/// `u_max`, `u_rms`, `samples`, …), computed as `ehservo run` computes it at
+/// the end of its run. The bare `e_max`, `e_rms` and `e_final` are accepted
+/// on a rotary axis too (in degrees): [`ehservo_sim_axis_unit`] names the
+/// unit. A metric not defined yet writes NaN and returns
+/// `EHSERVO_STATUS_UNAVAILABLE`.
 ///
 /// # Safety
 /// `sim` is null or a live handle; `name` null or NUL-terminated; `out`
@@ -442,13 +446,18 @@ pub unsafe extern "C" fn ehservo_sim_metric(
             return Err(null(F, "out"));
         }
         let m = sim.inner.metrics();
-        let known = ehservo::metrics::Metrics::NAMES.contains(&name);
+        use ehservo::metrics::Metrics;
+        let names = Metrics::names(m.axis);
+        let known = names.contains(&name)
+            || Metrics::csv_names(m.axis).contains(&name)
+            || Metrics::NAMES_LINEAR.contains(&name);
         if !known {
             return Err(invalid(
                 F,
                 format!(
-                    "unknown metric {name:?}, expected one of {}",
-                    ehservo::metrics::Metrics::NAMES.join(", ")
+                    "unknown metric {name:?} on a {} axis, expected one of {}",
+                    m.axis.name(),
+                    names.join(", ")
                 ),
             ));
         }
@@ -465,8 +474,21 @@ pub unsafe extern "C" fn ehservo_sim_metric(
     })
 }
 
+/// `ehservo_sim_metric(sim, "e_max", out)`: max |e| over t ≥
+/// `simulation.settle`, in the axis's unit (degrees on a rotary axis,
+/// millimetres on a linear one: [`ehservo_sim_axis_unit`]).
+///
+/// # Safety
+/// As [`ehservo_sim_metric`].
+#[no_mangle]
+pub unsafe extern "C" fn ehservo_sim_e_max(sim: *const EhservoSim, out: *mut f64) -> EhservoStatus {
+    // SAFETY: the same contract.
+    unsafe { ehservo_sim_metric(sim, c"e_max".as_ptr(), out) }
+}
+
 /// `ehservo_sim_metric(sim, "e_max_deg", out)`: max |e| over t ≥
-/// `simulation.settle` (degrees).
+/// `simulation.settle` (degrees), on a rotary axis; on a linear one it
+/// returns `EHSERVO_STATUS_INVALID_ARGUMENT` (use [`ehservo_sim_e_max`]).
 ///
 /// # Safety
 /// As [`ehservo_sim_metric`].
@@ -477,6 +499,25 @@ pub unsafe extern "C" fn ehservo_sim_e_max_deg(
 ) -> EhservoStatus {
     // SAFETY: the same contract.
     unsafe { ehservo_sim_metric(sim, c"e_max_deg".as_ptr(), out) }
+}
+
+/// The display unit of the scenario's axis, as a static NUL-terminated
+/// string: `"deg"` (rotary) or `"mm"` (linear); null for a null handle.
+/// Positions and errors in the C ABI's samples are SI (rad or m); the
+/// metrics are in this unit.
+///
+/// # Safety
+/// `sim` is null or a live handle.
+#[no_mangle]
+pub unsafe extern "C" fn ehservo_sim_axis_unit(sim: *const EhservoSim) -> *const c_char {
+    // SAFETY: null or a live handle.
+    match unsafe { sim.as_ref() } {
+        None => std::ptr::null(),
+        Some(s) => match s.inner.metrics().axis {
+            ehservo::axis::Axis::Rotary => c"deg".as_ptr(),
+            ehservo::axis::Axis::Linear => c"mm".as_ptr(),
+        },
+    }
 }
 
 /// The loop's sample period h (s) and number of steps N (the horizon is

@@ -354,11 +354,11 @@ fn metrics_by_name() {
         );
         assert_eq!(v, 5.0);
         assert_eq!(
-            ehservo_sim_metric(sim, c"e_max".as_ptr(), &mut v),
+            ehservo_sim_metric(sim, c"e_maxx".as_ptr(), &mut v),
             EhservoStatus::InvalidArgument
         );
         assert!(last_error().starts_with(
-            "ehservo_sim_metric: unknown metric \"e_max\", expected one of e_max_deg,"
+            "ehservo_sim_metric: unknown metric \"e_maxx\" on a rotary axis, expected one of e_max_deg,"
         ));
         let latin1 = [0xe9u8, 0];
         assert_eq!(
@@ -378,4 +378,44 @@ fn a_panic_stops_at_the_boundary() {
     let st = guard("ehservo_test", || Ok(EhservoStatus::Ok));
     assert_eq!(st, EhservoStatus::Ok);
     assert_eq!(last_error(), "", "a success clears the message");
+}
+
+/// A linear axis from C: the unit is "mm", `e_max` (and `e_max_mm`) is the
+/// run's e_max in mm to the bit, and `e_max_deg` is refused there.
+#[test]
+fn a_linear_axis_says_mm_and_refuses_degrees() {
+    let path = scenario_path("scenarios/cylinders/chrono-single-rod.toml");
+    let sim = new_sim(&path);
+    let mut s = EhservoSample::default();
+    let (mut e, mut e_mm) = (0.0, 0.0);
+    // SAFETY: a live handle and valid outputs throughout.
+    unsafe {
+        assert_eq!(
+            CStr::from_ptr(ehservo_sim_axis_unit(sim)).to_str().unwrap(),
+            "mm"
+        );
+        assert!(ehservo_sim_axis_unit(null()).is_null());
+        while ehservo_sim_step(sim, &mut s) == EhservoStatus::Ok {}
+        assert_eq!(ehservo_sim_e_max(sim, &mut e), EhservoStatus::Ok);
+        assert_eq!(
+            ehservo_sim_metric(sim, c"e_max_mm".as_ptr(), &mut e_mm),
+            EhservoStatus::Ok
+        );
+        assert_eq!(e, e_mm);
+        assert_eq!(
+            ehservo_sim_e_max_deg(sim, &mut e),
+            EhservoStatus::InvalidArgument
+        );
+        assert!(
+            last_error().contains("on a linear axis, expected one of e_max,"),
+            "{}",
+            last_error()
+        );
+        ehservo_sim_free(sim);
+    }
+    // The same run by the library: e_max over t ≥ settle, in mm.
+    let scen = Scenario::load(std::path::Path::new(path.to_str().unwrap()), &[]).unwrap();
+    let r = run(&scen, Keep::Nothing).unwrap();
+    assert_eq!(r.metrics.e_max, Some(e_mm));
+    assert_eq!(r.metrics.axis, ehservo::axis::Axis::Linear);
 }

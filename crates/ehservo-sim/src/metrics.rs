@@ -82,8 +82,37 @@ impl Metrics {
         "samples",
     ];
 
-    /// The names of the metrics on `axis`, in the order of tables and CSV
-    /// columns.
+    /// The metric columns of `axis` in a CSV: [`Metrics::NAMES`] on a
+    /// rotary axis, [`Metrics::CSV_LINEAR`] on a linear one.
+    pub fn csv_names(axis: Axis) -> &'static [&'static str; 13] {
+        match axis {
+            Axis::Rotary => &Self::NAMES,
+            Axis::Linear => &Self::CSV_LINEAR,
+        }
+    }
+
+    /// The columns of a linear axis's metrics in a CSV (results.csv):
+    /// the errors with their unit in the name (`e_max_mm`), as a rotary
+    /// axis's say `_deg`, so that a table read into pandas or MATLAB
+    /// carries its unit.
+    pub const CSV_LINEAR: [&'static str; 13] = [
+        "e_max_mm",
+        "e_final_mm",
+        "e_rms_mm",
+        "u_max",
+        "u_rms",
+        "chattering",
+        "u_tv_per_s",
+        "w_norm_max",
+        "w_norm_final",
+        "dead_zone_fraction",
+        "diverged",
+        "diverged_at_s",
+        "samples",
+    ];
+
+    /// The metric keys of `axis` (summary.json, the bindings): rotary
+    /// `e_max_deg`, linear `e_max` (with the unit beside it).
     pub fn names(axis: Axis) -> &'static [&'static str; 13] {
         match axis {
             Axis::Rotary => &Self::NAMES,
@@ -95,6 +124,7 @@ impl Metrics {
     pub fn unit_of(name: &str, axis: Axis) -> &'static str {
         match name {
             "e_max_deg" | "e_final_deg" | "e_rms_deg" => "deg",
+            "e_max_mm" | "e_final_mm" | "e_rms_mm" => "mm",
             "e_max" | "e_final" | "e_rms" => axis.unit(),
             "u_max" | "u_rms" => "V",
             "u_tv_per_s" => "V/s",
@@ -128,6 +158,9 @@ impl Metrics {
             "e_max_deg" if rotary => self.e_max,
             "e_final_deg" if rotary => self.e_final,
             "e_rms_deg" if rotary => self.e_rms,
+            "e_max_mm" if !rotary => self.e_max,
+            "e_final_mm" if !rotary => self.e_final,
+            "e_rms_mm" if !rotary => self.e_rms,
             "e_max" => self.e_max,
             "e_final" => self.e_final,
             "e_rms" => self.e_rms,

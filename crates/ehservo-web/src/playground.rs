@@ -336,13 +336,13 @@ pub struct Trace {
     /// t (s).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub t: Vec<f64>,
-    /// θd (deg).
+    /// θd (deg), or yd (mm) on a linear axis.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub theta_d: Vec<f64>,
-    /// θ (deg).
+    /// θ (deg), or y (mm).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub theta: Vec<f64>,
-    /// e = θd − θ (deg).
+    /// e = θd − θ (deg or mm).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub e: Vec<f64>,
     /// u (V).
@@ -363,6 +363,9 @@ pub struct RunOut {
     pub steps: u64,
     /// Every n-th sample is in the trace.
     pub every: u64,
+    /// The display unit of the plant's axis: `"deg"` or `"mm"` (the
+    /// trace's positions and the metrics' errors are in it).
+    pub unit: &'static str,
     /// SPEC §9 metrics, as in `summary.json`.
     pub metrics: Metrics,
     /// Why and when the run ended early, if it did.
@@ -375,6 +378,7 @@ pub struct RunOut {
 pub fn simulate(id: &str, overrides: &[(String, String)]) -> Result<RunOut, Vec<FieldError>> {
     let (scenario, setup) = resolve(id, overrides)?;
     let steps = setup.sim.steps;
+    let axis = setup.axis;
     let every = steps.div_ceil(MAX_POINTS).max(1);
     let mut trace = Trace::default();
     let mut keys: Vec<usize> = Vec::new();
@@ -397,9 +401,9 @@ pub fn simulate(id: &str, overrides: &[(String, String)]) -> Result<RunOut, Vec<
                 .collect();
         }
         trace.t.push(smp.t);
-        trace.theta_d.push(smp.z[0].to_degrees());
-        trace.theta.push(smp.x[0].to_degrees());
-        trace.e.push(smp.e.to_degrees());
+        trace.theta_d.push(axis.display(smp.z[0]));
+        trace.theta.push(axis.display(smp.x[0]));
+        trace.e.push(axis.display(smp.e));
         trace.u.push(smp.u);
         for (s, &i) in trace.signals.iter_mut().zip(&keys) {
             s.values.push(smp.values[i]);
@@ -421,6 +425,7 @@ pub fn simulate(id: &str, overrides: &[(String, String)]) -> Result<RunOut, Vec<
         kind: scenario.controller.kind(),
         steps,
         every,
+        unit: axis.unit(),
         metrics,
         divergence: outcome
             .diverged

@@ -13,7 +13,9 @@
 //! The variables, their value references and units are the tables below
 //! ([`variables`]); the binary serves the same tables. Angles are in rad
 //! (SI, as everywhere in the C ABI); `e_deg` and `e_max_deg` are in degrees
-//! as `summary.json` gives them.
+//! as `summary.json` gives them. On a linear axis ([`variables_on`]) the
+//! position is `y` in m and the error's display `e_mm` and metric `e_max`
+//! are in mm, at the same value references.
 
 use crate::scenario::{ReferenceKind, Scenario};
 use crate::simulation::Mode;
@@ -211,7 +213,43 @@ const CLOSED_LOOP: &[Variable] = &[
     },
 ];
 
-/// The variables of a kind of FMU.
+/// The variables of a kind of FMU on `axis`: a rotary axis's are
+/// [`variables`]; on a linear one the position is `y` (m, m/s, m/s2), the
+/// error in the display unit `e_mm` and the metric `e_max` (mm), with the
+/// same value references.
+pub fn variables_on(kind: FmuKind, axis: crate::axis::Axis) -> Vec<Variable> {
+    let vars = variables(kind);
+    if axis == crate::axis::Axis::Rotary {
+        return vars.to_vec();
+    }
+    vars.iter()
+        .map(|v| {
+            let (name, unit, description) = match v.vr {
+                vr::THETA => ("y", "m", "Rod position y"),
+                vr::THETA_DOT => ("y_dot", "m/s", "Rod velocity ẏ"),
+                vr::THETA_DDOT => ("y_ddot", "m/s2", "Rod acceleration ÿ"),
+                vr::THETA_D => ("y_d", "m", "Reference yd"),
+                vr::E => ("e", "m", "Tracking error e = yd − y"),
+                vr::E_DEG => ("e_mm", "mm", "Tracking error in millimetres"),
+                vr::E_MAX_DEG => (
+                    "e_max",
+                    "mm",
+                    "max |e| over the samples at t >= simulation.settle so far (summary.json's e_max, in mm, at the horizon; 0 before settle)",
+                ),
+                _ => (v.name, v.unit, v.description),
+            };
+            Variable {
+                name,
+                unit,
+                description,
+                ..*v
+            }
+        })
+        .collect()
+}
+
+/// The variables of a kind of FMU (a rotary axis: [`variables_on`] gives
+/// a linear one's).
 pub fn variables(kind: FmuKind) -> &'static [Variable] {
     match kind {
         FmuKind::Controller => CONTROLLER,
@@ -291,10 +329,14 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
     let horizon = cfg.steps as f64 * cfg.step;
     let what = match kind {
         FmuKind::Controller => format!(
-            "The {} controller of scenario {:?}, sampled every {} s (inputs theta, theta_dot, theta_ddot in rad, rad/s, rad/s2; output u in V)",
+            "The {} controller of scenario {:?}, sampled every {} s (inputs {}; output u in V)",
             s.controller.kind(),
             s.name,
-            cfg.step
+            cfg.step,
+            match s.plant.axis() {
+                crate::axis::Axis::Rotary => "theta, theta_dot, theta_ddot in rad, rad/s, rad/s2",
+                crate::axis::Axis::Linear => "y, y_dot, y_ddot in m, m/s, m/s2",
+            }
         ),
         FmuKind::ClosedLoop => format!(
             "The closed loop of scenario {:?} ({} controller, {} plant), sampled every {} s, horizon {} s",
@@ -325,6 +367,10 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
         "    <Unit name=\"rad/s\"><BaseUnit s=\"-1\" rad=\"1\"/></Unit>\n",
         "    <Unit name=\"rad/s2\"><BaseUnit s=\"-2\" rad=\"1\"/></Unit>\n",
         "    <Unit name=\"deg\"><BaseUnit rad=\"1\" factor=\"0.017453292519943295\"/></Unit>\n",
+        "    <Unit name=\"m\"><BaseUnit m=\"1\"/></Unit>\n",
+        "    <Unit name=\"m/s\"><BaseUnit m=\"1\" s=\"-1\"/></Unit>\n",
+        "    <Unit name=\"m/s2\"><BaseUnit m=\"1\" s=\"-2\"/></Unit>\n",
+        "    <Unit name=\"mm\"><BaseUnit m=\"1\" factor=\"0.001\"/></Unit>\n",
         "    <Unit name=\"V\"><BaseUnit kg=\"1\" m=\"2\" s=\"-3\" A=\"-1\"/></Unit>\n",
         "  </UnitDefinitions>\n",
         "  <LogCategories>\n",
@@ -337,8 +383,8 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
         cfg.step
     ));
     x.push_str("  <ModelVariables>\n");
-    let vars = variables(kind);
-    for v in vars {
+    let vars = variables_on(kind, s.plant.axis());
+    for v in &vars {
         let (causality, rest) = match v.causality {
             Causality::Independent => ("independent", String::new()),
             Causality::Input => ("input", " start=\"0\"".to_string()),

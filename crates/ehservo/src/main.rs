@@ -940,16 +940,17 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                     .collect();
                 out!(
                     w,
-                    "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}\n  {}\nwrote {}/tuned.toml",
+                    "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}{}\n  {}\nwrote {}/tuned.toml",
                     tune.file.name,
                     tune.kind,
                     r.evaluations,
                     start.elapsed().as_secs_f64(),
                     r.objective,
+                    tune.axis.suffix(),
                     if r.kept_defaults {
                         " — no better than the defaults, which are kept".to_string()
                     } else {
-                        format!(" (defaults: {:.5})", r.defaults)
+                        format!(" (defaults: {:.5}{})", r.defaults, tune.axis.suffix())
                     },
                     params.join(", "),
                     out.display()

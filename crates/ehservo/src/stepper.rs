@@ -57,6 +57,7 @@ pub struct LoopStepper {
     inner: Box<dyn LoopStep>,
     step: f64,
     steps: u64,
+    axis: crate::axis::Axis,
 }
 
 impl std::fmt::Debug for LoopStepper {
@@ -131,7 +132,13 @@ impl LoopStepper {
             inner: setup.controller.visit(BuildLoop(setup)),
             step: setup.sim.step,
             steps: setup.sim.steps,
+            axis: setup.axis,
         }
+    }
+
+    /// The plant's axis (the unit of the metrics: deg or mm).
+    pub fn axis(&self) -> crate::axis::Axis {
+        self.axis
     }
 
     /// The sample at t_k, and the loop advanced to t_{k+1}; `None` once the

@@ -165,9 +165,19 @@ pub struct MarginCfg {
     /// Bisection stops when the bracket is narrower (default 0.01).
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
-    /// e_max above this (°) counts as unbounded.
+    /// e_max above this (°, a rotary axis) counts as unbounded.
     #[serde(default)]
     pub e_limit_deg: Option<f64>,
+    /// e_max above this (mm, a linear axis) counts as unbounded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub e_limit_mm: Option<f64>,
+}
+
+impl MarginCfg {
+    /// The error limit in the axis's unit, whichever key gives it.
+    pub fn e_limit(&self) -> Option<f64> {
+        self.e_limit_deg.or(self.e_limit_mm)
+    }
 }
 
 fn default_tolerance() -> f64 {
@@ -256,6 +266,8 @@ pub struct League {
     pub cases: Vec<Case>,
     /// The margin.
     pub margin: Option<Margin>,
+    /// The scenarios' axis: the unit of every error (deg or mm).
+    pub axis: crate::axis::Axis,
 }
 
 /// The most draws of one scenario.
@@ -475,16 +487,35 @@ impl League {
                         ),
                     ));
                 }
-                if let Some(l) = m.e_limit_deg {
+                let scenario = load("margin.file", &m.scenario, &m.set)
+                    .map_err(|e| StudyError(e.0.replace("`margin.file`", "`margin.scenario`")))?;
+                // The limit's key says its unit: the one of the scenario's axis.
+                let (own, other) = match scenario.plant.axis() {
+                    crate::axis::Axis::Rotary => {
+                        (("e_limit_deg", m.e_limit_deg), ("e_limit_mm", m.e_limit_mm))
+                    }
+                    crate::axis::Axis::Linear => {
+                        (("e_limit_mm", m.e_limit_mm), ("e_limit_deg", m.e_limit_deg))
+                    }
+                };
+                if other.1.is_some() {
+                    return Err(bad(
+                        &format!("margin.{}", other.0),
+                        format!(
+                            "the margin's scenario is on a {} axis: give its error limit as `{}`",
+                            scenario.plant.axis().name(),
+                            own.0
+                        ),
+                    ));
+                }
+                if let Some(l) = own.1 {
                     if !(l.is_finite() && l > 0.0) {
                         return Err(bad(
-                            "margin.e_limit_deg",
+                            &format!("margin.{}", own.0),
                             format!("must be finite and > 0 (got {l:?})"),
                         ));
                     }
                 }
-                let scenario = load("margin.file", &m.scenario, &m.set)
-                    .map_err(|e| StudyError(e.0.replace("`margin.file`", "`margin.scenario`")))?;
                 let table = table_of("margin", &scenario)?;
                 let margin = Margin {
                     cfg: m.clone(),
@@ -514,11 +545,34 @@ impl League {
                 Some(margin)
             }
         };
+        // One league, one unit: every scenario on the first one's axis.
+        let axis = cases[0].scenario.plant.axis();
+        let mut axes: Vec<(String, &Scenario)> = cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (format!("scenario[{i}].file"), &c.scenario))
+            .collect();
+        if let Some(m) = &margin {
+            axes.push(("margin.scenario".into(), &m.scenario));
+        }
+        if let Some((key, s)) = axes.iter().find(|(_, s)| s.plant.axis() != axis) {
+            return Err(bad(
+                key,
+                format!(
+                    "`{}` is on a {} axis, `{}` on a {} one: a league's errors share one unit",
+                    s.name,
+                    s.plant.axis().name(),
+                    cases[0].scenario.name,
+                    axis.name()
+                ),
+            ));
+        }
         let league = League {
             file: sf,
             contestants,
             cases,
             margin,
+            axis,
         };
         league
             .work_asked()
@@ -743,7 +797,7 @@ impl Margin {
         let m = crate::run::run_setup(&setup, &mut |_| {}).1;
         !m.diverged
             && m.e_max
-                .is_some_and(|e| e.is_finite() && self.cfg.e_limit_deg.is_none_or(|l| e <= l))
+                .is_some_and(|e| e.is_finite() && self.cfg.e_limit().is_none_or(|l| e <= l))
     }
 
     /// The margin of the controller with `table`.
@@ -1039,7 +1093,7 @@ pub fn league_to_dir(
     let rows = report::rows(l, &r);
     write_atomic(
         &stage.path().join("league.csv"),
-        report::league_csv(&rows).as_bytes(),
+        report::league_csv(l, &rows).as_bytes(),
     )?;
     write_atomic(
         &stage.path().join("runs.csv"),

@@ -40,6 +40,14 @@ pub struct Row {
     pub margin_value: Option<f64>,
 }
 
+/// The errors' unit as the tables print it: ° or mm.
+fn sym(l: &League) -> &'static str {
+    match l.axis {
+        crate::axis::Axis::Rotary => "°",
+        crate::axis::Axis::Linear => "mm",
+    }
+}
+
 fn mean(v: &[f64]) -> Option<f64> {
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
@@ -109,9 +117,10 @@ fn csv_text(s: &str) -> String {
 
 /// league.csv: a row per controller × scenario. Empty cells are
 /// undefined (e_max_worst_deg is empty when a run diverged or was refused).
-pub fn league_csv(rows: &[Row]) -> String {
-    let mut s = String::from(
-        "controller,kind,parameters,scenario,draws,unbounded,refused,e_max_worst_deg,e_max_mean_deg,e_rms_mean_deg,chattering_mean,energy_mean_V2s,u_max_worst_V,margin\n",
+pub fn league_csv(l: &League, rows: &[Row]) -> String {
+    let u = l.axis.unit();
+    let mut s = format!(
+        "controller,kind,parameters,scenario,draws,unbounded,refused,e_max_worst_{u},e_max_mean_{u},e_rms_mean_{u},chattering_mean,energy_mean_V2s,u_max_worst_V,margin\n",
     );
     for r in rows {
         let _ = writeln!(
@@ -140,7 +149,7 @@ pub fn league_csv(rows: &[Row]) -> String {
 /// reproduces it.
 pub fn runs_csv(l: &League, r: &LeagueResult) -> String {
     let mut s = String::from("controller,scenario,draw,seed,file,refused,energy_V2s");
-    for n in crate::metrics::Metrics::NAMES {
+    for n in crate::metrics::Metrics::csv_names(l.axis) {
         s.push(',');
         s.push_str(n);
     }
@@ -160,7 +169,7 @@ pub fn runs_csv(l: &League, r: &LeagueResult) -> String {
             csv_text(c.refused.as_deref().unwrap_or("")),
             cell(c.energy)
         );
-        for n in crate::metrics::Metrics::NAMES {
+        for n in crate::metrics::Metrics::csv_names(l.axis) {
             s.push(',');
             if let Some(m) = &c.metrics {
                 s.push_str(&m.cell(n));
@@ -247,10 +256,11 @@ fn params_text(l: &League, r: &LeagueResult, ci: usize) -> String {
 /// What the report says of the set-up, as (heading, lines) pairs shared by
 /// the Markdown and the HTML.
 fn setup_lines(l: &League) -> Vec<String> {
+    let sym = sym(l);
     let mut v = Vec::new();
     if let Some(t) = &l.file.tuning {
         v.push(format!(
-            "Tuning budget (every tuned controller): {} evaluations of argmin's particle swarm ({} particles, seed {}), objective the {} score over {} × {} draw(s), score = e_max after the transient (°){}{}, each kind's declared tunable parameters and ranges.",
+            "Tuning budget (every tuned controller): {} evaluations of argmin's particle swarm ({} particles, seed {}), objective the {} score over {} × {} draw(s), score = e_max after the transient ({}){}{}, each kind's declared tunable parameters and ranges.",
             t.budget,
             t.particles,
             t.seed,
@@ -264,9 +274,10 @@ fn setup_lines(l: &League) -> Vec<String> {
                 .collect::<Vec<_>>()
                 .join(", "),
             t.draws,
+            sym,
             t.penalty
                 .u_limit
-                .map(|u| format!(" + {}°/V of u_max beyond ±{u} V", t.penalty.u_excess))
+                .map(|u| format!(" + {}{sym}/V of u_max beyond ±{u} V", t.penalty.u_excess))
                 .unwrap_or_default(),
             if t.penalty.chattering > 0.0 {
                 format!(" + {}·chattering", t.penalty.chattering)
@@ -306,8 +317,8 @@ fn setup_lines(l: &League) -> Vec<String> {
             },
             m.cfg.scenario.display(),
             m.cfg
-                .e_limit_deg
-                .map(|e| format!(" with e_max ≤ {e}°"))
+                .e_limit()
+                .map(|e| format!(" with e_max ≤ {e}{}", l.axis.suffix()))
                 .unwrap_or_default(),
             m.cfg.tolerance
         ));
@@ -428,9 +439,9 @@ fn scenario_table(l: &League, r: &LeagueResult, rows: &[Row], si: usize) -> Tabl
     Table {
         head: [
             "controller",
-            "e_max worst (°)",
-            "e_max mean (°)",
-            "e_rms mean (°)",
+            &format!("e_max worst ({})", sym(l)),
+            &format!("e_max mean ({})", sym(l)),
+            &format!("e_rms mean ({})", sym(l)),
             "chattering",
             "energy (V²·s)",
             "u_max worst (V)",
@@ -475,7 +486,7 @@ pub fn markdown(l: &League, r: &LeagueResult, rows: &[Row], figures: bool) -> St
     for line in setup_lines(l) {
         let _ = writeln!(s, "- {line}");
     }
-    s.push_str("\n## Standings\n\nWorst e_max after the transient (°) on each scenario, over its draws; controllers ordered by their mean rank over the scenarios (1 = best; unbounded ranks last).\n\n");
+    s.push_str(&format!("\n## Standings\n\nWorst e_max after the transient ({}) on each scenario, over its draws; controllers ordered by their mean rank over the scenarios (1 = best; unbounded ranks last).\n\n", sym(l)));
     s.push_str(&standings_table(l, r, rows).markdown());
     s.push_str("\n## Parameters\n\n");
     s.push_str(&params_table(l, r, rows).markdown());
@@ -515,7 +526,7 @@ pub fn html(l: &League, r: &LeagueResult, rows: &[Row], svgs: Option<(String, St
     for line in setup_lines(l) {
         let _ = writeln!(s, "<li>{}</li>", esc(&line));
     }
-    s.push_str("</ul>\n<h2>Standings</h2><p>Worst e_max after the transient (°) on each scenario, over its draws; ordered by mean rank (1 = best; unbounded last). The best of each column is marked.</p>\n");
+    s.push_str(&format!("</ul>\n<h2>Standings</h2><p>Worst e_max after the transient ({}) on each scenario, over its draws; ordered by mean rank (1 = best; unbounded last). The best of each column is marked.</p>\n", sym(l)));
     s.push_str(&standings_table(l, r, rows).html());
     s.push_str("<h2>Parameters</h2>");
     s.push_str(&params_table(l, r, rows).html());
@@ -593,7 +604,7 @@ pub fn pareto(l: &League, rows: &[Row]) -> Figure {
                     format!("{} (not shown, unbounded: {})", c.name, missing.join(", "))
                 },
                 x_label: "chattering index (mean)".into(),
-                y_label: "e_max worst (°)".into(),
+                y_label: format!("e_max worst ({})", sym(l)),
                 series,
                 log_y: true,
                 ..Default::default()
@@ -633,7 +644,7 @@ pub fn bars(l: &League, rows: &[Row]) -> Bars {
             "league {} — worst e_max after the transient, per scenario (× = unbounded)",
             l.file.name
         ),
-        y_label: "e_max worst (°)".into(),
+        y_label: format!("e_max worst ({})", sym(l)),
         groups: l.cases.iter().map(|c| c.name.clone()).collect(),
         series: (0..nc)
             .map(|ci| {

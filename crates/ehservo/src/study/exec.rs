@@ -51,6 +51,19 @@ pub fn execute(
                 }
                 let row = match plan.build_run(&sets) {
                     // Validation built the Setup: run it, not the scenario again.
+                    // One study, one unit: a run whose plant is on another
+                    // axis (a swept plant.model) is refused, not mixed in.
+                    Ok((_, setup)) if setup.axis != plan.axis() => RunRow {
+                        index: i,
+                        values,
+                        seed,
+                        metrics: None,
+                        error: Some(format!(
+                            "`plant.model`: its axis is {} but the base scenario's is {}: a study's errors share one unit",
+                            setup.axis.name(),
+                            plan.axis().name()
+                        )),
+                    },
                     Ok((_, setup)) => RunRow {
                         index: i,
                         values,
@@ -116,6 +129,7 @@ fn study_json(plan: &Plan, shard: Option<(u64, u64)>) -> Result<String> {
         runs: plan.runs,
         shard: shard.map(|(k, n)| [k, n]),
         range: [range.start, range.end],
+        axis: plan.axis(),
     };
     Ok(serde_json::to_string_pretty(&record)?)
 }

@@ -10,7 +10,7 @@
 
 use super::plan::{derive_seed, shard_range};
 use super::results::header;
-use super::{StudyRecord, MAX_RUNS, METRIC_COLUMNS};
+use super::{StudyRecord, MAX_RUNS};
 use crate::error::InputError;
 use crate::output::{write_atomic, Staging};
 use anyhow::{anyhow, Context, Result};
@@ -90,12 +90,14 @@ fn check_row(
             "{shown}: line {line}: seed {s:?} is not run {i}'s seed: the row was altered or is of another study"
         );
     }
-    for (name, c) in METRIC_COLUMNS
+    // The metric columns: after run, the values and seed, before error.
+    let metrics = &head[(2 + n_values).min(head.len())..head.len().saturating_sub(1)];
+    for (name, c) in metrics
         .iter()
         .zip(rec.iter().skip(2 + n_values))
         .filter(|(_, c)| !c.is_empty())
     {
-        let ok = match *name {
+        let ok = match name.as_str() {
             "diverged" => c == "true" || c == "false",
             "samples" => c.parse::<u64>().is_ok(),
             _ => finite(c),
@@ -103,7 +105,7 @@ fn check_row(
         if !ok {
             crate::bad_input!(
                 "{shown}: line {line}: `{name}` = {c:?} is not {}",
-                match *name {
+                match name.as_str() {
                     "diverged" => "true or false",
                     "samples" => "a whole number",
                     _ => "a finite number",
@@ -145,7 +147,7 @@ const MAX_ROW_BYTES: u64 = 16 << 10;
 fn shard_rows(d: &Path, r: &StudyRecord) -> Result<Vec<csv::StringRecord>> {
     let columns = r.study.columns();
     let n_values = columns.len();
-    let head = header(columns);
+    let head = header(columns, r.axis);
     let p = d.join("results.csv");
     let shown = p.display().to_string();
     // A regular file of a bounded size (a device or a FIFO in its place
@@ -466,7 +468,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
 
     // The rows, each checked, rewritten through one writer (the bytes a
     // whole run writes).
-    let head = header(first.study.columns());
+    let head = header(first.study.columns(), first.axis);
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(&head)?;
     let mut written = 0u64;

@@ -78,6 +78,11 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// The axis of the base scenario's plant: the unit of the study's errors.
+    pub fn axis(&self) -> crate::axis::Axis {
+        self.base.plant.axis()
+    }
+
     /// The varied columns of results.csv, in order: axes, then drawn keys.
     pub fn columns(&self) -> Vec<String> {
         self.study.columns()

@@ -65,6 +65,8 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
             .and_then(|m| if m.diverged { None } else { m.e_max })
     };
     let unbounded = |r: &RunRow| r.metrics.is_some_and(|m| m.diverged);
+    // The errors' unit: the base scenario's axis (deg or mm).
+    let unit = plan.axis().unit();
 
     if plan.study.monte_carlo.is_some() {
         let mut groups: BTreeMap<String, Vec<&RunRow>> = BTreeMap::new();
@@ -122,7 +124,7 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
                 size: (1100, 650),
                 panels: vec![Panel {
                     title: "histogram".into(),
-                    x_label: "max |e| after t_s (deg)".into(),
+                    x_label: format!("max |e| after t_s ({unit})"),
                     y_label: "runs".into(),
                     series,
                     log_y: false,
@@ -223,9 +225,9 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
                 title: "points on the top line: unbounded runs".into(),
                 x_label: axis.column(),
                 y_label: if log_y {
-                    "max |e| after t_s (deg, log)".into()
+                    format!("max |e| after t_s ({unit}, log)")
                 } else {
-                    "max |e| after t_s (deg)".into()
+                    format!("max |e| after t_s ({unit})")
                 },
                 series,
                 log_y,
@@ -291,7 +293,7 @@ pub fn study_plots(plan: &Plan, rows: &[RunRow], dir: &Path) -> Result<()> {
                 ys: ys.clone(),
                 z,
                 log_z: true,
-                z_label: "max |e| after t_s (deg)".into(),
+                z_label: format!("max |e| after t_s ({unit})"),
                 size: (1100, 750),
             };
             let stem = if gi == 0 {

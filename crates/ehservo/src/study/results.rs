@@ -2,11 +2,13 @@
 //! `study.json`.
 
 use super::{Plan, RunRow, Study};
+use crate::axis::Axis;
 use crate::metrics::Metrics;
 use anyhow::{anyhow, Result};
 use serde::{Deserialize, Serialize};
 
-/// The metric columns of results.csv, in order.
+/// The metric columns of a rotary axis's results.csv, in order (a linear
+/// axis's are [`Metrics::CSV_LINEAR`]: `e_max_mm` for `e_max_deg`).
 pub const METRIC_COLUMNS: [&str; 13] = Metrics::NAMES;
 
 /// A number as a cell: the shortest decimal that reads back to the same
@@ -39,27 +41,29 @@ fn metric_cell(m: &Metrics, name: &str) -> String {
     }
 }
 
-/// The header of results.csv for a study's varied columns.
-pub(crate) fn header(columns: Vec<String>) -> Vec<String> {
+/// The header of results.csv for a study's varied columns on `axis`.
+pub(crate) fn header(columns: Vec<String>, axis: Axis) -> Vec<String> {
     let mut head: Vec<String> = vec!["run".into()];
     head.extend(columns);
     head.push("seed".into());
-    head.extend(METRIC_COLUMNS.iter().map(|s| s.to_string()));
+    head.extend(Metrics::csv_names(axis).iter().map(|s| s.to_string()));
     head.push("error".into());
     head
 }
 
 /// results.csv (header + rows in run order).
 pub fn results_csv(plan: &Plan, rows: &[RunRow]) -> Result<Vec<u8>> {
+    let axis = plan.axis();
+    let names = Metrics::csv_names(axis);
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(header(plan.columns()))?;
+    w.write_record(header(plan.columns(), axis))?;
     for r in rows {
         let mut rec: Vec<String> = vec![r.index.to_string()];
         rec.extend(r.values.iter().map(cell));
         rec.push(r.seed.to_string());
         match &r.metrics {
-            Some(m) => rec.extend(METRIC_COLUMNS.iter().map(|k| metric_cell(m, k))),
-            None => rec.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len())),
+            Some(m) => rec.extend(names.iter().map(|k| metric_cell(m, k))),
+            None => rec.extend(std::iter::repeat_n(String::new(), names.len())),
         }
         rec.push(r.error.clone().unwrap_or_default());
         w.write_record(&rec)?;
@@ -84,6 +88,14 @@ pub struct StudyRecord {
     pub shard: Option<[u64; 2]>,
     /// Run indices in this output.
     pub range: [u64; 2],
+    /// The base scenario's axis (the unit of the error columns); absent
+    /// for a rotary one.
+    #[serde(default, skip_serializing_if = "is_rotary")]
+    pub axis: Axis,
+}
+
+fn is_rotary(a: &Axis) -> bool {
+    *a == Axis::Rotary
 }
 
 /// The value of a column as a number, if it is one.

@@ -500,6 +500,7 @@ impl Plan {
         let mut columns: Vec<String> = ["run", "seed", "error"]
             .iter()
             .chain(super::METRIC_COLUMNS.iter())
+            .chain(crate::metrics::Metrics::CSV_LINEAR.iter())
             .map(|c| c.to_string())
             .collect();
         let reserved = columns.len();

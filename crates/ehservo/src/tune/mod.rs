@@ -88,7 +88,8 @@ pub struct Penalty {
     pub chattering: f64,
     /// The valve's range (V): u_max beyond it is penalised.
     pub u_limit: Option<f64>,
-    /// Weight (°/V) on u_max beyond `u_limit`.
+    /// Weight on u_max beyond `u_limit`, in the axis's unit per volt
+    /// (°/V on a rotary axis, mm/V on a linear one).
     pub u_excess: f64,
 }
 
@@ -166,6 +167,21 @@ pub struct Tune {
     pub kind: &'static str,
     /// The searched parameters.
     pub params: Vec<ParamRange>,
+    /// The scenarios' axis: the unit of every score (deg or mm).
+    pub axis: crate::axis::Axis,
+}
+
+/// The one axis of a tune's or a league's scenarios (their scores add up
+/// in one unit): the first's, or the index of the first that differs.
+pub fn common_axis(scenarios: &[Scenario]) -> Result<crate::axis::Axis, usize> {
+    let axis = scenarios
+        .first()
+        .map(|s| s.plant.axis())
+        .unwrap_or_default();
+    match scenarios.iter().position(|s| s.plant.axis() != axis) {
+        Some(i) => Err(i),
+        None => Ok(axis),
+    }
 }
 
 /// The declared tunables of a kind.
@@ -225,6 +241,18 @@ impl Tune {
                 "is empty: list at least one scenario file".into(),
             ));
         }
+        let axis = common_axis(&scenarios).map_err(|i| {
+            bad(
+                &format!("scenarios[{i}]"),
+                format!(
+                    "`{}` is on a {} axis, `{}` on a {} one: the scores of one tune share one unit",
+                    scenarios[i].name,
+                    scenarios[i].plant.axis().name(),
+                    scenarios[0].name,
+                    scenarios[0].plant.axis().name()
+                ),
+            )
+        })?;
         if !(1..=MAX_BUDGET).contains(&tf.budget) {
             return Err(bad(
                 "budget",
@@ -395,6 +423,7 @@ impl Tune {
             tables,
             kind,
             params,
+            axis,
         };
         // Every scenario must take the kind and every parameter: check the
         // two ends and the middle of the ranges now, not in the search.
@@ -478,7 +507,7 @@ impl Tune {
             .collect()
     }
 
-    /// One run's score: e_max (°) plus the penalties; +∞ when unbounded,
+    /// One run's score: e_max (in the axis's unit, ° or mm) plus the penalties; +∞ when unbounded,
     /// refused or undefined.
     pub fn score(&self, m: Option<&Metrics>) -> f64 {
         let Some(m) = m else {
@@ -720,7 +749,7 @@ pub fn tune_to_dir(
     );
     tuned.name = format!("{}-tuned", t.file.name);
     let mut text = format!(
-        "# Tuned by `ehservo tune` ({} {}): {} = {:.6} over {} evaluations (seed {}).\n",
+        "# Tuned by `ehservo tune` ({} {}): {} = {:.6} {} over {} evaluations (seed {}).\n",
         SOFTWARE.name,
         SOFTWARE.version,
         match t.file.objective {
@@ -728,6 +757,7 @@ pub fn tune_to_dir(
             Objective::Worst => "worst score",
         },
         r.objective,
+        t.axis.unit(),
         r.evaluations,
         t.file.seed
     );
@@ -743,6 +773,7 @@ pub fn tune_to_dir(
         "tune": t.file,
         "kind": t.kind,
         "result": r,
+        "unit": t.axis.unit(),
     });
     write_atomic(
         &stage.path().join("tune.json"),
@@ -777,8 +808,9 @@ fn convergence_figure(t: &Tune, r: &TuneResult) -> Figure {
         ),
         panels: vec![Panel {
             title: format!(
-                "best objective: {:.5}{}",
+                "best objective: {:.5}{}{}",
                 r.objective,
+                t.axis.suffix(),
                 if r.kept_defaults {
                     " — the defaults, kept: the swarm found nothing better".to_string()
                 } else {
@@ -786,7 +818,7 @@ fn convergence_figure(t: &Tune, r: &TuneResult) -> Figure {
                 }
             ),
             x_label: "evaluations".into(),
-            y_label: "objective (° + penalties)".into(),
+            y_label: format!("objective ({} + penalties)", t.axis.unit()),
             series: vec![Series::new("best so far", x, y, 0)],
             log_y: false,
             ..Default::default()

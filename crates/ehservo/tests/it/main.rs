@@ -21,6 +21,7 @@ mod identify;
 mod independent;
 mod k1_closed_form;
 mod league;
+mod linear_axis;
 mod models;
 mod nn_robust;
 mod outputs;

@@ -1,0 +1,223 @@
+//! A linear axis read in mm everywhere (issue #35 item 5): a run's
+//! summary.json and trace.csv, a sweep's results.csv, a tune's tune.json and
+//! a league's tables, on the shipped single-rod cylinder; a tune or league
+//! that mixes a rotary and a linear scenario is refused.
+
+use super::common::{ehservo, rejected, repo};
+
+fn chrono() -> std::path::PathBuf {
+    repo().join("scenarios/cylinders/chrono-single-rod.toml")
+}
+
+fn short() -> [&'static str; 4] {
+    [
+        "--set",
+        "simulation.horizon=1.0",
+        "--set",
+        "simulation.settle=0.5",
+    ]
+}
+
+#[test]
+fn a_run_on_a_cylinder_is_in_mm_without_a_degree_anywhere() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = ehservo()
+        .arg("run")
+        .arg(chrono())
+        .args(short())
+        .args(["--no-plot", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains(" mm") && !stdout.contains('°'), "{stdout}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let m = &summary["metrics"];
+    assert_eq!(m["unit"], "mm");
+    assert!(m["e_max"].as_f64().is_some(), "{m}");
+    assert!(m.get("e_max_deg").is_none(), "{m}");
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let head = trace.lines().next().unwrap();
+    assert!(head.contains("y_mm") && head.contains("e_mm"), "{head}");
+    assert!(!head.contains("deg"), "{head}");
+    // e_mm is y_d − y in mm: the rod starts at 142 mm on the reference.
+    let cols: Vec<&str> = head.split(',').collect();
+    let at = |name: &str| cols.iter().position(|c| *c == name).unwrap();
+    let row: Vec<f64> = trace
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap_or(f64::NAN))
+        .collect();
+    assert!((row[at("y_mm")] - 142.0).abs() < 1e-9, "{row:?}");
+}
+
+#[test]
+fn a_sweep_on_a_cylinder_writes_e_max_mm() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("s.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "name = \"s\"\nbase = {:?}\nset = [\"simulation.horizon=1.0\", \"simulation.settle=0.5\"]\n[[axis]]\nkey = \"controller.kp\"\nvalues = [5000.0, 11162.0]\n",
+            chrono()
+        ),
+    )
+    .unwrap();
+    let out = tmp.path().join("o");
+    let o = ehservo()
+        .arg("sweep")
+        .arg(&study)
+        .args(["--no-plot", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert!(
+        head.contains(&"e_max_mm") && !head.iter().any(|c| c.contains("deg")),
+        "{head:?}"
+    );
+    // The second run is the scenario's own kp: its e_max is the run's.
+    let e = head.iter().position(|c| *c == "e_max_mm").unwrap();
+    let cell: f64 = csv
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split(',')
+        .nth(e)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let r = ehservo()
+        .arg("run")
+        .arg(chrono())
+        .args(short())
+        .args(["--no-plot", "--out"])
+        .arg(tmp.path().join("r"))
+        .output()
+        .unwrap();
+    assert!(r.status.success());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("r/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["metrics"]["e_max"].as_f64(), Some(cell));
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
+    assert_eq!(record["axis"], "linear");
+    // Merging the one output reads its mm columns back.
+    let merged = tmp.path().join("m");
+    let o = ehservo()
+        .arg("merge")
+        .arg(&out)
+        .arg("--out")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(merged.join("results.csv")).unwrap(),
+        csv
+    );
+}
+
+#[test]
+fn tune_and_league_on_a_cylinder_say_mm_and_refuse_a_mixed_set() {
+    let tmp = tempfile::tempdir().unwrap();
+    let tune = tmp.path().join("t.toml");
+    std::fs::write(
+        &tune,
+        format!(
+            "name = \"t\"\nscenarios = [{:?}]\ncontroller = \"pid\"\nbudget = 8\nparticles = 4\n",
+            chrono()
+        ),
+    )
+    .unwrap();
+    let out = tmp.path().join("t");
+    let o = ehservo()
+        .arg("tune")
+        .arg(&tune)
+        .args(["--no-plot", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains(" mm"));
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("tune.json")).unwrap()).unwrap();
+    assert_eq!(j["unit"], "mm");
+
+    let fig2 = repo().join("scenarios/paper/fig2.toml");
+    std::fs::write(
+        &tune,
+        format!(
+            "name = \"t\"\nscenarios = [{:?}, {:?}]\ncontroller = \"pid\"\nbudget = 8\nparticles = 4\n",
+            fig2,
+            chrono()
+        ),
+    )
+    .unwrap();
+    let o = ehservo()
+        .arg("tune")
+        .arg(&tune)
+        .arg("--out")
+        .arg(tmp.path().join("t2"))
+        .output()
+        .unwrap();
+    rejected("mixed tune", &o, "`scenarios[1]`");
+    assert!(!tmp.path().join("t2").exists());
+
+    let suite = tmp.path().join("l.toml");
+    let league = |scenarios: &str| {
+        format!(
+            "name = \"l\"\n[[controller]]\nkind = \"pid\"\ntune = false\nparams = {{ kp = 11162.0, ki = 0.0, kd = 0.0 }}\n{scenarios}"
+        )
+    };
+    std::fs::write(
+        &suite,
+        league(&format!(
+            "[[scenario]]\nfile = {:?}\nset = [\"simulation.horizon=1.0\", \"simulation.settle=0.5\"]\n",
+            chrono()
+        )),
+    )
+    .unwrap();
+    let out = tmp.path().join("l");
+    let o = ehservo()
+        .arg("league")
+        .arg(&suite)
+        .args(["--no-plot", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("league.csv")).unwrap();
+    assert!(
+        csv.lines().next().unwrap().contains("e_max_worst_mm"),
+        "{csv}"
+    );
+    let md = std::fs::read_to_string(out.join("league.md")).unwrap();
+    assert!(md.contains("e_max worst (mm)") && !md.contains('°'), "{md}");
+
+    std::fs::write(
+        &suite,
+        league(&format!(
+            "[[scenario]]\nfile = {:?}\n[[scenario]]\nfile = {:?}\n",
+            chrono(),
+            fig2
+        )),
+    )
+    .unwrap();
+    let o = ehservo()
+        .arg("league")
+        .arg(&suite)
+        .arg("--out")
+        .arg(tmp.path().join("l2"))
+        .output()
+        .unwrap();
+    rejected("mixed league", &o, "`scenario[1].file`");
+}
