@@ -101,11 +101,6 @@ pub fn schema_text(format: Format) -> String {
     s
 }
 
-/// `ehservo schema` with an unknown name: the names.
-pub fn names() -> String {
-    Format::ALL.map(Format::name).join(", ")
-}
-
 /// A TOML value of any type (a study's listed values).
 pub struct TomlValue;
 
