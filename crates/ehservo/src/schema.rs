@@ -101,6 +101,12 @@ pub fn schema_text(format: Format) -> String {
     s
 }
 
+/// A controller kind's name: one of the registered kinds (a league's
+/// `[[controller]] kind`, a tune file's `controller`).
+pub fn controller_kind(_: &mut SchemaGenerator) -> Schema {
+    schemars::json_schema!({ "type": "string", "enum": ControllerCfg::KINDS })
+}
+
 /// A TOML value of any type (a study's listed values).
 pub struct TomlValue;
 

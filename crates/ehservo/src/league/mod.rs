@@ -75,6 +75,7 @@ use std::path::{Path, PathBuf};
 #[serde(deny_unknown_fields)]
 pub struct ControllerEntry {
     /// The controller kind.
+    #[schemars(schema_with = "crate::schema::controller_kind")]
     pub kind: String,
     /// Its label in the report (default: the kind).
     #[serde(default)]

@@ -117,6 +117,7 @@ pub struct TuneFile {
     pub scenarios: Vec<PathBuf>,
     /// The controller kind tuned (default: the first scenario's).
     #[serde(default)]
+    #[schemars(schema_with = "crate::schema::controller_kind")]
     pub controller: Option<String>,
     /// Evaluations of the objective (default 2000).
     #[serde(default = "default_budget")]

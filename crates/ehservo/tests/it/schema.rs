@@ -286,6 +286,7 @@ fn the_other_schemas_agree_with_the_types() {
             true,
         ),
         ("[[controller]]\nname = \"x\"", false),
+        ("[[controller]]\nkind = \"sta\"", true),
         ("[[scenario]]\nfile = \"a.toml\"\ndraws = 3", true),
         ("[[scenario]]\nfile = \"a.toml\"\nruns = 3", false),
         (
@@ -301,6 +302,17 @@ fn the_other_schemas_agree_with_the_types() {
             "{text}"
         );
         assert_eq!(accepts(&league, text), *ok, "{text}");
+    }
+    // A kind is a string to the types (checked when the suite or the tune
+    // is loaded); the schemas name the registered kinds.
+    assert!(!accepts(&league, "[[controller]]\nkind = \"lqr\""));
+    assert!(!accepts(
+        &tune,
+        "scenarios = [\"a.toml\"]\ncontroller = \"lqr\""
+    ));
+    for kind in ControllerCfg::KINDS {
+        let text = format!("scenarios = [\"a.toml\"]\ncontroller = \"{kind}\"");
+        assert!(accepts(&tune, &text), "{text}");
     }
 }
 
