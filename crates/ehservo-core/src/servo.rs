@@ -39,6 +39,7 @@ use crate::math::{cos, exp, sgn, sin, sqrt, tanh, Real};
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct ServoParams<T: Real = f64> {
     /// Supply pressure Ps (Pa).
     #[cfg_attr(feature = "serde", serde(rename = "Ps"))]
@@ -255,6 +256,7 @@ impl<T: Real> Coefficients<T> {
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Friction<T: Real = f64> {
     /// Coulomb level Tc (N·m).
     pub coulomb: T,
@@ -334,6 +336,7 @@ impl<T: Real> Friction<T> {
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Load<T: Real = f64> {
     /// Amplitude A (N·m).
     pub amplitude: T,

@@ -32,7 +32,7 @@ use ehservo_core::error::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// `[actuator]`: every key optional; none means no such effect.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ActuatorConfig {
     /// Saturation of the command, ±limit (V).

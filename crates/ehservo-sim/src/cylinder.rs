@@ -71,7 +71,7 @@ pub const STANDARD_GRAVITY: f64 = 9.806_65;
 pub const ISO_VG46_VISCOSITY: f64 = 46e-6;
 
 /// `[plant.cylinder]`: the geometry, by areas or by diameters.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct CylinderGeom {
     /// Piston-side area A_A (m²), or give `bore`.
@@ -102,7 +102,7 @@ pub struct CylinderGeom {
 }
 
 /// `[plant.fluid]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct FluidCfg {
     /// Density ρ (kg/m³).
@@ -125,7 +125,7 @@ impl Default for FluidCfg {
 }
 
 /// `[plant.load]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LoadCfg {
     /// The moving mass M (kg): rod, piston and load.
@@ -165,7 +165,7 @@ impl Default for LoadCfg {
 }
 
 /// `[plant.end_stop]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct EndStopCfg {
     /// Contact stiffness k_s (N/m); default 100·βe·(A_A²/V_A + A_B²/V_B) at mid-stroke.
@@ -177,7 +177,7 @@ pub struct EndStopCfg {
 }
 
 /// `[plant.initial]`: the pressures at t = 0.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct InitialCfg {
     /// p_A(0) (Pa); default: the pair that holds the load at x(0) about
@@ -190,7 +190,7 @@ pub struct InitialCfg {
 }
 
 /// `[plant.transmission]`: a rack and pinion that makes the axis rotary.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TransmissionCfg {
     /// Pinion radius r (m): θ = (y − stroke/2)/r.
@@ -198,7 +198,7 @@ pub struct TransmissionCfg {
 }
 
 /// `[plant.nominal]`: where the controller's model is linearised.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct NominalCfg {
     /// The rod position of the operating point (m); default mid-stroke.
@@ -207,7 +207,7 @@ pub struct NominalCfg {
 }
 
 /// `[plant] model = "cylinder"`: the tables of a valve-controlled cylinder.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct CylinderCfg {
     /// `[plant.cylinder]`.

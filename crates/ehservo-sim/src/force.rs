@@ -20,7 +20,7 @@ use std::sync::Arc;
 pub const MAX_ROWS: usize = 200_000;
 
 /// `[plant.load.force]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum ForceCfg {
     /// A constant force.

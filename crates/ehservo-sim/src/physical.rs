@@ -140,7 +140,7 @@ impl Plant for PhysicalPlant {
 
 /// `[plant] model = "physical"`: the same `[plant.params]` as the
 /// third-order model; the load is the scenario's `[load]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct PhysicalCfg {
     /// `[plant.params]`.

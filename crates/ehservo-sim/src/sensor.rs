@@ -109,16 +109,34 @@ impl<'de> Deserialize<'de> for Channels {
     }
 }
 
+/// A list of channel names, each once, θ among them.
+impl schemars::JsonSchema for Channels {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Channels".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "Channel names, each once, \"theta\" among them.",
+            "type": "array",
+            "items": { "type": "string", "enum": CHANNELS },
+            "uniqueItems": true,
+            "contains": { "const": CHANNELS[0] }
+        })
+    }
+}
+
 /// `[sensor]`.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SensorConfig {
     /// Constant offset added to (θ, θ̇, θ̈) (rad, rad/s, rad/s²). Default 0.
     #[serde(with = "crate::triple")]
+    #[schemars(with = "[f64; 3]")]
     pub bias: [f64; 3],
     /// Quantisation step of each channel (0: exact). An encoder of N counts
     /// per revolution has a θ step of 2π/N rad. Default 0.
     #[serde(with = "crate::triple")]
+    #[schemars(with = "[f64; 3]")]
     pub resolution: [f64; 3],
     /// Which channels the controller gets from the sensors (default all);
     /// the rest come from the estimator.
@@ -127,6 +145,7 @@ pub struct SensorConfig {
     /// Standard deviation of white Gaussian noise per channel (rad, rad/s,
     /// rad/s²), drawn once per sample. Default 0.
     #[serde(skip_serializing_if = "is_zero3", with = "crate::triple")]
+    #[schemars(with = "[f64; 3]")]
     pub noise: [f64; 3],
     /// Seed of the noise (channel i draws from its own stream, seed + i).
     #[serde(skip_serializing_if = "is_zero_u64")]

@@ -45,7 +45,7 @@ use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 
 /// How the controller is coupled to the integrator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum Mode {
     /// Law inside every RK4 stage; controller state integrated with the plant.

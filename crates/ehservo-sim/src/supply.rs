@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 pub const RELIEF_P_NOM: f64 = 7e6;
 
 /// `[plant.supply]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum SupplyCfg {
     /// A constant supply pressure.

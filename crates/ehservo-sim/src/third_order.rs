@@ -232,7 +232,7 @@ impl Plant for ThirdOrderPlant {
 /// paper's physical parameters (SI, by the paper's symbol: `Ps`, `beta_e`,
 /// `Vt`, `Kce`, `Dm`, `Jt`, `Bm`, `Kv`, `G`, `rho`, `Cd`, `Ag`); the load is
 /// the scenario's `[load]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ThirdOrderCfg {
     /// `[plant.params]`.

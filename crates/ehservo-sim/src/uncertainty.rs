@@ -29,7 +29,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 /// A bias and a random part, as fractions of a parameter's nominal value.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Spread {
     /// The constant part: the true value is `nominal·(1 + bias + random·r)`.
@@ -63,7 +63,7 @@ impl Spread {
 }
 
 /// The physical parameters a variation can scale (`[uncertainty.physical]`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct PhysicalSpec {
     /// The moving mass (a cylinder's load mass; the motor's inertia Jt).
@@ -196,7 +196,7 @@ impl Factors {
 /// Sizes of the variation: a scenario's `[uncertainty]`, resolved for its
 /// plant (the scenario's own table leaves the paper's keys unset for a
 /// plant outside the third-order family).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct UncertaintySpec {
     /// Bias fraction of α_i = |ā_i|.

@@ -44,7 +44,7 @@ use ehservo_core::math::sgn;
 use serde::{Deserialize, Serialize};
 
 /// `[plant.valve]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ValveCfg {
     /// Spool travel limit x_max (m).
@@ -103,7 +103,7 @@ impl Default for ValveCfg {
 }
 
 /// One value for the four edges, or one each (P→A, P→B, A→T, B→T).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum Edges {
     /// The same for every edge.

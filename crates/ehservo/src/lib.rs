@@ -41,6 +41,7 @@ pub mod plot;
 pub mod reproduce;
 pub mod run;
 pub mod scenario;
+pub mod schema;
 pub mod signals;
 pub mod stepper;
 pub mod study;

@@ -252,6 +252,17 @@ enum Command {
     },
     /// Print the default scenario (the paper's Fig. 2 case) as TOML.
     Defaults,
+    /// Print the JSON Schema of a file format (or, with --markdown, its reference page, docs/reference/).
+    ///
+    /// Example: ehservo schema scenario > scenario.schema.json
+    Schema {
+        /// The format.
+        #[arg(value_enum, default_value = "scenario")]
+        format: ehservo::schema::Format,
+        /// Print the reference page (Markdown) instead.
+        #[arg(long)]
+        markdown: bool,
+    },
     /// Design an identification experiment: excitation.csv for a rig and scenario.toml that simulates it (docs/identification.md).
     Excite(ExciteArgs),
     /// Identify a servo from logged (t, u, y) data: frequency response, linear and grey-box fits, identified.toml (docs/identification.md).
@@ -1263,6 +1274,14 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                 );
                 let names: Vec<String> = r.files.iter().map(|f| f.display().to_string()).collect();
                 out!(w, "wrote {}/{{{}}}", dir.display(), names.join(", "));
+            }
+            Ok(())
+        }
+        Command::Schema { format, markdown } => {
+            if markdown {
+                put!(w, "{}", ehservo::schema::markdown(format));
+            } else {
+                put!(w, "{}", ehservo::schema::schema_text(format));
             }
             Ok(())
         }

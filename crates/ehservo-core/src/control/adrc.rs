@@ -81,6 +81,7 @@ use crate::math::Real;
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct AdrcConfig {
     /// ω_c, the controller bandwidth (rad/s); default ω_o/4.
     #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]

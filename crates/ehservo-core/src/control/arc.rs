@@ -98,6 +98,7 @@ use crate::surface::SwitchingSurface;
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct ArcConfig {
     /// Bound on Δa_i as a fraction of |ā_i| (Ω's a-box). Default 1.
     pub bound_a: f64,

@@ -88,6 +88,7 @@ use crate::servo::NominalModel;
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct BacksteppingConfig {
     /// c1 (s⁻¹). Default 30.
     pub c1: f64,

@@ -60,6 +60,19 @@ macro_rules! serde_by_name {
                 d.deserialize_str(V)
             }
         }
+
+        #[cfg(feature = "schema")]
+        impl schemars::JsonSchema for $t {
+            fn schema_name() -> std::borrow::Cow<'static, str> {
+                stringify!($t).into()
+            }
+            fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+                schemars::json_schema!({
+                    "type": "string",
+                    "enum": $names,
+                })
+            }
+        }
     };
 }
 

@@ -371,6 +371,7 @@ impl<T: Real> Controller<T> for NnRobust<T> {
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct NnRobustConfig {
     /// `"sigma-mod"`, `"e-mod"` (default) or `"projection"`.
     pub weight_law: WeightLaw,

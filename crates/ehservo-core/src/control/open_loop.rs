@@ -22,6 +22,7 @@ use crate::math::{Real, DR};
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct OpenLoopConfig {
     /// Volts of command per degree of reference (V/°). Default 1.
     pub volts_per_deg: f64,

@@ -159,6 +159,7 @@ serde_by_name!(
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct RbfConfig {
     /// δ. Default 0.5.
     pub width: f64,
@@ -195,6 +196,7 @@ impl RbfConfig {
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct SlidingConfig {
     /// Bound the controller knows on Δa_i: α_i = bound_a·|ā_i| (VSC). Default 1.
     pub bound_a: f64,
@@ -296,6 +298,7 @@ impl SlidingConfig {
     derive(serde::Serialize, serde::Deserialize),
     serde(transparent)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct NnVscConfig(pub SlidingConfig);
 
 /// `kind = "vsc"`: the traditional VSC of Theorem 1, sgn(σ).
@@ -305,6 +308,7 @@ pub struct NnVscConfig(pub SlidingConfig);
     derive(serde::Serialize, serde::Deserialize),
     serde(transparent)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct VscConfig(pub SlidingConfig);
 
 /// `kind = "vsc-sat"`: Theorem 1 with sat(σ/μ) (Remark 2).
@@ -314,6 +318,7 @@ pub struct VscConfig(pub SlidingConfig);
     derive(serde::Serialize, serde::Deserialize),
     serde(transparent)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct VscSatConfig(pub SlidingConfig);
 
 impl Config for NnVscConfig {

@@ -61,6 +61,7 @@ use crate::surface::SwitchingSurface;
     derive(serde::Serialize, serde::Deserialize),
     serde(deny_unknown_fields, default)
 )]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct StaConfig {
     /// k1, the gain of |σ|^{1/2}sgn σ (rad^{1/2}/s²); default 1.5·√C(t).
     #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]

@@ -71,10 +71,11 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// One `[[controller]]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerEntry {
     /// The controller kind.
+    #[schemars(schema_with = "crate::schema::controller_kind")]
     pub kind: String,
     /// Its label in the report (default: the kind).
     #[serde(default)]
@@ -85,6 +86,7 @@ pub struct ControllerEntry {
     pub tune: bool,
     /// Given parameters (with `tune = false`), on top of the kind's defaults.
     #[serde(default)]
+    #[schemars(with = "crate::schema::TomlTable")]
     pub params: toml::Table,
 }
 
@@ -93,7 +95,7 @@ fn yes() -> bool {
 }
 
 /// One `[[scenario]]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioEntry {
     /// The scenario file, relative to the suite file.
@@ -118,7 +120,7 @@ fn one() -> u64 {
 }
 
 /// `[tuning]`: the budget every tuned controller gets.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TuningCfg {
     /// The scenarios of the objective (relative to the suite file).
@@ -144,7 +146,7 @@ pub struct TuningCfg {
 }
 
 /// `[margin]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MarginCfg {
     /// The scenario varied (relative to the suite file).
@@ -189,7 +191,7 @@ fn unit() -> f64 {
 }
 
 /// A suite file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SuiteFile {
     /// Name (default: the file's stem).

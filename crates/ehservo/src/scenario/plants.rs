@@ -154,6 +154,13 @@ macro_rules! plants {
                 None
             }
 
+            /// Every model with the JSON Schema of its keys (`ehservo schema`).
+            pub fn model_schemas(
+                g: &mut schemars::SchemaGenerator,
+            ) -> Vec<(&'static str, schemars::Schema)> {
+                vec![$((<$ty as PlantConfig>::MODEL, g.subschema_for::<$ty>())),*]
+            }
+
             fn params_table(&self) -> Result<toml::Table, toml::ser::Error> {
                 match self {
                     $(Self::$variant(c) => toml::Table::try_from(c),)*

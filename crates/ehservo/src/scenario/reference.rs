@@ -51,7 +51,9 @@ pub const DEFAULT_FREQUENCY_HZ: f64 = 1.0;
 pub const MAX_KNOTS: usize = 200_000;
 
 /// `reference.kind`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum ReferenceKind {
     /// A·sin(2πft) (the paper).
@@ -105,7 +107,7 @@ impl ReferenceKind {
 }
 
 /// One `reference.components` entry of a `multisine`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ComponentCfg {
     /// Amplitude (deg) on a rotary axis.
@@ -124,7 +126,7 @@ pub struct ComponentCfg {
 /// `[reference]`: `kind` and that kind's keys (see the module's table).
 /// Every key is optional here; [`ReferenceCfg::build`] checks that the
 /// kind's required keys are given and that no other kind's key is.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(from = "ReferenceRaw")]
 pub struct ReferenceCfg {
     /// Default `"sine"`.
@@ -194,6 +196,33 @@ struct ReferenceRaw {
     duration: Option<f64>,
     components: Option<Vec<ComponentCfg>>,
     file: Option<String>,
+}
+
+/// What a file may hold (every key of [`ReferenceCfg`] optional, no
+/// other): `ReferenceCfg`'s keys with their docs, as it writes them, made
+/// strict, with the kind's default. (`ReferenceCfg` is read through this
+/// type, so its derived schema for reading is this one's.)
+impl schemars::JsonSchema for ReferenceRaw {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "ReferenceCfg".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        // The nested types as read, in `g`'s own definitions.
+        g.subschema_for::<ReferenceKind>();
+        g.subschema_for::<ComponentCfg>();
+        let mut writing = g.settings().clone().for_serialize().into_generator();
+        let mut s = <ReferenceCfg as schemars::JsonSchema>::json_schema(&mut writing);
+        s.insert("additionalProperties".into(), false.into());
+        s.remove("required");
+        if let Some(kind) = s
+            .get_mut("properties")
+            .and_then(|p| p.get_mut("kind"))
+            .and_then(|k| k.as_object_mut())
+        {
+            kind.insert("default".into(), ReferenceKind::default().name().into());
+        }
+        s
+    }
 }
 
 impl From<ReferenceRaw> for ReferenceCfg {

@@ -125,6 +125,13 @@ macro_rules! registry {
                 None
             }
 
+            /// Every kind with the JSON Schema of its keys (`ehservo schema`).
+            pub fn kind_schemas(
+                g: &mut schemars::SchemaGenerator,
+            ) -> Vec<(&'static str, schemars::Schema)> {
+                vec![$((<$ty as Config>::KIND, g.subschema_for::<$ty>())),*]
+            }
+
             fn params_table(&self) -> Result<toml::Table, toml::ser::Error> {
                 match self {
                     $(Self::$variant(c) => toml::Table::try_from(c),)*

@@ -6,7 +6,7 @@ use ehservo_sim::simulation::Mode;
 use serde::{Deserialize, Serialize};
 
 /// `[simulation]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimulationCfg {
     /// Horizon T (s), a whole number of steps. Default 10.
@@ -23,6 +23,7 @@ pub struct SimulationCfg {
     pub theta_limit: f64,
     /// x(0) = (θ, θ̇, θ̈). Default 0.
     #[serde(with = "ehservo_sim::triple")]
+    #[schemars(with = "[f64; 3]")]
     pub x0: [f64; 3],
     /// Sampled mode: apply each command one sample after the measurement
     /// it was computed from (a controller that takes a period to compute).
@@ -51,7 +52,7 @@ impl Default for SimulationCfg {
 /// family's, at the Fig. 2 case by default (`a_bias = 1`, `b_bias = 0.5`);
 /// another plant refuses them and varies by `[uncertainty.physical]` alone
 /// (`ehservo_sim::uncertainty`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct UncertaintyCfg {
     /// Bias fraction of α_i = |ā_i| (default 1, the Fig. 2 case).
@@ -129,14 +130,16 @@ impl UncertaintyCfg {
 }
 
 /// `[surface]`: either `poles` (three real, negative) or `p` = [p1, p2, p3].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SurfaceCfg {
     /// Poles of the sliding dynamics (default −20, −30, −40).
     #[serde(with = "ehservo_sim::triple::option")]
+    #[schemars(with = "Option<[f64; 3]>")]
     pub poles: Option<[f64; 3]>,
     /// Coefficients (p1, p2, p3) of (10).
     #[serde(with = "ehservo_sim::triple::option")]
+    #[schemars(with = "Option<[f64; 3]>")]
     pub p: Option<[f64; 3]>,
 }
 
@@ -144,7 +147,7 @@ pub struct SurfaceCfg {
 /// trust (non-finite, or beyond `measurement_limit`): it commands its safe
 /// value and leaves the controller state alone (the core's
 /// `SampledController`). The valve range it clamps to is `actuator.limit`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct FaultCfg {
     /// `"hold-last"` (default: the last good command) or `"zero"`.
@@ -154,6 +157,7 @@ pub struct FaultCfg {
         skip_serializing_if = "Option::is_none",
         with = "ehservo_sim::triple::option"
     )]
+    #[schemars(with = "Option<[f64; 3]>")]
     pub measurement_limit: Option<[f64; 3]>,
 }
 
@@ -174,7 +178,7 @@ impl FaultCfg {
 }
 
 /// `fault.safe_command`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum SafeCommandCfg {
     /// Hold the last good command.
@@ -184,7 +188,7 @@ pub enum SafeCommandCfg {
 }
 
 /// `[output]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OutputCfg {
     /// Write every n-th sample to `trace.csv` (metrics use every sample). Default 1.
@@ -204,7 +208,7 @@ impl Default for OutputCfg {
 
 /// `[estimator]`: what estimates the channels of x that `sensor.measured`
 /// leaves out, from the measured θ, at the controller's rate (sampled mode).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum EstimatorCfg {
     /// Levant's robust exact differentiator of second order.

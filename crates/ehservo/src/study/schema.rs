@@ -7,14 +7,14 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The values of an axis.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(
     untagged,
     expecting = "expected a list of values, { from, to, step } or { from, to, n, scale = \"linear\" | \"log\" }"
 )]
 pub enum AxisValues {
     /// An explicit list (numbers, strings or booleans).
-    List(Vec<toml::Value>),
+    List(#[schemars(with = "Vec<crate::schema::TomlValue>")] Vec<toml::Value>),
     /// `{ from, to, step }`: from, from + step, … up to `to` (inclusive within 1e-9).
     Step {
         /// First value.
@@ -39,7 +39,9 @@ pub enum AxisValues {
 }
 
 /// Spacing of a counted axis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Scale {
     /// Equal differences.
@@ -50,7 +52,7 @@ pub enum Scale {
 }
 
 /// One grid axis.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Axis {
     /// One key (shorthand for `keys = [key]`).
@@ -67,7 +69,7 @@ pub struct Axis {
 }
 
 /// A distribution to draw a key from.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Draw {
     /// The key.
@@ -88,11 +90,12 @@ pub struct Draw {
     pub sd: Option<f64>,
     /// Values (choice).
     #[serde(default)]
+    #[schemars(with = "Vec<crate::schema::TomlValue>")]
     pub values: Vec<toml::Value>,
 }
 
 /// Distribution names.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Dist {
     /// Uniform on [low, high).
@@ -106,7 +109,7 @@ pub enum Dist {
 }
 
 /// `[monte_carlo]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MonteCarlo {
     /// Replicates per grid point.
@@ -117,7 +120,7 @@ pub struct MonteCarlo {
 }
 
 /// A study file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Study {
     /// Name.

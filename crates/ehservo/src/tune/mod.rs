@@ -44,7 +44,9 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 /// How the scores of the scenarios × draws make one objective.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Objective {
     /// Their mean.
@@ -55,7 +57,9 @@ pub enum Objective {
 }
 
 /// Spacing of a parameter's search.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Scale {
     /// Searched as given.
@@ -66,7 +70,7 @@ pub enum Scale {
 }
 
 /// One searched parameter.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ParamRange {
     /// Key in `[controller]`.
@@ -81,7 +85,7 @@ pub struct ParamRange {
 }
 
 /// `[penalty]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Penalty {
     /// Weight on the chattering index (L2[Δu]/L2[u] after the transient).
@@ -104,7 +108,7 @@ impl Default for Penalty {
 }
 
 /// A tune file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TuneFile {
     /// Name (default: the file's stem).
@@ -114,6 +118,7 @@ pub struct TuneFile {
     pub scenarios: Vec<PathBuf>,
     /// The controller kind tuned (default: the first scenario's).
     #[serde(default)]
+    #[schemars(schema_with = "crate::schema::controller_kind")]
     pub controller: Option<String>,
     /// Evaluations of the objective (default 2000).
     #[serde(default = "default_budget")]

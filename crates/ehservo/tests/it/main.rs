@@ -32,6 +32,7 @@ mod reliability;
 mod reproduce_bad_input;
 mod reproduction;
 mod sampled_loop;
+mod schema;
 mod stages;
 mod stochastic;
 mod study;
