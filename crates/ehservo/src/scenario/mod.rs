@@ -507,35 +507,41 @@ fn plant_table_error(table: toml::Table, file: &str, text: Option<&str>) -> Scen
 pub fn other_format(text: &str, file: &str) -> Option<String> {
     let t: toml::Table = toml::from_str(text).ok()?;
     let has = |k: &str| t.contains_key(k);
-    let (what, key, command) = if let Some(k) = ["axis", "monte_carlo", "base"]
-        .into_iter()
-        .find(|k| has(k))
-    {
-        ("a study", k, "ehservo sweep FILE --out DIR")
-    } else if let Some(k) = ["tuning", "margin", "scenario"]
-        .into_iter()
-        .find(|k| has(k))
-        .or_else(|| t.get("controller").filter(|c| c.is_array()).map(|_| "controller"))
-    {
-        ("a league suite", k, "ehservo league FILE --out DIR")
-    } else if let Some(k) = ["scenarios", "budget", "particles", "penalty", "param"]
-        .into_iter()
-        .find(|k| has(k))
-        .or_else(|| t.get("controller").filter(|c| c.is_str()).map(|_| "controller"))
-    {
-        ("a tune file", k, "ehservo tune FILE --out DIR")
-    } else if let Some(k) = ["reading", "case", "claim", "convergence"]
-        .into_iter()
-        .find(|k| has(k))
-    {
-        (
-            "the reproduction's manifest",
-            k,
-            "ehservo reproduce --paper-dir ITS-FOLDER",
-        )
-    } else {
-        return None;
-    };
+    let (what, key, command) =
+        if let Some(k) = ["axis", "monte_carlo", "base"].into_iter().find(|k| has(k)) {
+            ("a study", k, "ehservo sweep FILE --out DIR")
+        } else if let Some(k) = ["tuning", "margin", "scenario"]
+            .into_iter()
+            .find(|k| has(k))
+            .or_else(|| {
+                t.get("controller")
+                    .filter(|c| c.is_array())
+                    .map(|_| "controller")
+            })
+        {
+            ("a league suite", k, "ehservo league FILE --out DIR")
+        } else if let Some(k) = ["scenarios", "budget", "particles", "penalty", "param"]
+            .into_iter()
+            .find(|k| has(k))
+            .or_else(|| {
+                t.get("controller")
+                    .filter(|c| c.is_str())
+                    .map(|_| "controller")
+            })
+        {
+            ("a tune file", k, "ehservo tune FILE --out DIR")
+        } else if let Some(k) = ["reading", "case", "claim", "convergence"]
+            .into_iter()
+            .find(|k| has(k))
+        {
+            (
+                "the reproduction's manifest",
+                k,
+                "ehservo reproduce --paper-dir ITS-FOLDER",
+            )
+        } else {
+            return None;
+        };
     let shown = match t.get(key) {
         Some(toml::Value::Array(a)) if a.iter().all(toml::Value::is_table) => format!("[[{key}]]"),
         Some(toml::Value::Table(_)) => format!("[{key}]"),

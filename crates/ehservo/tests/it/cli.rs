@@ -291,14 +291,22 @@ fn run_of_a_study_tune_league_or_manifest_names_it() {
             .unwrap();
         crate::common::rejected_naming(file, &run, expect);
         assert!(!out.exists(), "{file}: nothing written");
-        let check = ehservo().current_dir(repo()).args(["check", file]).output().unwrap();
+        let check = ehservo()
+            .current_dir(repo())
+            .args(["check", file])
+            .output()
+            .unwrap();
         crate::common::rejected_naming(file, &check, expect);
     }
     // A study whose only study key is `base` is one too; a scenario with a
     // misspelt key still gets serde's message.
     let base = write(tmp.path(), "b.toml", "base = \"x.toml\"\n");
     let o = ehservo().arg("check").arg(&base).output().unwrap();
-    crate::common::rejected(&base.display().to_string(), &o, "this is a study (it has `base`)");
+    crate::common::rejected(
+        &base.display().to_string(),
+        &o,
+        "this is a study (it has `base`)",
+    );
     let typo = write(tmp.path(), "t.toml", "[controller]\ngama1 = 1\n");
     let o = ehservo().arg("check").arg(&typo).output().unwrap();
     crate::common::rejected("t.toml", &o, "unknown field `gama1`");

@@ -211,8 +211,7 @@ fn line_matches(pattern: &str, line: &str) -> bool {
         return pattern == line;
     }
     let (first, last) = (parts[0], parts[parts.len() - 1]);
-    if !line.starts_with(first) || line.len() < first.len() + last.len() || !line.ends_with(last)
-    {
+    if !line.starts_with(first) || line.len() < first.len() + last.len() || !line.ends_with(last) {
         return false;
     }
     let mut rest = &line[first.len()..line.len() - last.len()];
@@ -278,9 +277,8 @@ impl Env {
     }
 
     fn on_path(prog: &str) -> bool {
-        std::env::var_os("PATH").is_some_and(|p| {
-            std::env::split_paths(&p).any(|d| d.join(prog).is_file())
-        })
+        std::env::var_os("PATH")
+            .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(prog).is_file()))
     }
 
     /// Whether a need is met; `Err` names an unknown one.
@@ -295,9 +293,7 @@ impl Env {
                         .join("target/thumbv7em-none-eabihf/release/ehservo-firmware-pil")
                         .is_file()
             }
-            "ffi" => {
-                self.bin.with_file_name("libehservo_ffi.so").is_file() && Self::on_path("gcc")
-            }
+            "ffi" => self.bin.with_file_name("libehservo_ffi.so").is_file() && Self::on_path("gcc"),
             other => return Err(format!("unknown need {other:?}")),
         })
     }
@@ -524,8 +520,7 @@ fn check_page(page: &str, env: &Env) -> Vec<String> {
                     let (prog, args): (PathBuf, &[String]) = match c.words[0].as_str() {
                         "ehservo" => (env.bin.clone(), &c.words[1..]),
                         "cargo"
-                            if c.words.len() > 3
-                                && c.words[1..4] == ["run", "--release", "--"] =>
+                            if c.words.len() > 3 && c.words[1..4] == ["run", "--release", "--"] =>
                         {
                             (env.bin.clone(), &c.words[4..])
                         }
@@ -650,11 +645,21 @@ fn check_toml(b: &Block, dir: &Path) -> Result<(), String> {
         (Some(_), Some(_)) => return Err("file= and save= together".into()),
     };
     let loaded = match kind {
-        "scenario" => ehservo::scenario::Scenario::load(&file, &[]).map(|_| ()).map_err(|e| e.to_string()),
-        "study" => ehservo::study::Plan::load(&file).map(|_| ()).map_err(|e| e.to_string()),
-        "tune" => ehservo::tune::Tune::load(&file).map(|_| ()).map_err(|e| e.to_string()),
-        "league" => ehservo::league::League::load(&file).map(|_| ()).map_err(|e| e.to_string()),
-        _ => ehservo::reproduce::manifest::Manifest::load(&file).map(|_| ()).map_err(|e| e.to_string()),
+        "scenario" => ehservo::scenario::Scenario::load(&file, &[])
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
+        "study" => ehservo::study::Plan::load(&file)
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
+        "tune" => ehservo::tune::Tune::load(&file)
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
+        "league" => ehservo::league::League::load(&file)
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
+        _ => ehservo::reproduce::manifest::Manifest::load(&file)
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
     };
     loaded.map_err(|e| format!("does not load as a {kind}: {e}"))
 }
@@ -737,15 +742,25 @@ fn every_page_is_tested() {
         .collect();
     on_disk.sort();
     for p in &on_disk {
-        assert!(PAGES.contains(&p.as_str()), "{p} is not in guide.rs's PAGES");
+        assert!(
+            PAGES.contains(&p.as_str()),
+            "{p} is not in guide.rs's PAGES"
+        );
     }
-    assert_eq!(PAGES.len(), on_disk.len() + 1, "PAGES lists a page that is not there");
+    assert_eq!(
+        PAGES.len(),
+        on_disk.len() + 1,
+        "PAGES lists a page that is not there"
+    );
 }
 
 #[test]
 fn the_matcher_matches_what_it_says() {
     let l = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-    assert!(output_matches(&l(&["a", "…", "d"]), &l(&["a", "b", "c", "d"])));
+    assert!(output_matches(
+        &l(&["a", "…", "d"]),
+        &l(&["a", "b", "c", "d"])
+    ));
     assert!(output_matches(&l(&["a", "…"]), &l(&["a"])));
     assert!(!output_matches(&l(&["a", "d"]), &l(&["a", "b", "d"])));
     assert!(!output_matches(&l(&[]), &l(&["x"])));
