@@ -773,3 +773,39 @@ fn the_matcher_matches_what_it_says() {
     );
     assert!(words("ehservo run x | head").is_err());
 }
+
+/// Every relative link of the pages (outside code blocks) names a file or
+/// folder that is there.
+#[test]
+fn links_resolve() {
+    let mut bad = Vec::new();
+    for page in PAGES {
+        let text = std::fs::read_to_string(repo().join(page)).unwrap();
+        let dir = Path::new(page).parent().unwrap_or(Path::new(""));
+        let mut in_code = false;
+        for (n, line) in text.lines().enumerate() {
+            if line.starts_with("```") {
+                in_code = !in_code;
+                continue;
+            }
+            if in_code {
+                continue;
+            }
+            let mut rest = line;
+            while let Some(k) = rest.find("](") {
+                rest = &rest[k + 2..];
+                let Some(end) = rest.find(')') else { break };
+                let target = &rest[..end];
+                let path = target.split('#').next().unwrap_or("");
+                if !path.is_empty()
+                    && !target.contains("://")
+                    && !target.contains(char::is_whitespace)
+                    && !repo().join(dir).join(path).exists()
+                {
+                    bad.push(format!("{page}:{}: {target}", n + 1));
+                }
+            }
+        }
+    }
+    assert!(bad.is_empty(), "links to nothing:\n{}", bad.join("\n"));
+}
