@@ -110,3 +110,6 @@ if [ -n "$fmpy_skip" ]; then
 else
   python3 ci/fmu_check.py "$d/controller.fmu" "$d/closed-loop.fmu" "$d/fig2/summary.json"
 fi
+
+echo "-- the guide's C and FMU blocks (docs/guide/python-c-fmi.md), and FMPy's where it is installed"
+EHSERVO_GUIDE_REQUIRE=ffi cargo test -q --workspace --test it -- guide::python_c_fmi

@@ -62,4 +62,6 @@ for want in "k = 50: corrupt-reply" "k = 120: no-reply" "k = 200: late-reply" "k
   fi
 done
 grep -q '"sessions": 2' "$d/faults/summary.json" || { echo "ci/pil.sh: no second session after the reset"; exit 1; }
+echo "-- the guide's PIL blocks (README, docs/guide/board.md), which need QEMU and the firmware"
+EHSERVO_GUIDE_REQUIRE=qemu cargo test -q --workspace --test it -- guide::readme guide::board
 echo "ci/pil.sh: passed"

@@ -73,6 +73,10 @@ cli="$root/target/release/ehservo"
 [ -x "$cli" ] || cli="$root/target/debug/ehservo"
 [ -x "$cli" ] || { cargo build -q -p ehservo && cli="$root/target/debug/ehservo"; }
 
+echo "== the guide's Python blocks, with the package installed (docs/guide/README.md)"
+EHSERVO_GUIDE_PYTHON="$vpy" EHSERVO_GUIDE_REQUIRE=python \
+  cargo test -q --workspace --test it -- guide::readme guide::python_c_fmi guide::troubleshooting
+
 echo "== pytest (bindings/python/tests)"
 cd bindings/python
 EHSERVO_CLI="$cli" "$vpy" -m pytest -q -p no:cacheprovider tests

@@ -1,4 +1,4 @@
-//! The README's library example, compiled (and run) by `cargo test`: the
+//! The library example of docs/guide/board.md, compiled (and run) by `cargo test`: the
 //! NNBVSC of the paper at 10 kHz through the hardware loop, against a crude
 //! plant stand-in.
 

@@ -66,7 +66,12 @@ macro_rules! note {
 
 /// Simulate and control electrohydraulic servo systems (Hwang's NNBVSC).
 #[derive(Parser)]
-#[command(name = "ehservo", version, about, long_about = None)]
+#[command(
+    name = "ehservo",
+    version = concat!(env!("CARGO_PKG_VERSION"), " (commit ", env!("EHSERVO_COMMIT"), ")"),
+    about,
+    long_about = None
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -75,6 +80,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run one scenario: print a summary, write trace.csv, summary.json and trace.png.
+    #[command(
+        after_help = "Example:\n  ehservo run scenarios/paper/fig2.toml --set simulation.horizon=5 --no-plot --out out/fig2"
+    )]
     Run {
         /// The scenario file (TOML).
         scenario: PathBuf,
@@ -97,6 +105,9 @@ enum Command {
         float: String,
     },
     /// Processor-in-the-loop: the controller on a board (QEMU's Cortex-M4F or a serial port), the rest simulated here in lock-step; writes run's outputs and pil.csv.
+    #[command(
+        after_help = "Example:\n  ehservo pil scenarios/paper/fig2.toml --set simulation.step=0.001 --qemu   (after: cd examples/firmware-pil && cargo build --release)"
+    )]
     Pil {
         /// The scenario file (TOML).
         scenario: PathBuf,
@@ -144,6 +155,9 @@ enum Command {
         quiet: bool,
     },
     /// What the theory says about a scenario: poles, K1/K2 and Theorem 2's bound, Remark 6, the σ-loop and the integrator.
+    #[command(
+        after_help = "Example:\n  ehservo analyze scenarios/paper/fig2.toml --set controller.gamma1=200"
+    )]
     Analyze {
         /// The scenario file (TOML).
         scenario: PathBuf,
@@ -158,6 +172,9 @@ enum Command {
         run: bool,
     },
     /// Parse and validate a scenario and print it with every default filled in.
+    #[command(
+        after_help = "Example:\n  ehservo check scenarios/examples/step.toml --set reference.amplitude_deg=2"
+    )]
     Check {
         /// The scenario file (TOML).
         scenario: PathBuf,
@@ -166,6 +183,7 @@ enum Command {
         set: Vec<String>,
     },
     /// Re-run the paper's Section IV: every case, every claim scored, figures and a report.
+    #[command(after_help = "Example:\n  ehservo reproduce --out out/reproduce")]
     Reproduce {
         /// Output directory.
         #[arg(long, default_value = "out/reproduce")]
@@ -178,6 +196,9 @@ enum Command {
         quiet: bool,
     },
     /// Run a study (grid sweep and/or Monte Carlo) in parallel: results.csv, study.json, plots.
+    #[command(
+        after_help = "Example:\n  ehservo sweep scenarios/studies/gamma1-eta.toml --out out/gamma1-eta --shard 0/4"
+    )]
     Sweep {
         /// The study file (TOML).
         study: PathBuf,
@@ -203,6 +224,9 @@ enum Command {
         resume: bool,
     },
     /// Tune a controller's parameters over a set of scenarios by particle swarm: tuned.toml, convergence.csv/png, tune.json.
+    #[command(
+        after_help = "Example:\n  ehservo tune scenarios/league/tune-pid-fig2.toml --out out/tune-pid"
+    )]
     Tune {
         /// The tune file (TOML).
         file: PathBuf,
@@ -220,6 +244,9 @@ enum Command {
         no_plot: bool,
     },
     /// Run a league: every controller of a suite (tuned with the same budget, or with given parameters) on every scenario: league.md/html/csv, runs.csv, figures.
+    #[command(
+        after_help = "Example:\n  ehservo league scenarios/league/suite.toml --out out/league"
+    )]
     League {
         /// The suite file (TOML).
         file: PathBuf,
@@ -237,6 +264,9 @@ enum Command {
         no_plot: bool,
     },
     /// Join the outputs of sharded sweeps into one results.csv.
+    #[command(
+        after_help = "Example:\n  ehservo merge shards/* --out merged     (ehservo merge --missing shards/*: the shards to rerun)"
+    )]
     Merge {
         /// Shard output directories.
         #[arg(required = true)]
@@ -251,6 +281,7 @@ enum Command {
         missing: bool,
     },
     /// Print the default scenario (the paper's Fig. 2 case) as TOML.
+    #[command(after_help = "Example:\n  ehservo defaults > my-case.toml")]
     Defaults,
     /// Print the JSON Schema of a file format (or, with --markdown, its reference page, docs/reference/).
     ///
@@ -264,10 +295,19 @@ enum Command {
         markdown: bool,
     },
     /// Design an identification experiment: excitation.csv for a rig and scenario.toml that simulates it (docs/identification.md).
+    #[command(
+        after_help = "Example:\n  ehservo excite --signal multisine --duration 20 --out out/experiment"
+    )]
     Excite(ExciteArgs),
     /// Identify a servo from logged (t, u, y) data: frequency response, linear and grey-box fits, identified.toml (docs/identification.md).
+    #[command(
+        after_help = "Example:\n  ehservo identify out/run/trace.csv --pressure none --out out/identified   (out/run: ehservo run out/experiment/scenario.toml --out out/run)"
+    )]
     Identify(Box<IdentifyArgs>),
     /// Linearise the loop at an operating point: plant, actuator, delays and a linear controller as state-space models, with poles, zeros, DC gain and damping (JSON; docs/frequency.md).
+    #[command(
+        after_help = "Example:\n  ehservo linearize scenarios/frequency/pid-nominal.toml --trim"
+    )]
     Linearize {
         /// The scenario file (TOML).
         scenario: PathBuf,
@@ -291,6 +331,9 @@ enum Command {
         set: Vec<String>,
     },
     /// Frequency responses of the loop (G, C, L, S, T, θ/θd, θ/d) with margins, computed and measured on the simulator: freq.json, CSVs, Bode and Nyquist plots (docs/frequency.md).
+    #[command(
+        after_help = "Example:\n  ehservo freq scenarios/frequency/pid-nominal.toml --out out/freq"
+    )]
     Freq {
         /// The scenario file (TOML).
         scenario: PathBuf,
@@ -359,6 +402,9 @@ enum Command {
         set: Vec<String>,
     },
     /// Export the scenario's controller (or, with --closed-loop, its whole loop) as an FMI 3.0 co-simulation FMU.
+    #[command(
+        after_help = "Example:\n  ehservo fmu scenarios/paper/fig2.toml --closed-loop --out fig2-loop.fmu"
+    )]
     Fmu {
         /// The scenario file (TOML).
         scenario: PathBuf,
@@ -1387,4 +1433,33 @@ fn print_summary(
         secs * 1e3
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::CommandFactory;
+
+    /// Every subcommand's help ends with an example of it (the `ehservo`
+    /// line a newcomer can copy).
+    #[test]
+    fn every_subcommand_has_an_example() {
+        let mut cli = Cli::command();
+        cli.build();
+        let mut n = 0;
+        for sub in cli.get_subcommands_mut() {
+            let name = sub.get_name().to_string();
+            if name == "help" {
+                continue;
+            }
+            let help = sub.render_long_help().to_string();
+            let example = help.split_once("Example:").map(|(_, e)| e.trim_start());
+            assert!(
+                example.is_some_and(|e| e.starts_with(&format!("ehservo {name} "))),
+                "`ehservo {name} --help` has no example of itself:\n{help}"
+            );
+            n += 1;
+        }
+        assert!(n >= 15, "only {n} subcommands");
+    }
 }

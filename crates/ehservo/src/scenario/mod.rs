@@ -9,7 +9,7 @@
 //! and any key can be set in the file or overridden on the command line with
 //! `--set key.path=value`. Unknown keys, wrong types and non-physical values
 //! are rejected with a [`ScenarioError`] naming the file, the key (with line
-//! and column when TOML gives them) and the reason. See the README for the
+//! and column when TOML gives them) and the reason. See docs/guide/scenarios.md for the
 //! full list of keys; [`Scenario::default`] is the paper's Fig. 2 case.
 
 mod build;
@@ -177,6 +177,9 @@ impl Scenario {
             )
         })?;
         let scenario: Scenario = serde_path_to_error::deserialize(de).map_err(|e| {
+            if let Some(other) = other_format(text, file) {
+                return err(String::new(), None, other);
+            }
             let key = clean_path(&e.path().to_string());
             let inner = e.into_inner();
             if key == "controller" {
@@ -495,6 +498,59 @@ fn plant_table_error(table: toml::Table, file: &str, text: Option<&str>) -> Scen
         line_col,
         reason,
     }
+}
+
+/// What a TOML file that does not read as a scenario is instead, from its
+/// top-level keys (which a scenario never has), and the command that takes
+/// it: the reason `ehservo run` gives for a study, tune, league file or the
+/// reproduction's manifest, instead of "unknown field `axis`".
+pub fn other_format(text: &str, file: &str) -> Option<String> {
+    let t: toml::Table = toml::from_str(text).ok()?;
+    let has = |k: &str| t.contains_key(k);
+    let (what, key, command) =
+        if let Some(k) = ["axis", "monte_carlo", "base"].into_iter().find(|k| has(k)) {
+            ("a study", k, "ehservo sweep FILE --out DIR")
+        } else if let Some(k) = ["tuning", "margin", "scenario"]
+            .into_iter()
+            .find(|k| has(k))
+            .or_else(|| {
+                t.get("controller")
+                    .filter(|c| c.is_array())
+                    .map(|_| "controller")
+            })
+        {
+            ("a league suite", k, "ehservo league FILE --out DIR")
+        } else if let Some(k) = ["scenarios", "budget", "particles", "penalty", "param"]
+            .into_iter()
+            .find(|k| has(k))
+            .or_else(|| {
+                t.get("controller")
+                    .filter(|c| c.is_str())
+                    .map(|_| "controller")
+            })
+        {
+            ("a tune file", k, "ehservo tune FILE --out DIR")
+        } else if let Some(k) = ["reading", "case", "claim", "convergence"]
+            .into_iter()
+            .find(|k| has(k))
+        {
+            (
+                "the reproduction's manifest",
+                k,
+                "ehservo reproduce --paper-dir ITS-FOLDER",
+            )
+        } else {
+            return None;
+        };
+    let shown = match t.get(key) {
+        Some(toml::Value::Array(a)) if a.iter().all(toml::Value::is_table) => format!("[[{key}]]"),
+        Some(toml::Value::Table(_)) => format!("[{key}]"),
+        _ => format!("`{key}`"),
+    };
+    Some(format!(
+        "this is {what} (it has {shown}), not a scenario: run it with `{}`",
+        command.replace("FILE", file)
+    ))
 }
 
 fn plant_error(text: &str, file: &str) -> ScenarioError {

@@ -257,3 +257,83 @@ fn reference_examples_run_end_to_end() {
         }
     }
 }
+
+/// `ehservo run` (and `check`) of a file that is not a scenario names what
+/// it is and the command that takes it, exit 2, nothing written.
+#[test]
+fn run_of_a_study_tune_league_or_manifest_names_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "scenarios/realistic/delay.toml",
+            "this is a study (it has [[axis]]), not a scenario: run it with `ehservo sweep",
+        ),
+        (
+            "scenarios/league/tune-pid-fig2.toml",
+            "this is a tune file (it has `scenarios`), not a scenario: run it with `ehservo tune",
+        ),
+        (
+            "scenarios/league/suite.toml",
+            "this is a league suite (it has [tuning]), not a scenario: run it with `ehservo league",
+        ),
+        (
+            "scenarios/paper/manifest.toml",
+            "this is the reproduction's manifest (it has [[reading]]), not a scenario: run it with `ehservo reproduce",
+        ),
+    ];
+    for (file, expect) in cases {
+        let out = tmp.path().join("o");
+        let run = ehservo()
+            .current_dir(repo())
+            .args(["run", file, "--no-plot", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        crate::common::rejected_naming(file, &run, expect);
+        assert!(!out.exists(), "{file}: nothing written");
+        let check = ehservo()
+            .current_dir(repo())
+            .args(["check", file])
+            .output()
+            .unwrap();
+        crate::common::rejected_naming(file, &check, expect);
+    }
+    // A study whose only study key is `base` is one too; a scenario with a
+    // misspelt key still gets serde's message.
+    let base = write(tmp.path(), "b.toml", "base = \"x.toml\"\n");
+    let o = ehservo().arg("check").arg(&base).output().unwrap();
+    crate::common::rejected(
+        &base.display().to_string(),
+        &o,
+        "this is a study (it has `base`)",
+    );
+    let typo = write(tmp.path(), "t.toml", "[controller]\ngama1 = 1\n");
+    let o = ehservo().arg("check").arg(&typo).output().unwrap();
+    crate::common::rejected("t.toml", &o, "unknown field `gama1`");
+}
+
+/// `ehservo --version` names the package's version and the commit built.
+#[test]
+fn version_names_the_commit() {
+    let o = ehservo().arg("--version").output().unwrap();
+    assert!(o.status.success());
+    let v = String::from_utf8(o.stdout).unwrap();
+    let want = format!("ehservo {} (commit ", env!("CARGO_PKG_VERSION"));
+    assert!(v.starts_with(&want), "{v}");
+    let commit = v[want.len()..].trim_end().strip_suffix(')').unwrap_or("");
+    // A git checkout's short hash, or "unknown" outside one.
+    let is_hash = commit.len() >= 7 && commit.chars().all(|c| c.is_ascii_hexdigit());
+    assert!(is_hash || commit == "unknown", "{v}");
+    if repo().join(".git").exists() {
+        let head = std::process::Command::new("git")
+            .args(["rev-parse", "HEAD"])
+            .current_dir(repo())
+            .output();
+        if let Ok(h) = head {
+            if h.status.success() {
+                let full = String::from_utf8(h.stdout).unwrap();
+                assert!(full.starts_with(commit), "{commit} is not HEAD {full}");
+            }
+        }
+    }
+}

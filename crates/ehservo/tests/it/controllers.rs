@@ -116,7 +116,8 @@ fn studies_switch_kind() {
     assert_eq!(e.key, "controller.eta");
 }
 
-/// The README's second library example, as written there.
+/// The library example of docs/guide/board.md, as written there (the guide's
+/// test checks that the page shows these lines).
 #[test]
 fn readme_simulation_snippet() -> Result<(), Box<dyn std::error::Error>> {
     let setup = ehservo::scenario::Scenario::parse("[controller]\nkind = \"pid\"\n")?.setup()?;

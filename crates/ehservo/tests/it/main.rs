@@ -16,6 +16,7 @@ mod controllers;
 mod faults;
 mod freq;
 mod golden;
+mod guide;
 mod hopsan;
 mod identify;
 mod independent;
