@@ -80,6 +80,14 @@ impl Axis {
         }
     }
 
+    /// The display unit as a table's heading gives it: `°` or `mm`.
+    pub fn symbol_unit(self) -> &'static str {
+        match self {
+            Axis::Rotary => "°",
+            Axis::Linear => "mm",
+        }
+    }
+
     /// The display unit in an axis label: `deg` or `mm`.
     pub fn label_unit(self) -> &'static str {
         self.unit()

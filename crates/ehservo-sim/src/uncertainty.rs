@@ -165,7 +165,7 @@ impl PhysicalSpec {
 }
 
 /// The multipliers of one hold interval's physical variation.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Factors {
     /// Mass or inertia.
     pub mass: f64,

@@ -128,7 +128,6 @@ pub struct OperatingPoint {
     pub db_rel: f64,
     /// The physical factors there (mass, bulk modulus, leakage, supply
     /// pressure, friction, load; all 1 without `[uncertainty.physical]`).
-    #[serde(serialize_with = "factors")]
     pub factors: Factors,
     /// ẋ of the plant's states at the point (zero at a trim point, up to the
     /// tolerance).
@@ -153,18 +152,6 @@ impl OperatingPoint {
         x.extend_from_slice(&self.actuator_state);
         x
     }
-}
-
-fn factors<S: serde::Serializer>(f: &Factors, s: S) -> Result<S::Ok, S::Error> {
-    use serde::ser::SerializeMap;
-    let mut m = s.serialize_map(Some(6))?;
-    m.serialize_entry("mass", &f.mass)?;
-    m.serialize_entry("bulk_modulus", &f.bulk_modulus)?;
-    m.serialize_entry("leakage", &f.leakage)?;
-    m.serialize_entry("supply_pressure", &f.supply_pressure)?;
-    m.serialize_entry("friction", &f.friction)?;
-    m.serialize_entry("load", &f.load)?;
-    m.end()
 }
 
 /// The scenario's variation for the draw `r`: the paper's part on the
@@ -447,7 +434,7 @@ impl Visit for RunTo<'_> {
         let ctrl = cfg
             .build(&s.design)
             .expect("Setup::new built this controller once already");
-        s.plant.visit(Record_ {
+        s.plant.visit(RecordOn {
             ctrl,
             setup: s,
             k: self.k,
@@ -456,14 +443,13 @@ impl Visit for RunTo<'_> {
 }
 
 /// The second half of [`RunTo`]: the scenario's own plant, typed.
-#[allow(non_camel_case_types)]
-struct Record_<'a, C> {
+struct RecordOn<'a, C> {
     ctrl: C,
     setup: &'a Setup,
     k: u64,
 }
 
-impl<C: ehservo_core::control::Controller> PlantVisit for Record_<'_, C> {
+impl<C: ehservo_core::control::Controller> PlantVisit for RecordOn<'_, C> {
     type Out = Result<Recorded, (String, String)>;
     fn visit<P: Plant + Clone + std::fmt::Debug + Send + Sync + 'static>(
         self,

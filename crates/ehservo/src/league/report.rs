@@ -42,10 +42,7 @@ pub struct Row {
 
 /// The errors' unit as the tables print it: ° or mm.
 fn sym(l: &League) -> &'static str {
-    match l.axis {
-        crate::axis::Axis::Rotary => "°",
-        crate::axis::Axis::Linear => "mm",
-    }
+    l.axis.symbol_unit()
 }
 
 fn mean(v: &[f64]) -> Option<f64> {
