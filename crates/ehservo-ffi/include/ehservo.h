@@ -219,10 +219,14 @@ EhservoStatus ehservo_sim_step(EhservoSim *sim,
                                EhservoSample *out);
 
 /*
- A metric of the samples so far, as `summary.json` names it
- (`e_max_deg`, `e_rms_deg`, `e_final_deg`, `u_max`, `u_rms`, `samples`, …),
- computed as `ehservo run` computes it at the end of its run. A metric
- not defined yet writes NaN and returns `EHSERVO_STATUS_UNAVAILABLE`.
+ A metric of the samples so far, as `summary.json` names it on the
+ scenario's axis (rotary: `e_max_deg`, `e_rms_deg`, `e_final_deg`; linear:
+ `e_max`, `e_rms`, `e_final` in mm, also spelled `e_max_mm` …; any axis:
+ `u_max`, `u_rms`, `samples`, …), computed as `ehservo run` computes it at
+ the end of its run. The bare `e_max`, `e_rms` and `e_final` are accepted
+ on a rotary axis too (in degrees): [`ehservo_sim_axis_unit`] names the
+ unit. A metric not defined yet writes NaN and returns
+ `EHSERVO_STATUS_UNAVAILABLE`.
 
  # Safety
  `sim` is null or a live handle; `name` null or NUL-terminated; `out`
@@ -233,14 +237,37 @@ EhservoStatus ehservo_sim_metric(const EhservoSim *sim,
                                  double *out);
 
 /*
+ `ehservo_sim_metric(sim, "e_max", out)`: max |e| over t ≥
+ `simulation.settle`, in the axis's unit (degrees on a rotary axis,
+ millimetres on a linear one: [`ehservo_sim_axis_unit`]).
+
+ # Safety
+ As [`ehservo_sim_metric`].
+ */
+EhservoStatus ehservo_sim_e_max(const EhservoSim *sim,
+                                double *out);
+
+/*
  `ehservo_sim_metric(sim, "e_max_deg", out)`: max |e| over t ≥
- `simulation.settle` (degrees).
+ `simulation.settle` (degrees), on a rotary axis; on a linear one it
+ returns `EHSERVO_STATUS_INVALID_ARGUMENT` (use [`ehservo_sim_e_max`]).
 
  # Safety
  As [`ehservo_sim_metric`].
  */
 EhservoStatus ehservo_sim_e_max_deg(const EhservoSim *sim,
                                     double *out);
+
+/*
+ The display unit of the scenario's axis, as a static NUL-terminated
+ string: `"deg"` (rotary) or `"mm"` (linear); null for a null handle.
+ Positions and errors in the C ABI's samples are SI (rad or m); the
+ metrics are in this unit.
+
+ # Safety
+ `sim` is null or a live handle.
+ */
+const char *ehservo_sim_axis_unit(const EhservoSim *sim);
 
 /*
  The loop's sample period h (s) and number of steps N (the horizon is
