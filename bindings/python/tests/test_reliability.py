@@ -6,6 +6,7 @@ tune and league are there, refusing bad input as ScenarioError; the flags
 are named."""
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -218,11 +219,23 @@ def test_tune_refuses_bad_and_unbounded_work_as_scenario_error(repo, tmp_path):
 
 
 def test_flags_are_named_by_the_law_s_constants(repo, monkeypatch):
-    """FLAGS is the law's constants (docs/flags.md); a command clamped to a
-    1 V valve range raises SATURATED (bit 4, value 16)."""
+    """FLAGS is the law's constants, as docs/flags.md's table names them
+    (name, value); a command clamped to a 1 V valve range raises SATURATED
+    (bit 4, value 16)."""
     monkeypatch.chdir(repo)
+    table = {
+        m.group(1): int(m.group(2))
+        for m in re.finditer(
+            r"^\| `EHSERVO_FLAG_(\w+)` \| `(\d+)` \|",
+            (repo / "docs" / "flags.md").read_text(),
+            re.MULTILINE,
+        )
+    }
+    assert table, "docs/flags.md has no flag table"
+    assert ehservo.FLAGS == table
     assert ehservo.FLAGS["SATURATED"] == 16
-    assert sorted(ehservo.FLAGS.values()) == [1, 2, 4, 8, 16, 32]
+    # one bit each, none shared
+    assert sorted(ehservo.FLAGS.values()) == [1 << i for i in range(len(table))]
     c = ehservo.Controller(FIG2, actuator__limit=1.0)
     out = c.step(0.0, [0.5, 0.0, 0.0])  # a 0.5 rad error: far beyond 1 V
     assert abs(out["u"]) == 1.0
