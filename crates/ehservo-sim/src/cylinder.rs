@@ -613,14 +613,16 @@ impl Cylinder {
         }
     }
 
-    /// The load force on the rod (N, opposing extension): spring, gravity,
-    /// F(t), scaled by the load factor; and its rate.
+    /// The load force on the rod (N, opposing extension): the spring and
+    /// F(t) scaled by the load factor, and the weight M·g·sin α scaled by
+    /// the mass factor (a heavier load weighs more as it is harder to
+    /// accelerate: one mass, one factor); and its rate.
     #[inline]
     fn load_force(&self, t: f64, y: f64, v: f64, f: &Factors) -> (f64, f64) {
         let (fe, fe_rate) = self.force.at(t);
         let spring = self.spring * (y - self.spring_origin);
         (
-            f.load * (spring + self.gravity_force + fe),
+            f.load * (spring + fe) + f.mass * self.gravity_force,
             f.load * (self.spring * v + fe_rate),
         )
     }

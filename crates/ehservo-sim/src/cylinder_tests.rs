@@ -101,6 +101,117 @@ fn steady_flow_balance() {
     }
 }
 
+/// Each physical factor scales its own parameter and nothing else, each
+/// against the closed form of the one term it enters (a state at rest, or
+/// moving, with the valve closed or open):
+/// - mass f_m on a vertical axis with the chambers holding the nominal
+///   weight: ÿ = (M·g − f_m·M·g)/(f_m·M) = g·(1 − f_m)/f_m (the weight is
+///   the mass's);
+/// - bulk modulus f_β: ṗ_A = f_β·βe/V_A·(−A_A·ẏ) with the valve closed;
+/// - leakage f_l: ṗ_A = −βe/V_A·f_l·C_l·(p_A − p_B) at rest, valve closed;
+/// - supply pressure f_s: Q_A = k·x·√(f_s·Ps − p_A) through the open P→A
+///   edge (turbulent), so ṗ_A at rest is in the ratio √((f_s·Ps − p_A)/(Ps − p_A));
+/// - friction f_f: a viscous B_p·ẏ becomes f_f·B_p·ẏ;
+/// - load f_L: a spring K·(y − y_K) becomes f_L·K·(y − y_K).
+#[test]
+fn each_physical_factor_scales_its_parameter() {
+    let var = |f: Factors| CylinderVariation { f };
+    let g = STANDARD_GRAVITY;
+    let mut cfg = single_rod();
+    cfg.load.incline_deg = 90.0;
+    cfg.cylinder.leakage = 1e-12;
+    cfg.cylinder.viscous = 2e3;
+    cfg.load.spring = 1e5;
+    cfg.load.spring_origin = 0.1;
+    let p = build(&cfg);
+    let c = p.cylinder().clone();
+    let [aa, ab] = c.area;
+    let (m, y) = (250.0, 0.1);
+    let [va, _] = c.volumes(y);
+    // Mass: at rest at the spring's origin, p_B = 5 MPa, p_A holding M·g.
+    let pb = 5e6;
+    let pa = (m * g + ab * pb) / aa;
+    let rest = [y, 0.0, pa, pb, 2e7, 0.0];
+    let mut ds = [0.0; 6];
+    p.deriv(0.0, &rest, 0.0, &ONE, &mut ds);
+    // Nominal: the leakage term alone moves p_A (checked below); no force.
+    assert!(ds[1].abs() <= 1e-9 * g, "nominal ÿ = {}", ds[1]);
+    for fm in [0.8, 1.25] {
+        let f = Factors {
+            mass: fm,
+            ..Factors::ONE
+        };
+        p.deriv(0.0, &rest, 0.0, &var(f), &mut ds);
+        let want = g * (1.0 - fm) / fm;
+        assert!(close(ds[1], want, 1e-9), "mass {fm}: ÿ {} vs {want}", ds[1]);
+    }
+    // Leakage at rest, valve closed (critically centred: no flow at u = 0).
+    for fl in [1.0, 3.0] {
+        let f = Factors {
+            leakage: fl,
+            ..Factors::ONE
+        };
+        p.deriv(0.0, &rest, 0.0, &var(f), &mut ds);
+        let want = -1.4e9 / va * fl * 1e-12 * (pa - pb);
+        assert!(
+            close(ds[2], want, 1e-12),
+            "leakage {fl}: ṗ_A {} vs {want}",
+            ds[2]
+        );
+    }
+    // Bulk modulus, moving at 0.1 m/s with equal pressures (no leakage flow).
+    let moving = [y, 0.1, pb, pb, 2e7, 0.0];
+    for fb in [0.7, 1.0] {
+        let f = Factors {
+            bulk_modulus: fb,
+            ..Factors::ONE
+        };
+        p.deriv(0.0, &moving, 0.0, &var(f), &mut ds);
+        let want = -fb * 1.4e9 / va * aa * 0.1;
+        assert!(
+            close(ds[2], want, 1e-12),
+            "βe {fb}: ṗ_A {} vs {want}",
+            ds[2]
+        );
+    }
+    // Friction and load: the force at the moving state, against its parts
+    // (A_A·p − A_B·p − f_f·B_p·ẏ − f_L·K·(y − y_K) − f_m·M·g; y = y_K).
+    let y1 = 0.3;
+    let moved = [y1, 0.1, pb, pb, 2e7, 0.0];
+    for (ff, fload) in [(1.0, 1.0), (1.5, 1.0), (1.0, 0.6)] {
+        let f = Factors {
+            friction: ff,
+            load: fload,
+            ..Factors::ONE
+        };
+        p.deriv(0.0, &moved, 0.0, &var(f), &mut ds);
+        let force = (aa - ab) * pb - ff * 2e3 * 0.1 - fload * 1e5 * (y1 - 0.1) - m * g;
+        assert!(
+            close(ds[1], force / m, 1e-12),
+            "friction {ff}, load {fload}: ÿ {} vs {}",
+            ds[1],
+            force / m
+        );
+    }
+    // Supply pressure: valve open (u > 0: P→A), at rest, p_A = p_B = 5 MPa.
+    let open = [y, 0.0, pb, pb, 2e7, 0.0];
+    let rate = |fs: f64| {
+        let mut d = [0.0; 6];
+        let f = Factors {
+            supply_pressure: fs,
+            ..Factors::ONE
+        };
+        p.deriv(0.0, &open, 1.0, &var(f), &mut d);
+        d[2]
+    };
+    let want = ((0.8 * 2e7 - pb) / (2e7 - pb)).sqrt();
+    assert!(
+        close(rate(0.8) / rate(1.0), want, 1e-9),
+        "supply ratio {} vs {want}",
+        rate(0.8) / rate(1.0)
+    );
+}
+
 /// H's rate along the vector field, by a central difference of H itself
 /// (independent of the power terms below).
 fn storage_rate(p: &CylinderPlant, s: &[f64; 6], ds: &[f64; 6]) -> f64 {

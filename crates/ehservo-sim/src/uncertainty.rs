@@ -66,7 +66,8 @@ impl Spread {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct PhysicalSpec {
-    /// The moving mass (a cylinder's load mass; the motor's inertia Jt).
+    /// The moving mass (a cylinder's load mass, its weight on an inclined
+    /// axis with it; the motor's inertia Jt).
     #[serde(skip_serializing_if = "Spread::is_none")]
     pub mass: Spread,
     /// The effective bulk modulus βe.
@@ -81,7 +82,8 @@ pub struct PhysicalSpec {
     /// Every friction force (Coulomb, stiction, viscous).
     #[serde(skip_serializing_if = "Spread::is_none")]
     pub friction: Spread,
-    /// The external load (its force or torque, gravity included).
+    /// The external load (its force or torque: a cylinder's spring and
+    /// force signal; the weight goes with the mass).
     #[serde(skip_serializing_if = "Spread::is_none")]
     pub load: Spread,
 }
