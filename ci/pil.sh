@@ -3,7 +3,8 @@
 # runs `ehservo pil --qemu` on the paper's Fig. 2 at 1 kHz for 10 s and
 # checks its trace.csv against `ehservo run --float f32` byte for byte,
 # then a fault case (a corrupted reply, a dropped frame, a late reply, a
-# board reset) whose faults must be named at their samples. Installs
+# board reset) whose faults must be named at their samples, then the QEMU
+# tests of tests/it/pil.rs, required (EHSERVO_PIL_REQUIRE). Installs
 # qemu-system-arm and the thumbv7em-none-eabihf target as .ci/run's
 # firmware step does; prints one SKIPPED line where they cannot be had.
 set -euo pipefail
@@ -62,6 +63,8 @@ for want in "k = 50: corrupt-reply" "k = 120: no-reply" "k = 200: late-reply" "k
   fi
 done
 grep -q '"sessions": 2' "$d/faults/summary.json" || { echo "ci/pil.sh: no second session after the reset"; exit 1; }
+echo "-- the QEMU tests of tests/it/pil.rs (skipped by cargo test before the firmware was built): Fig. 2 and the realistic case with the cycle budget, a PID in f64, the ADRC and STA, faults from a TCP proxy"
+EHSERVO_PIL_REQUIRE=1 cargo test -q --workspace --test it -- pil::
 echo "-- the guide's PIL blocks (README, docs/guide/board.md), which need QEMU and the firmware"
 EHSERVO_GUIDE_REQUIRE=qemu cargo test -q --workspace --test it -- guide::readme guide::board
 echo "ci/pil.sh: passed"
