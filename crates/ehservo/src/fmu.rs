@@ -289,13 +289,6 @@ pub fn check_token(token_text: &str, scenario_toml: &str) -> Result<FmuKind, Str
     ))
 }
 
-fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
 /// The scenario as the FMU's `resources/scenario.toml`: every default
 /// filled in, the overrides applied. Refuses what the FMU could not
 /// rebuild from that file alone.
@@ -351,9 +344,9 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
     x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     x.push_str(&format!(
         "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"{}\" instantiationToken=\"{}\" description=\"{}\" generationTool=\"ehservo {}\" variableNamingConvention=\"flat\">\n",
-        xml_escape(&format!("ehservo-{}-{}", s.name, kind.as_str())),
+        crate::output::escape::html(&format!("ehservo-{}-{}", s.name, kind.as_str())),
         token(kind, scenario_toml),
-        xml_escape(&what),
+        crate::output::escape::html(&what),
         env!("CARGO_PKG_VERSION"),
     ));
     x.push_str(&format!(
@@ -399,7 +392,7 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
             "    <Float64 name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\" unit=\"{}\"{rest}/>\n",
             v.name,
             v.vr,
-            xml_escape(v.description),
+            crate::output::escape::html(v.description),
             v.unit
         ));
     }

@@ -13,6 +13,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 mod decimal;
+pub mod escape;
 mod figure;
 mod staging;
 pub use figure::{
