@@ -12,10 +12,13 @@
 //! | [`reference`] | the desired trajectory and its first three derivatives `z` | A3, §IV |
 //! | [`surface`] | the switching surface `σ`, the error vector `E`, design from poles | (10), (15)–(16) |
 //! | [`rbf`] | the modified radial-basis vector `Φ(x, z)` (130 entries) | (20) |
-//! | [`control`] | the [`Controller`](control::Controller) trait, the traditional VSC and the NNBVSC | (11)–(14), (23)–(34) |
+//! | [`control`] | the [`Controller`](control::Controller) trait and every law, each a kind with its [`Config`](control::Config): the paper's traditional VSC (`vsc`, `vsc-sat`) and NNBVSC (`nnvsc`), the NNBVSC with a classical robust weight law (`nn-robust`), and the baselines PID (`pid`), super-twisting (`sta`), ADRC (`adrc`), adaptive robust control (`arc`), adaptive backstepping (`backstepping`) and the open loop of an identification experiment (`open-loop`) | (11)–(14), (23)–(34) |
 //! | [`rk4`] | one fixed-step classic Runge–Kutta step over any fixed-size state | §IV |
 //! | [`estimate`] | estimators of `(θ, θ̇, θ̈)` from θ: Levant's differentiator, a linear observer | — |
 //! | [`sampled`] | a fixed-rate loop for hardware: law + forward-Euler controller state | — |
+//! | [`onboard`] | a closed loop that fits on a board: the plant (8) with a constant uncertainty, RK4 in the core's float type, around a sampled controller (the firmware's loop and its host check) | (8) |
+//! | [`math`] | [`Real`](math::Real), the float type the core computes in (`f64` or `f32`), and the small scalar helpers the laws share | — |
+//! | [`error`] | [`ParamError`](error::ParamError), the core's one error: a parameter rejected at construction | — |
 //!
 //! Nothing here allocates or touches `std`; `exp` and `sqrt` come from
 //! `libm`. Parameters are validated once, at construction (`try_new`), with a

@@ -11,10 +11,12 @@
 //! | [`axis`] | rotary (rad, shown in degrees) or linear (m, shown in mm) |
 //! | [`cylinder`] | a valve-controlled single- or double-rod cylinder: a linear axis, its load and end stops |
 //! | [`valve`], [`supply`], [`force`] | the cylinder's 4/3 valve, its pump or fixed supply, an external force signal |
-//! | [`actuator`] | the valve between controller and plant: saturation, rate limit, first-order lag |
-//! | [`sensor`] | what the controller measures: bias and quantisation |
+//! | [`actuator`] | the servo valve between controller and plant: saturation, rate limit, first- or second-order spool dynamics (time constant or bandwidth), dead band, null bias |
+//! | [`sensor`] | what the controller measures, and when: which channels, bias, quantisation, seeded noise, a delay |
+//! | [`estimator`] | the channels the sensors do not measure, estimated at the controller's rate by one of the core's [`estimate`](ehservo_core::estimate) components (Levant's differentiator, a Luenberger or steady-state Kalman observer) |
 //! | [`simulation`] | the resumable loop, continuous and sampled, with its stop reasons |
 //! | [`metrics`] | SPEC §9 metrics, computed online |
+//! | [`triple`] | serde for the scenarios' `[f64; 3]` keys, naming the length a key takes |
 //!
 //! Controllers come from [`ehservo_core`]: any [`Controller`](ehservo_core::control::Controller)
 //! runs here, its parts logged as named signals.

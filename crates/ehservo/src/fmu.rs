@@ -257,20 +257,15 @@ pub fn variables(kind: FmuKind) -> &'static [Variable] {
     }
 }
 
-/// FNV-1a, 64 bits: a fingerprint of the scenario file in the token (not
-/// a security measure: it catches resources swapped by mistake).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    })
-}
-
-/// The instantiation token of an FMU of `kind` built from `scenario_toml`.
+/// The instantiation token of an FMU of `kind` built from `scenario_toml`:
+/// the kind and the scenario file's FNV-1a fingerprint
+/// ([`ehservo_wire::fnv1a`], 64 bits; not a security measure: it catches
+/// resources swapped by mistake).
 pub fn token(kind: FmuKind, scenario_toml: &str) -> String {
     format!(
         "{{ehservo-{}-{:016x}}}",
         kind.as_str(),
-        fnv1a(scenario_toml.as_bytes())
+        ehservo_wire::fnv1a(scenario_toml.as_bytes())
     )
 }
 
@@ -287,13 +282,6 @@ pub fn check_token(token_text: &str, scenario_toml: &str) -> Result<FmuKind, Str
         token(FmuKind::Controller, scenario_toml),
         token(FmuKind::ClosedLoop, scenario_toml)
     ))
-}
-
-fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// The scenario as the FMU's `resources/scenario.toml`: every default
@@ -351,9 +339,9 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
     x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     x.push_str(&format!(
         "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"{}\" instantiationToken=\"{}\" description=\"{}\" generationTool=\"ehservo {}\" variableNamingConvention=\"flat\">\n",
-        xml_escape(&format!("ehservo-{}-{}", s.name, kind.as_str())),
+        crate::output::escape::html(&format!("ehservo-{}-{}", s.name, kind.as_str())),
         token(kind, scenario_toml),
-        xml_escape(&what),
+        crate::output::escape::html(&what),
         env!("CARGO_PKG_VERSION"),
     ));
     x.push_str(&format!(
@@ -399,7 +387,7 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
             "    <Float64 name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\" unit=\"{}\"{rest}/>\n",
             v.name,
             v.vr,
-            xml_escape(v.description),
+            crate::output::escape::html(v.description),
             v.unit
         ));
     }
@@ -587,9 +575,6 @@ mod tests {
         assert!(check_token(&t, "name = \"b\"\n").is_err());
         let c = token(FmuKind::ClosedLoop, "x");
         assert_eq!(check_token(&c, "x"), Ok(FmuKind::ClosedLoop));
-        // FNV-1a's published test vectors.
-        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
     }
 
     #[test]

@@ -12,6 +12,7 @@
 //! with its type, unit (from its doc comment), default (the types'
 //! `Default`, serialised) and doc.
 
+use crate::output::escape::{md_cell, md_code};
 use crate::scenario::{ControllerCfg, PlantCfg, Scenario, DEFAULT_KIND, DEFAULT_MODEL};
 use schemars::generate::SchemaSettings;
 use schemars::{JsonSchema, Schema, SchemaGenerator};
@@ -459,7 +460,7 @@ impl Page<'_> {
                 } else {
                     r.get("default")
                         .or_else(|| own.get(&key))
-                        .map_or("—".into(), |d| code(&toml_text(d)))
+                        .map_or("—".into(), |d| md_code(&toml_text(d)))
                 };
                 let _ = writeln!(
                     self.out,
@@ -525,12 +526,12 @@ impl Page<'_> {
     fn type_text(&self, s: &Value) -> String {
         let s = self.resolve(s);
         if let Some(c) = s.get("const") {
-            return code(&toml_text(c));
+            return md_code(&toml_text(c));
         }
         if let Some(e) = s.get("enum").and_then(Value::as_array) {
             return e
                 .iter()
-                .map(|x| code(&toml_text(x)))
+                .map(|x| md_code(&toml_text(x)))
                 .collect::<Vec<_>>()
                 .join(" \\| ");
         }
@@ -622,14 +623,7 @@ fn description(s: &Value) -> Option<String> {
 
 /// A description as one table cell.
 fn cell(d: &str) -> String {
-    d.split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ")
-        .replace('|', "\\|")
-}
-
-fn code(s: &str) -> String {
-    format!("`{}`", s.replace('|', "\\|"))
+    md_cell(&d.split_whitespace().collect::<Vec<_>>().join(" "))
 }
 
 /// A JSON value as TOML writes it.

@@ -1,6 +1,7 @@
 //! The league's tables, figures and pages.
 
 use super::{League, LeagueResult};
+use crate::output::escape::{self, md_cell};
 use crate::plot::{Bars, Dash, Figure, Panel, Series};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -335,7 +336,7 @@ impl Table {
     fn markdown(&self) -> String {
         let mut s = String::from("|");
         for h in &self.head {
-            let _ = write!(s, " {h} |");
+            let _ = write!(s, " {} |", md_cell(h));
         }
         s.push_str("\n|");
         s.push_str(&"---|".repeat(self.head.len()));
@@ -343,7 +344,7 @@ impl Table {
         for row in &self.rows {
             s.push('|');
             for (c, _) in row {
-                let _ = write!(s, " {c} |");
+                let _ = write!(s, " {} |", md_cell(c));
             }
             s.push('\n');
         }
@@ -353,13 +354,13 @@ impl Table {
     fn html(&self) -> String {
         let mut s = String::from("<table><tr>");
         for h in &self.head {
-            let _ = write!(s, "<th>{}</th>", esc(h));
+            let _ = write!(s, "<th>{}</th>", escape::html(h));
         }
         s.push_str("</tr>\n");
         for row in &self.rows {
             s.push_str("<tr>");
             for (c, attr) in row {
-                let _ = write!(s, "<td{attr}>{}</td>", esc(c));
+                let _ = write!(s, "<td{attr}>{}</td>", escape::html(c));
             }
             s.push_str("</tr>\n");
         }
@@ -497,22 +498,15 @@ pub fn markdown(l: &League, r: &LeagueResult, rows: &[Row], figures: bool) -> St
     s
 }
 
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
 /// league.html: the same tables, and the figures inline (one file to send).
 pub fn html(l: &League, r: &LeagueResult, rows: &[Row], svgs: Option<(String, String)>) -> String {
     let mut s = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>League {}</title>\n<style>body{{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}}table{{border-collapse:collapse;margin:1em 0}}th,td{{border:1px solid #ccc;padding:4px 8px;text-align:right}}th{{background:#f0f0f0}}td:first-child,th:first-child{{text-align:left}}td.best{{font-weight:bold;background:#e8f4e8}}td.bad{{color:#b00}}svg{{max-width:100%;height:auto}}</style></head><body>\n<h1>League <code>{}</code></h1>\n",
-        esc(&l.file.name),
-        esc(&l.file.name)
+        escape::html(&l.file.name),
+        escape::html(&l.file.name)
     );
     if !l.file.description.is_empty() {
-        let _ = writeln!(s, "<p>{}</p>", esc(&l.file.description));
+        let _ = writeln!(s, "<p>{}</p>", escape::html(&l.file.description));
     }
     let _ = writeln!(
         s,
@@ -521,7 +515,7 @@ pub fn html(l: &League, r: &LeagueResult, rows: &[Row], svgs: Option<(String, St
         crate::output::SOFTWARE.version
     );
     for line in setup_lines(l) {
-        let _ = writeln!(s, "<li>{}</li>", esc(&line));
+        let _ = writeln!(s, "<li>{}</li>", escape::html(&line));
     }
     s.push_str(&format!("</ul>\n<h2>Standings</h2><p>Worst e_max after the transient ({}) on each scenario, over its draws; ordered by mean rank (1 = best; unbounded last). The best of each column is marked.</p>\n", sym(l)));
     s.push_str(&standings_table(l, r, rows).html());
@@ -536,7 +530,11 @@ pub fn html(l: &League, r: &LeagueResult, rows: &[Row], svgs: Option<(String, St
         );
     }
     for (si, c) in l.cases.iter().enumerate() {
-        let _ = write!(s, "<h2>Scenario <code>{}</code></h2>", esc(&c.name));
+        let _ = write!(
+            s,
+            "<h2>Scenario <code>{}</code></h2>",
+            escape::html(&c.name)
+        );
         s.push_str(&scenario_table(l, r, rows, si).html());
     }
     s.push_str("</body></html>\n");

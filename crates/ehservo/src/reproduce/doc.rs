@@ -1,6 +1,7 @@
 //! A small document model written out as Markdown and as self-contained
 //! HTML (figures embedded), so both reports say the same thing.
 
+use crate::output::escape::{html, html_text, md_cell};
 use base64::Engine;
 use std::fmt::Write;
 
@@ -26,19 +27,9 @@ pub struct Doc {
     pub blocks: Vec<Block>,
 }
 
-fn md_cell(s: &str) -> String {
-    s.replace('|', "\\|").replace('\n', " ")
-}
-
-fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
 /// `code` → <code>, **x** → <b>, after escaping.
 fn html_inline(s: &str) -> String {
-    let e = html_escape(s);
+    let e = html_text(s);
     let mut out = String::new();
     let mut code = false;
     for (i, part) in e.split('`').enumerate() {
@@ -133,7 +124,7 @@ table{{border-collapse:collapse;margin:1em 0;font-size:0.92em}}th,td{{border:1px
 th{{background:#f3f3f3}}td.agree{{background:#e6f4e6}}td.differ{{background:#fbe6e6}}td.undetermined,td.undecided{{background:#f5f0dc}}\
 figure{{margin:1.5em 0}}figure img{{max-width:100%;border:1px solid #ddd}}figcaption{{font-style:italic;color:#444}}\
 code{{background:#f4f4f4;padding:0 3px}}</style></head><body>\n",
-            html_escape(title)
+            html_text(title)
         );
         for b in &self.blocks {
             match b {
@@ -177,12 +168,12 @@ code{{background:#f4f4f4;padding:0 3px}}</style></head><body>\n",
                             "data:image/png;base64,{}",
                             base64::engine::general_purpose::STANDARD.encode(bytes)
                         ),
-                        Err(_) => html_escape(path),
+                        Err(_) => html(path),
                     };
                     let _ = writeln!(
                         s,
                         "<figure><img src=\"{src}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
-                        html_escape(caption),
+                        html(caption),
                         html_inline(caption)
                     );
                 }

@@ -11,7 +11,8 @@
 
 use super::breaking::Boundary;
 use super::manifest::Reading;
-use crate::plot::{Dash, Figure, Mark, Panel, Series};
+use crate::output::{a_variation, b_convention, b_size, clip_diverged, num, panel};
+use crate::plot::{Dash, Figure, Panel, Series};
 use crate::run::RunResult;
 use crate::scenario::Scenario;
 use crate::simulation::Sample;
@@ -21,67 +22,6 @@ use std::collections::BTreeMap;
 /// Longest series drawn; longer ones are reduced by min/max per bucket, which
 /// keeps every peak (an SVG with 60 000 points per line helps nobody).
 const MAX_POINTS: usize = 4000;
-
-/// β as a multiple of |b̄| (SPEC §2, the paper's reference size of the b
-/// variation).
-const BETA_OVER_B: f64 = 0.5;
-
-/// A number with at most three decimals and no trailing zeros.
-fn num(v: f64) -> String {
-    let s = format!("{v:.3}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".into()
-    } else {
-        s.into()
-    }
-}
-
-/// The size of the true b variation in the paper's terms, e.g. "Δb = β",
-/// "Δb = 0.5β ± 0.5β random".
-pub fn b_size(u: &UncertaintySpec) -> String {
-    let beta = |f: f64| {
-        let k = u.b_reference * f / BETA_OVER_B;
-        if (k - 1.0).abs() < 1e-12 {
-            "β".to_string()
-        } else {
-            format!("{}β", num(k))
-        }
-    };
-    let mut s = format!("Δb = {}", beta(u.b_bias));
-    if u.b_random != 0.0 {
-        s.push_str(&format!(" ± {} random", beta(u.b_random.abs())));
-    }
-    s
-}
-
-/// The convention behind [`b_size`], e.g. "b_reference = 1: b fractions
-/// of b̄".
-pub fn b_convention(u: &UncertaintySpec) -> String {
-    let of = if (u.b_reference - BETA_OVER_B).abs() < 1e-12 {
-        "β = 0.5·b̄".to_string()
-    } else if (u.b_reference - 1.0).abs() < 1e-12 {
-        "b̄".to_string()
-    } else {
-        format!("{}·b̄", num(u.b_reference))
-    };
-    format!("b_reference = {}: b fractions of {of}", num(u.b_reference))
-}
-
-/// [`b_size`] and [`b_convention`]: "Δb = β (b_reference = 1: b fractions
-/// of b̄)".
-pub fn b_variation(u: &UncertaintySpec) -> String {
-    format!("{} ({})", b_size(u), b_convention(u))
-}
-
-/// The a_i variation of a scenario, e.g. "100 % aᵢ bias".
-pub fn a_variation(u: &UncertaintySpec) -> String {
-    let mut s = format!("{} % aᵢ bias", num(100.0 * u.a_bias));
-    if u.a_random != 0.0 {
-        s.push_str(&format!(" + {} % random", num(100.0 * u.a_random)));
-    }
-    s
-}
 
 /// What the figures' runs were made under.
 pub struct FigureContext<'a> {
@@ -293,44 +233,6 @@ fn tail(trace: &[Sample], span: f64) -> &[Sample] {
 /// The samples with t ≤ `span`.
 fn head(trace: &[Sample], span: f64) -> &[Sample] {
     &trace[..trace.partition_point(|s| s.t <= span + 1e-9)]
-}
-
-fn panel(title: &str, y_label: &str, series: Vec<Series>) -> Panel {
-    Panel {
-        title: title.into(),
-        x_label: "t (s)".into(),
-        y_label: y_label.into(),
-        series,
-        ..Default::default()
-    }
-}
-
-/// For a run that diverged: a y range around the bounded part of the
-/// panel's lines (the 2–98 % quantiles of all their values, widened by half
-/// their spread) and a mark at the divergence. The lines are clipped to the
-/// range.
-pub(crate) fn clip_diverged(p: &mut Panel, r: &RunResult) {
-    let Some(d) = r.outcome.diverged else {
-        return;
-    };
-    let mut v: Vec<f64> = p
-        .series
-        .iter()
-        .flat_map(|s| s.y.iter().chain(s.lower.iter().flatten()))
-        .copied()
-        .filter(|x| x.is_finite())
-        .collect();
-    if v.len() >= 10 {
-        v.sort_by(f64::total_cmp);
-        let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
-        let (lo, hi) = (q(0.02), q(0.98));
-        let m = 0.5 * (hi - lo).max(1e-12);
-        p.y_range = Some((lo - m, hi + m));
-    }
-    p.marks.push(Mark {
-        x: d.t,
-        text: format!("unbounded at t = {:.2} s", d.t),
-    });
 }
 
 /// A panel of u(t) (V).
