@@ -1,12 +1,19 @@
 //! The cost of a cylinder sample against a sample of the paper's
 //! third-order plant (issue #35: at most 2×), side by side in one run: the
-//! same PID law, the same sample period (1 ms) and RK4 sub-steps (10), one
-//! second of the loop (1000 samples) with `run_setup` as a sweep runs it.
+//! same controller kind (`pid`; each scenario's own gains), the same sample
+//! period (1 ms) and RK4 sub-steps (10), one second of the loop (1000
+//! samples) with `run_setup` as a sweep runs it.
 //!
 //! - `third_order`: `scenarios/paper/fig2.toml`'s plant (8)–(9) under a PID;
 //! - `physical`: the same servo as the physical model (1)–(6);
 //! - `cylinder`: `scenarios/cylinders/chrono-single-rod.toml` (single rod,
-//!   4/3 valve with laminar regions, fixed supply, end stops, gravity).
+//!   4/3 valve with laminar regions, fixed supply, end stops, gravity; a
+//!   P law);
+//! - `hopsan_pump`: `scenarios/hopsan/position-servo.toml` (double rod,
+//!   overlapped valve with a second-order spool, a pump with its relief
+//!   valve and line volume: the stiffest state, which the plant's own step
+//!   splitting refines; a PI), its step moved to 0.2 s so that the second
+//!   holds it.
 //!
 //! ```text
 //! cargo bench -p ehservo --bench cylinder
@@ -57,6 +64,13 @@ fn bench_cylinder(c: &mut Criterion) {
         (
             "cylinder",
             scenario("scenarios/cylinders/chrono-single-rod.toml", &[]),
+        ),
+        (
+            "hopsan_pump",
+            scenario(
+                "scenarios/hopsan/position-servo.toml",
+                &["reference.start=0.2"],
+            ),
         ),
     ];
     let mut g = c.benchmark_group("per_1000_samples");
