@@ -483,3 +483,93 @@ fn threads_are_checked_and_reproduce_fails_fast_on_an_unwritable_folder() {
         );
     }
 }
+
+/// This round's long commands take SIGINT as `run` does: a sinestream of
+/// `ehservo freq` (400 frequencies, 60 s of settling each: minutes of
+/// work) and `ehservo identify` of a 30 s experiment (tens of seconds of
+/// fitting) stop promptly with exit 130, leaving no output and no staging
+/// folder.
+#[test]
+fn sigint_stops_freq_and_identify_and_leaves_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    // identify's data: 30 s of a multisine at 1 kHz on Fig. 2's servo.
+    let ex = tmp.path().join("ex");
+    let o = ehservo()
+        .args(["excite", "--duration", "30", "--out"])
+        .arg(&ex)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let data = tmp.path().join("data");
+    let o = ehservo()
+        .arg("run")
+        .arg(ex.join("scenario.toml"))
+        .args(["--no-plot", "-q", "--out"])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let work = tmp.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    let fig2 = fig2();
+    let trace = data.join("trace.csv");
+    let cases: [(&str, Vec<&std::ffi::OsStr>); 2] = [
+        (
+            "freq",
+            vec![
+                "freq".as_ref(),
+                fig2.as_os_str(),
+                "--measure-points".as_ref(),
+                "400".as_ref(),
+                "--settle".as_ref(),
+                "60".as_ref(),
+                "--out".as_ref(),
+                "o".as_ref(),
+            ],
+        ),
+        (
+            "identify",
+            vec![
+                "identify".as_ref(),
+                trace.as_os_str(),
+                "--pressure".as_ref(),
+                "none".as_ref(),
+                "--out".as_ref(),
+                "o".as_ref(),
+            ],
+        ),
+    ];
+    for (name, args) in cases {
+        let mut child = ehservo()
+            .args(args)
+            .current_dir(&work)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(1500));
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "{name} ended before the signal"
+        );
+        let k = Command::new("kill")
+            .arg("-INT")
+            .arg(child.id().to_string())
+            .status()
+            .unwrap();
+        assert!(k.success());
+        let sent = Instant::now();
+        let code = loop {
+            if let Some(s) = child.try_wait().unwrap() {
+                break s.code();
+            }
+            assert!(
+                sent.elapsed() < Duration::from_secs(10),
+                "{name} still running 10 s after SIGINT"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        assert_eq!(code, Some(130), "{name}");
+        assert!(names(&work).is_empty(), "{name} left {:?}", names(&work));
+    }
+}

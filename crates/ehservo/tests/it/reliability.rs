@@ -415,7 +415,8 @@ fn a_folder_changed_by_another_process_during_a_run_is_an_io_error() {
 }
 
 /// Under a file-size limit (`ulimit -f 1`: SIGXFSZ would kill the process
-/// mid-write) every command that writes fails as a full disk does: exit 1,
+/// mid-write) every command that writes, this round's freq, linearize,
+/// excite and identify among them, fails as a full disk does: exit 1,
 /// one line with "File too large", no output folder, nothing left beside it.
 #[test]
 fn a_file_size_limit_fails_every_writer_cleanly() {
@@ -447,7 +448,56 @@ fn a_file_size_limit_fails_every_writer_cleanly() {
     }));
     std::fs::write(&binary, bytes).unwrap();
     let fig2 = fig2();
+    // identify's data: a short open-loop experiment, run without a limit.
+    let ex = tmp.path().join("ex");
+    ok(&ehservo()
+        .args(["excite", "--duration", "4", "--period", "1000", "--out"])
+        .arg(&ex)
+        .output()
+        .unwrap());
+    let data = tmp.path().join("data");
+    ok(&ehservo()
+        .arg("run")
+        .arg(ex.join("scenario.toml"))
+        .args(["--no-plot", "-q", "--out"])
+        .arg(&data)
+        .output()
+        .unwrap());
+    let trace = data.join("trace.csv");
     let cases: Vec<(&str, Vec<&std::ffi::OsStr>)> = vec![
+        (
+            "freq",
+            vec![
+                "freq".as_ref(),
+                fig2.as_os_str(),
+                "--out".as_ref(),
+                "o".as_ref(),
+            ],
+        ),
+        (
+            "linearize",
+            vec![
+                "linearize".as_ref(),
+                fig2.as_os_str(),
+                "--out".as_ref(),
+                "o".as_ref(),
+            ],
+        ),
+        (
+            "excite",
+            vec!["excite".as_ref(), "--out".as_ref(), "o".as_ref()],
+        ),
+        (
+            "identify",
+            vec![
+                "identify".as_ref(),
+                trace.as_os_str(),
+                "--pressure".as_ref(),
+                "none".as_ref(),
+                "--out".as_ref(),
+                "o".as_ref(),
+            ],
+        ),
         (
             "run",
             vec![
