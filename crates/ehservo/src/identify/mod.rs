@@ -664,48 +664,90 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         v.extend(nuisance(&exps, unit));
         v
     };
-    let mut candidates = vec![("the prior scenario's coefficients", prior_lin)];
+    // Each start: its (a1, a2, a3, b) and, when it has them, u_offset and
+    // the θ0s.
+    type Start = (&'static str, [f64; 4], Option<(f64, Vec<f64>)>);
+    let mut candidates: Vec<Start> = vec![("the prior scenario's coefficients", prior_lin, None)];
     if let Some(l) = levy {
-        candidates.insert(0, ("the frequency-domain fit (Levy/Sanathanan-Koerner)", l));
+        candidates.insert(
+            0,
+            (
+                "the frequency-domain fit (Levy/Sanathanan-Koerner)",
+                l,
+                None,
+            ),
+        );
     }
-    let linear = oe::Linear::new(
+    if !load_terms {
+        if let Some((c, uo, th)) = oe::grid_start(&exps) {
+            candidates.push((
+                "the grid of denominators s(s^2 + 2 zeta omega s + omega^2), b by least squares",
+                c,
+                Some((uo, th)),
+            ));
+        }
+    }
+    let start_params = |s: &Start| -> Vec<Param> {
+        let mut ps = lin_params(s.1);
+        if let Some((uo, th)) = &s.2 {
+            let n = ps.len() - exps.len() - 1;
+            ps[n].value = *uo;
+            for (j, t) in th.iter().enumerate() {
+                ps[n + 1 + j].value = *t;
+            }
+        }
+        ps
+    };
+    // The work, checked before any fit: one evaluation's RK4 steps at the
+    // prior's dynamics.
+    let prior_model = oe::Linear::new(
         &exps,
         load_terms,
         k,
         [prior_lin[0], prior_lin[1], prior_lin[2]],
     );
-    // The work, checked before any fit: one evaluation's RK4 steps.
     let steps: usize = exps
         .iter()
-        .zip(&linear.substeps)
+        .zip(&prior_model.substeps)
         .map(|(e, m)| e.len() * m)
         .sum();
     if steps > MAX_STEPS_PER_EVALUATION {
         return Err(bad(format!(
             "identify: {steps} RK4 steps per evaluation ({} substeps a sample for the prior's dynamics), more than the limit of {MAX_STEPS_PER_EVALUATION}",
-            linear.substeps.iter().max().unwrap_or(&1)
+            prior_model.substeps.iter().max().unwrap_or(&1)
         )));
     }
-    let w0 = OutputError::initial_weights(&linear, &exps);
-    let cost = |ps: &[Param]| -> f64 {
+    // The model integrated with the substeps of the faster of the prior's
+    // and the start's dynamics.
+    let model_for = |a: [f64; 4]| -> oe::Linear {
+        let mut m = oe::Linear::new(&exps, load_terms, k, [a[0], a[1], a[2]]);
+        for (s, p) in m.substeps.iter_mut().zip(&prior_model.substeps) {
+            *s = (*s).max(*p);
+        }
+        m
+    };
+    let w0 = OutputError::initial_weights(&prior_model, &exps);
+    let cost = |s: &Start| -> f64 {
+        let m = model_for(s.1);
         let prob = OutputError {
-            model: &linear,
+            model: &m,
             experiments: &exps,
             weights: w0,
         };
         let mut r = Vec::new();
-        let v: Vec<f64> = ps.iter().map(|p| p.value).collect();
+        let v: Vec<f64> = start_params(s).iter().map(|p| p.value).collect();
         if prob.residuals(&v, &mut r) {
             r.iter().map(|x| x * x).sum()
         } else {
             f64::INFINITY
         }
     };
-    let (start_name, mut lp) = candidates
+    let best = candidates
         .iter()
-        .map(|(n, c)| (*n, lin_params(*c)))
-        .min_by(|a, b| cost(&a.1).total_cmp(&cost(&b.1)))
+        .min_by(|a, b| cost(a).total_cmp(&cost(b)))
         .expect("at least the prior");
+    let (start_name, mut lp) = (best.0, start_params(best));
+    let linear = model_for(best.1);
     let other_keys: Vec<&str> = greybox::KEYS.iter().map(|k| k.0).collect();
     apply_fix(&mut lp, &opts.fix, &other_keys)?;
     let nl = linear.n_model();
