@@ -8,7 +8,7 @@
 //!    the reference when the file has one);
 //! 2. the linear third-order model (8) by output error ([`oe`]);
 //! 3. the grey-box fit of the physical model (1)–(6) ([`greybox`]; rotary
-//!    data only until the plant family has a linear axis);
+//!    data only: the cylinder plant exists, a grey-box of it does not yet);
 //! 4. for each fit: every estimate's standard error and 95 % interval, the
 //!    parameters the data cannot identify ([`fit`]), NRMSE on the
 //!    estimation and validation data, residual whiteness and
@@ -217,9 +217,13 @@ fn nuisance(experiments: &[Experiment], unit: &str) -> Vec<Param> {
         .iter()
         .map(|e| rms(&e.u.values))
         .fold(0.0f64, f64::max);
+    let u_unit = match experiments.first().map_or("", |e| e.u.unit) {
+        "" => "V",
+        u => u,
+    };
     let mut v = vec![Param {
         nuisance: true,
-        ..Param::signed("u_offset", "V", 0.0, u_rms.max(1e-9))
+        ..Param::signed("u_offset", u_unit, 0.0, u_rms.max(1e-9))
     }];
     for (i, e) in experiments.iter().enumerate() {
         let y = &e.y.values;
@@ -630,6 +634,11 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         }
         p
     });
+    // The command's unit (V, A, or m for a spool position; V without a suffix).
+    let u_unit = match exps[0].u.unit {
+        "" => "V",
+        u => u,
+    };
     let lin_params = |start: [f64; 4]| -> Vec<Param> {
         let [a1, a2, a3, b] = start;
         let mut v = vec![
@@ -639,7 +648,12 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
             },
             Param::new("a2", "1/s^2", a2.max(1e-9), 1.0),
             Param::new("a3", "1/s", a3.max(1e-9), 1.0),
-            Param::signed("b", &format!("{unit}/(V*s^3)"), b, b.abs().max(1e-300)),
+            Param::signed(
+                "b",
+                &format!("{unit}/({u_unit}*s^3)"),
+                b,
+                b.abs().max(1e-300),
+            ),
         ];
         if load_terms {
             v.push(Param {
@@ -773,7 +787,7 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let mut greybox_result = None;
     let mut gb_model = None;
     if axis == Axis::Linear {
-        notes.push("linear-axis data: the grey-box fit and the scenario need the plant family's linear axis (not in this build); the linear model is fitted".into());
+        notes.push("linear-axis data: the grey-box fit is of the paper's rotary model (1)-(6) and is not made for a cylinder (the cylinder plant exists, a grey-box of it does not yet), so neither is the identified scenario; the linear model is fitted".into());
     } else if !opts.no_greybox {
         let free: Vec<String> = opts.free.clone().unwrap_or_else(|| {
             greybox::DEFAULT_FREE

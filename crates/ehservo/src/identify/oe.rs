@@ -11,9 +11,10 @@
 //! scenario's `load.wavenumber`). Without them a load is absorbed into the
 //! effective a1 (+d1·k) and a2 (+d2) of its linearisation.
 //!
-//! **The start.** Output error is not convex. The start is the better (by
-//! the output-error cost) of the prior scenario's coefficients and a
-//! frequency-domain fit to the nonparametric estimate: Levy's linear least
+//! **The start.** Output error is not convex. The start is the best (by
+//! the output-error cost) of the prior scenario's coefficients, the grid
+//! of [`grid_start`] (without load terms) and a frequency-domain fit to
+//! the nonparametric estimate: Levy's linear least
 //! squares on H(jω)·D(jω) = b over the bins with γ² ≥ 0.5 below 0.4× the
 //! Nyquist frequency, iterated three times with Sanathanan and Koerner's
 //! weights 1/|D_prev(jω)| (E. C. Levy, "Complex-curve fitting", *IRE
