@@ -395,8 +395,8 @@ pub fn parse(
         }
     }
     // The window: the rows kept, by index into the file's.
-    let (t, data, line_of, n) = match opts.window {
-        None => (t, data, line_of, n),
+    let (t, data, line_of, row_of, n) = match opts.window {
+        None => (t, data, line_of, (1..=n).collect::<Vec<usize>>(), n),
         Some([a, b]) => {
             let keep: Vec<usize> = (0..n).filter(|&k| t[k] >= a && t[k] <= b).collect();
             if keep.len() < opts.min_rows.max(2) {
@@ -413,6 +413,7 @@ pub fn parse(
                 pick(&t),
                 data.iter().map(|c| pick(c)).collect::<Vec<_>>(),
                 keep.iter().map(|&k| line_of[k]).collect::<Vec<_>>(),
+                keep.iter().map(|&k| k + 1).collect::<Vec<_>>(),
                 keep.len(),
             )
         }
@@ -424,7 +425,7 @@ pub fn parse(
             return Err(bad(format!(
                 "{file}: line {} (row {}), column `{tname}`: non-uniform sample period: t = {} s where a uniform grid of period {h:.6e} s puts {:.6e} s (off by {:.1} % of a period; the limit is {:.1} %)",
                 line_of[k],
-                k + 1,
+                row_of[k],
                 t[k],
                 t[0] + k as f64 * h,
                 100.0 * dev.abs() / h,
