@@ -512,6 +512,12 @@ struct IdentifyArgs {
     /// Largest deviation of a sample time from the uniform grid, as a fraction of the period.
     #[arg(long, default_value_t = 0.05)]
     period_tolerance: f64,
+    /// Use only the rows from this time on (s, in the time column's clock).
+    #[arg(long, value_name = "S")]
+    from: Option<f64>,
+    /// Use only the rows up to this time (s, in the time column's clock).
+    #[arg(long, value_name = "S")]
+    to: Option<f64>,
     /// The prior scenario: its plant and load start the grey-box and hold what is fixed or unidentifiable (default: the paper's).
     #[arg(long)]
     prior: Option<PathBuf>,
@@ -1181,6 +1187,16 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                     a.period_tolerance
                 );
             }
+            let window = match (a.from, a.to) {
+                (None, None) => None,
+                (f, t) => {
+                    let (f, t) = (f.unwrap_or(f64::NEG_INFINITY), t.unwrap_or(f64::INFINITY));
+                    if f.is_nan() || t.is_nan() || f >= t {
+                        ehservo::bad_input!("--from {f} --to {t}: the window must have from < to");
+                    }
+                    Some([f, t])
+                }
+            };
             if !(a.ident_threshold.is_finite() && a.ident_threshold > 0.0) {
                 ehservo::bad_input!(
                     "--ident-threshold {}: must be finite and > 0",
@@ -1206,6 +1222,7 @@ fn dispatch(cli: Cli, w: &mut impl Write) -> Result<()> {
                 read: data::ReadOptions {
                     tolerance: a.period_tolerance,
                     min_rows: 64,
+                    window,
                 },
                 prior: a.prior.clone(),
                 set: a.set.clone(),

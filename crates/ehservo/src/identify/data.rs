@@ -200,6 +200,10 @@ pub struct ReadOptions {
     pub tolerance: f64,
     /// Fewest rows accepted.
     pub min_rows: usize,
+    /// Only the rows with t in [from, to] (s) are used (`--from`, `--to`):
+    /// the whole file is still checked for increasing time, the window for
+    /// a uniform period, its length and a moving command.
+    pub window: Option<[f64; 2]>,
 }
 
 impl Default for ReadOptions {
@@ -207,6 +211,7 @@ impl Default for ReadOptions {
         Self {
             tolerance: 0.05,
             min_rows: 64,
+            window: None,
         }
     }
 }
@@ -389,6 +394,30 @@ pub fn parse(
             )));
         }
     }
+    // The window: the rows kept, by index into the file's.
+    let (t, data, line_of, row_of, n) = match opts.window {
+        None => (t, data, line_of, (1..=n).collect::<Vec<usize>>(), n),
+        Some([a, b]) => {
+            let keep: Vec<usize> = (0..n).filter(|&k| t[k] >= a && t[k] <= b).collect();
+            if keep.len() < opts.min_rows.max(2) {
+                return Err(bad(format!(
+                    "{file}: column `{tname}`: the window [{a}, {b}] s (--from, --to) keeps {} rows of {n} (t from {} to {} s): at least {} are needed",
+                    keep.len(),
+                    t[0],
+                    t[n - 1],
+                    opts.min_rows.max(2)
+                )));
+            }
+            let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+            (
+                pick(&t),
+                data.iter().map(|c| pick(c)).collect::<Vec<_>>(),
+                keep.iter().map(|&k| line_of[k]).collect::<Vec<_>>(),
+                keep.iter().map(|&k| k + 1).collect::<Vec<_>>(),
+                keep.len(),
+            )
+        }
+    };
     let h = (t[n - 1] - t[0]) / (n - 1) as f64;
     for k in 0..n {
         let dev = t[k] - (t[0] + k as f64 * h);
@@ -396,7 +425,7 @@ pub fn parse(
             return Err(bad(format!(
                 "{file}: line {} (row {}), column `{tname}`: non-uniform sample period: t = {} s where a uniform grid of period {h:.6e} s puts {:.6e} s (off by {:.1} % of a period; the limit is {:.1} %)",
                 line_of[k],
-                k + 1,
+                row_of[k],
                 t[k],
                 t[0] + k as f64 * h,
                 100.0 * dev.abs() / h,
@@ -472,6 +501,7 @@ mod tests {
         ReadOptions {
             tolerance: 0.05,
             min_rows: 4,
+            window: None,
         }
     }
 

@@ -11,9 +11,10 @@
 //! scenario's `load.wavenumber`). Without them a load is absorbed into the
 //! effective a1 (+d1·k) and a2 (+d2) of its linearisation.
 //!
-//! **The start.** Output error is not convex. The start is the better (by
-//! the output-error cost) of the prior scenario's coefficients and a
-//! frequency-domain fit to the nonparametric estimate: Levy's linear least
+//! **The start.** Output error is not convex. The start is the best (by
+//! the output-error cost) of the prior scenario's coefficients, the grid
+//! of [`grid_start`] (without load terms) and a frequency-domain fit to
+//! the nonparametric estimate: Levy's linear least
 //! squares on H(jω)·D(jω) = b over the bins with γ² ≥ 0.5 below 0.4× the
 //! Nyquist frequency, iterated three times with Sanathanan and Koerner's
 //! weights 1/|D_prev(jω)| (E. C. Levy, "Complex-curve fitting", *IRE
@@ -186,6 +187,94 @@ pub fn frequency_fit(frf: &Frf, h: f64) -> Option<[f64; 4]> {
     }
     let p = sol?;
     (p[1] > 0.0 && p[2] > 0.0 && p[0] > -0.1 * p[1] * p[2] && p[3] != 0.0).then_some(p)
+}
+
+/// A start that needs neither the prior nor a coherent frequency
+/// response: over a grid of denominators s·(s² + 2ζω·s + ω²) (ω
+/// log-spaced from 2π·2/T, T the shortest record, to 0.4× the Nyquist
+/// frequency; ζ from 0.05 to 1), the output is linear in b, b·u_offset
+/// and each experiment's θ0, which are solved by linear least squares
+/// (variable projection); the denominator with the least squared output
+/// error wins. Returns `[a1, a2, a3, b]`, u_offset and the θ0s, or `None`
+/// when no candidate simulates.
+pub fn grid_start(experiments: &[Experiment]) -> Option<([f64; 4], f64, Vec<f64>)> {
+    use rayon::prelude::*;
+    let h = experiments.iter().map(|e| e.h).fold(0.0f64, f64::max);
+    let t = experiments
+        .iter()
+        .map(|e| e.h * e.len() as f64)
+        .fold(f64::INFINITY, f64::min);
+    let (lo, hi) = (
+        2.0 * std::f64::consts::PI * 2.0 / t,
+        2.0 * std::f64::consts::PI * 0.2 / h,
+    );
+    if !(lo.is_finite() && hi > lo) {
+        return None;
+    }
+    const N_OMEGA: usize = 32;
+    const ZETAS: [f64; 4] = [0.05, 0.2, 0.5, 1.0];
+    let cands: Vec<(f64, f64)> = (0..N_OMEGA)
+        .flat_map(|i| {
+            let w = lo * (hi / lo).powf(i as f64 / (N_OMEGA - 1) as f64);
+            ZETAS.iter().map(move |&z| (w, z))
+        })
+        .collect();
+    let ne = experiments.len();
+    // The constant command's size: the commands' RMS (keeps the column's
+    // scale that of the input's).
+    let us = {
+        let (s2, n) = experiments.iter().fold((0.0, 0usize), |(s, n), e| {
+            (
+                s + e.u.values.iter().map(|v| v * v).sum::<f64>(),
+                n + e.len(),
+            )
+        });
+        (s2 / n.max(1) as f64).sqrt().max(f64::MIN_POSITIVE)
+    };
+    let m: usize = experiments.iter().map(Experiment::len).sum();
+    let best = cands
+        .par_iter()
+        .filter_map(|&(w, z)| {
+            let a = [0.0, w * w, 2.0 * z * w];
+            let model = Linear::new(experiments, false, 0.0, a);
+            // Columns: the response to u (b = 1), to a unit constant
+            // command, and each experiment's θ0.
+            let mut x = nalgebra::DMatrix::<f64>::zeros(m, 2 + ne);
+            let mut y = nalgebra::DVector::<f64>::zeros(m);
+            let mut row = 0;
+            let mut sim = SimOut::default();
+            for (i, e) in experiments.iter().enumerate() {
+                let mut p = vec![a[0], a[1], a[2], 1.0, 0.0];
+                p.extend(std::iter::repeat_n(0.0, ne));
+                if !model.simulate(&p, i, e, &mut sim) {
+                    return None;
+                }
+                let g1 = sim.y.clone();
+                p[4] = us;
+                if !model.simulate(&p, i, e, &mut sim) {
+                    return None;
+                }
+                for k in 0..e.len() {
+                    x[(row + k, 0)] = g1[k];
+                    x[(row + k, 1)] = sim.y[k] - g1[k];
+                    x[(row + k, 2 + i)] = 1.0;
+                    y[row + k] = e.y.values[k];
+                }
+                row += e.len();
+            }
+            let c = x.clone().svd(true, true).solve(&y, 1e-12).ok()?;
+            let cost = (&x * &c - &y).norm_squared();
+            (cost.is_finite() && c[0].is_finite() && c[0] != 0.0).then(|| {
+                (
+                    cost,
+                    [a[0], a[1], a[2], c[0]],
+                    c[1] * us / c[0],
+                    c.iter().skip(2).copied().collect::<Vec<f64>>(),
+                )
+            })
+        })
+        .min_by(|p, q| p.0.total_cmp(&q.0))?;
+    Some((best.1, best.2, best.3))
 }
 
 /// The discrete (zero-order hold) frequency response of the linear model
