@@ -79,9 +79,13 @@ impl LinPlant {
         match &setup.plant {
             scenario::AnyPlant::ThirdOrder(_) => Ok(LinPlant::Third(ThirdOrderPlant::new(p, l))),
             scenario::AnyPlant::Physical(_) => Ok(LinPlant::Physical(PhysicalPlant::new(p, l))),
-            scenario::AnyPlant::Cylinder(_) => Err((
+            // Any other registered plant (a new one need not be named here).
+            other => Err((
                 "plant.model".into(),
-                "\"cylinder\" is not linearised yet (no ehservo::freq::Linearize for it): the measured responses (--measure) work on it, the computed ones do not".into(),
+                format!(
+                    "\"{}\" is not linearised yet (no ehservo::freq::Linearize for it): the measured responses (--measure) work on it, the computed ones do not",
+                    other.model()
+                ),
             )),
         }
     }

@@ -169,6 +169,13 @@ macro_rules! plants {
         }
 
         impl AnyPlant {
+            /// The model's name (`plant.model`).
+            pub fn model(&self) -> &'static str {
+                match self {
+                    $(Self::$variant(_) => <$ty as PlantConfig>::MODEL,)*
+                }
+            }
+
             /// Calls `v` with the typed plant.
             pub fn visit<V: PlantVisit>(&self, v: V) -> V::Out {
                 match self {

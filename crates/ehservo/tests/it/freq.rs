@@ -163,7 +163,18 @@ fn measured_agrees_with_computed_on_a_linear_case() {
             || measure::sinestream(&l.setup, Input::Disturbance, &freqs, &settings),
         );
         let plan = measure::plan_welch(Broadband::Multisine, 0.2, 45.0, 30, 3, 0.01, 2.0);
-        let (wt, wd) = measure::welch_both(&l.setup, &plan, &settings);
+        let (mut wt, mut wd) = measure::welch_both(&l.setup, &plan, &settings);
+        // The chirp's Welch H1 too: held to the same bound where its
+        // coherence passes (a chirp leaks between bins, so fewer do).
+        let chirp = measure::plan_welch(Broadband::Chirp, 0.2, 45.0, 30, 3, 0.01, 2.0);
+        let (ct, cd) = measure::welch_both(&l.setup, &chirp, &settings);
+        let chirp_passed = ct.iter().filter(|t| t.quality > 0.99).count();
+        assert!(
+            chirp_passed >= chirp.bins.len() / 2,
+            "{chirp_passed} chirp bins pass"
+        );
+        wt.extend(ct);
+        wd.extend(cd);
         let mut checked = 0;
         let close = |what: &str, f: f64, got: C64, want: C64| {
             let dg = 20.0 * (got.norm() / want.norm()).log10();
@@ -185,7 +196,8 @@ fn measured_agrees_with_computed_on_a_linear_case() {
                 checked += 1;
             }
         }
-        // Not vacuous: nearly every point passed the quality gate.
+        // Not vacuous: nearly every sinestream and multisine point passed
+        // the quality gate.
         assert!(
             checked >= 2 * (freqs.len() + plan.bins.len()) - 4,
             "{checked} checked"
@@ -234,6 +246,42 @@ fn freq_is_the_same_on_any_thread_count() {
         let b = std::fs::read(outs[1].join(f)).unwrap();
         assert!(a == b, "{f} differs between 1 and 2 threads");
     }
+}
+
+/// With plots, a linear loop's `freq` draws Bode and Nyquist plots and the
+/// measured responses, each as PNG and SVG, and a chirp measurement writes
+/// its CSV with the coherence beside each bin.
+#[test]
+fn plots_and_the_chirp_are_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = common::repo().join("docs/league/suite/scenarios/pid/fig2.toml");
+    let d = tmp.path().join("f");
+    let r = common::ehservo()
+        .arg("freq")
+        .arg(&sc)
+        .args(["--out", d.to_str().unwrap(), "-q"])
+        .args(["--measure", "chirp", "--measure-points", "8"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        r.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    for name in ["bode", "nyquist", "measured"] {
+        let png = std::fs::read(d.join(format!("{name}.png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "{name}.png");
+        let svg = std::fs::read_to_string(d.join(format!("{name}.svg"))).unwrap();
+        assert!(svg.contains("<svg"), "{name}.svg");
+    }
+    let csv = std::fs::read_to_string(d.join("measured_chirp.csv")).unwrap();
+    let head = csv.lines().next().unwrap();
+    assert!(
+        head.contains("coherence") || head.contains("quality"),
+        "{head}"
+    );
+    assert!(csv.lines().count() > 2, "{csv}");
 }
 
 /// `--at T` linearises at the run's state at T: the operating point's

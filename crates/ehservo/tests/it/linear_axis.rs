@@ -233,6 +233,7 @@ fn tune_and_league_on_a_cylinder_say_mm_and_refuse_a_mixed_set() {
 ///   this heavily damped axis (c = 1e5 N·s/m puts the nominal model's own
 ///   pole beyond the design's) and is refused as bad input that names the
 ///   key and the way out; the scenario's own gains run (the shipped file).
+///
 /// What each kind tracks is printed, for the docs' table.
 #[test]
 fn every_kind_runs_on_a_single_rod_cylinder() {
