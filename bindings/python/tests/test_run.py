@@ -112,3 +112,25 @@ def test_a_diverging_run_reports_what_summary_json_reports(cli, repo, tmp_path, 
     assert r.metrics == summary["metrics"] and r.metrics["diverged"] is True
     assert len(r.trace) == len(trace)
     np.testing.assert_array_equal(r.trace["theta_deg"].to_numpy(), trace["theta_deg"].to_numpy())
+
+
+def test_a_cylinder_is_read_in_mm_as_the_cli_writes_it(cli, repo, tmp_path, monkeypatch):
+    """On a linear axis (the shipped single-rod cylinder) the metrics carry
+    e_max/e_rms with unit "mm" beside them, exactly summary.json's, no key
+    or column says "deg", and the trace is trace.csv's, y_mm and e_mm among
+    it, to the bit."""
+    monkeypatch.chdir(repo)
+    sc = "scenarios/cylinders/chrono-single-rod.toml"
+    sets = ["simulation.horizon=1.0", "simulation.settle=0.5"]
+    summary, trace = cli_run(cli, tmp_path, sc, *sets)
+    r = ehservo.run(sc, set=sets)
+    assert r.metrics["unit"] == "mm"
+    assert r.metrics == summary["metrics"]
+    assert not any("deg" in k for k in r.metrics), r.metrics
+    assert list(r.trace.columns) == list(trace.columns)
+    assert "y_mm" in trace.columns and "e_mm" in trace.columns
+    assert not any("deg" in c for c in trace.columns), list(trace.columns)
+    for c in trace.columns:
+        np.testing.assert_array_equal(r.trace[c].to_numpy(), trace[c].to_numpy(), err_msg=c)
+    # The rod starts at 142 mm on its reference (the scenario's x0).
+    assert r.trace["y_mm"].iloc[0] == pytest.approx(142.0, abs=1e-9)

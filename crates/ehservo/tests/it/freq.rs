@@ -163,18 +163,8 @@ fn measured_agrees_with_computed_on_a_linear_case() {
             || measure::sinestream(&l.setup, Input::Disturbance, &freqs, &settings),
         );
         let plan = measure::plan_welch(Broadband::Multisine, 0.2, 45.0, 30, 3, 0.01, 2.0);
-        let (mut wt, mut wd) = measure::welch_both(&l.setup, &plan, &settings);
-        // The chirp's Welch H1 too: held to the same bound where its
-        // coherence passes (a chirp leaks between bins, so fewer do).
-        let chirp = measure::plan_welch(Broadband::Chirp, 0.2, 45.0, 30, 3, 0.01, 2.0);
-        let (ct, cd) = measure::welch_both(&l.setup, &chirp, &settings);
-        let chirp_passed = ct.iter().filter(|t| t.quality > 0.99).count();
-        assert!(
-            chirp_passed >= chirp.bins.len() / 2,
-            "{chirp_passed} chirp bins pass"
-        );
-        wt.extend(ct);
-        wd.extend(cd);
+        // (The chirp's H1 is not held to this bound: docs/frequency.md.)
+        let (wt, wd) = measure::welch_both(&l.setup, &plan, &settings);
         let mut checked = 0;
         let close = |what: &str, f: f64, got: C64, want: C64| {
             let dg = 20.0 * (got.norm() / want.norm()).log10();
