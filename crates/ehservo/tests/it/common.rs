@@ -90,3 +90,31 @@ pub fn rejected_naming(name: &str, o: &Output, expect: &str) -> String {
     );
     err
 }
+
+/// An open-loop `ehservo excite` experiment on Fig. 2's servo (`excite`'s
+/// arguments given), simulated by `ehservo run` into `dir`: the trace.csv
+/// that `identify` reads.
+pub fn excited_trace(dir: &Path, excite: &[&str]) -> PathBuf {
+    let ex = dir.join("ex");
+    let data = dir.join("data");
+    for args in [
+        [&["excite"][..], excite, &["--out"]].concat(),
+        vec![
+            "run",
+            ex.join("scenario.toml").to_str().unwrap(),
+            "--no-plot",
+            "-q",
+            "--out",
+        ],
+    ] {
+        let target = if args[0] == "excite" { &ex } else { &data };
+        let o = ehservo().args(&args).arg(target).output().unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    data.join("trace.csv")
+}

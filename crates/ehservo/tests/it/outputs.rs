@@ -493,26 +493,10 @@ fn threads_are_checked_and_reproduce_fails_fast_on_an_unwritable_folder() {
 fn sigint_stops_freq_and_identify_and_leaves_nothing() {
     let tmp = tempfile::tempdir().unwrap();
     // identify's data: 30 s of a multisine at 1 kHz on Fig. 2's servo.
-    let ex = tmp.path().join("ex");
-    let o = ehservo()
-        .args(["excite", "--duration", "30", "--out"])
-        .arg(&ex)
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let data = tmp.path().join("data");
-    let o = ehservo()
-        .arg("run")
-        .arg(ex.join("scenario.toml"))
-        .args(["--no-plot", "-q", "--out"])
-        .arg(&data)
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let trace = crate::common::excited_trace(tmp.path(), &["--duration", "30"]);
     let work = tmp.path().join("work");
     std::fs::create_dir(&work).unwrap();
     let fig2 = fig2();
-    let trace = data.join("trace.csv");
     let cases: [(&str, Vec<&std::ffi::OsStr>); 2] = [
         (
             "freq",

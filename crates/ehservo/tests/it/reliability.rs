@@ -449,21 +449,7 @@ fn a_file_size_limit_fails_every_writer_cleanly() {
     std::fs::write(&binary, bytes).unwrap();
     let fig2 = fig2();
     // identify's data: a short open-loop experiment, run without a limit.
-    let ex = tmp.path().join("ex");
-    ok(&ehservo()
-        .args(["excite", "--duration", "4", "--period", "1000", "--out"])
-        .arg(&ex)
-        .output()
-        .unwrap());
-    let data = tmp.path().join("data");
-    ok(&ehservo()
-        .arg("run")
-        .arg(ex.join("scenario.toml"))
-        .args(["--no-plot", "-q", "--out"])
-        .arg(&data)
-        .output()
-        .unwrap());
-    let trace = data.join("trace.csv");
+    let trace = crate::common::excited_trace(tmp.path(), &["--duration", "4", "--period", "1000"]);
     let cases: Vec<(&str, Vec<&std::ffi::OsStr>)> = vec![
         (
             "freq",
