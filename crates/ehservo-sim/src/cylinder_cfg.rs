@@ -1,0 +1,478 @@
+//! The cylinder's `[plant]` tables (geometry, fluid, load, stops,
+//! initial pressures, transmission, nominal point) and their validation
+//! into [`Cylinder`](super::Cylinder): the configuration side of
+//! `cylinder.rs`, whose physics reads only the validated constants.
+
+use super::*;
+
+/// `[plant.cylinder]`: the geometry, by areas or by diameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct CylinderGeom {
+    /// Piston-side area A_A (m²), or give `bore`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub area_a: Option<f64>,
+    /// Rod-side area A_B (m²), or give `rod_diameter`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub area_b: Option<f64>,
+    /// Bore D (m): A_A = πD²/4 (a double-rod's both sides A = π(D² − d²)/4).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bore: Option<f64>,
+    /// Rod diameter d (m): A_B = π(D² − d²)/4.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rod_diameter: Option<f64>,
+    /// With `bore`: 1 (single-rod, the default) or 2 (double-rod).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rods: Option<u8>,
+    /// Stroke (m).
+    pub stroke: f64,
+    /// Dead volume of chamber A at y = 0 (m³).
+    pub dead_volume_a: f64,
+    /// Dead volume of chamber B at y = stroke (m³).
+    pub dead_volume_b: f64,
+    /// Cross-piston leakage C_l (m³/(s·Pa)). Default 0.
+    pub leakage: f64,
+    /// Viscous friction of the piston B_p (N·s/m). Default 0.
+    pub viscous: f64,
+}
+
+/// `[plant.fluid]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct FluidCfg {
+    /// Density ρ (kg/m³).
+    pub density: f64,
+    /// Effective bulk modulus βe (Pa).
+    pub bulk_modulus: f64,
+    /// Kinematic viscosity ν (m²/s): the orifices' laminar transition.
+    /// Default 46e-6 (ISO VG 46 at 40 °C).
+    pub viscosity: f64,
+}
+
+impl Default for FluidCfg {
+    fn default() -> Self {
+        Self {
+            density: 0.0,
+            bulk_modulus: 0.0,
+            viscosity: ISO_VG46_VISCOSITY,
+        }
+    }
+}
+
+/// `[plant.load]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct LoadCfg {
+    /// The moving mass M (kg): rod, piston and load.
+    pub mass: f64,
+    /// Spring stiffness K (N/m). Default 0.
+    pub spring: f64,
+    /// Where the spring is relaxed, y_K (m). Default 0.
+    pub spring_origin: f64,
+    /// External viscous damping (N·s/m). Default 0.
+    pub damping: f64,
+    /// Inclination of the axis (deg): gravity pulls M·g·sin α toward y = 0.
+    /// Default 0 (horizontal).
+    pub incline_deg: f64,
+    /// g (m/s²). Default 9.80665.
+    pub gravity: f64,
+    /// `[plant.load.friction]`: Stribeck friction of the rod (N, m/s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<Friction>,
+    /// `[plant.load.force]`: an external force F(t) (N) opposing extension.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub force: Option<ForceCfg>,
+}
+
+impl Default for LoadCfg {
+    fn default() -> Self {
+        Self {
+            mass: 0.0,
+            spring: 0.0,
+            spring_origin: 0.0,
+            damping: 0.0,
+            incline_deg: 0.0,
+            gravity: STANDARD_GRAVITY,
+            friction: None,
+            force: None,
+        }
+    }
+}
+
+/// `[plant.end_stop]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct EndStopCfg {
+    /// Contact stiffness k_s (N/m); default 100·βe·(A_A²/V_A + A_B²/V_B) at mid-stroke.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Contact damping c_s (N·s/m); default 2·√(k_s·M).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+}
+
+/// `[plant.initial]`: the pressures at t = 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct InitialCfg {
+    /// p_A(0) (Pa); default: the pair that holds the load at x(0) about
+    /// the mid pressure (Ps + Pt)/2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pressure_a: Option<f64>,
+    /// p_B(0) (Pa).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pressure_b: Option<f64>,
+}
+
+/// `[plant.transmission]`: a rack and pinion that makes the axis rotary.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TransmissionCfg {
+    /// Pinion radius r (m): θ = (y − stroke/2)/r.
+    pub radius: f64,
+}
+
+/// `[plant.nominal]`: where the controller's model is linearised.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct NominalCfg {
+    /// The rod position of the operating point (m); default mid-stroke.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position: Option<f64>,
+}
+
+/// `[plant] model = "cylinder"`: the tables of a valve-controlled cylinder.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct CylinderCfg {
+    /// `[plant.cylinder]`.
+    pub cylinder: CylinderGeom,
+    /// `[plant.fluid]`.
+    pub fluid: FluidCfg,
+    /// `[plant.valve]`.
+    pub valve: ValveCfg,
+    /// `[plant.supply]`.
+    pub supply: SupplyCfg,
+    /// `[plant.load]`.
+    pub load: LoadCfg,
+    /// `[plant.end_stop]`.
+    #[serde(skip_serializing_if = "is_default")]
+    pub end_stop: EndStopCfg,
+    /// `[plant.initial]`.
+    #[serde(skip_serializing_if = "is_default")]
+    pub initial: InitialCfg,
+    /// `[plant.transmission]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transmission: Option<TransmissionCfg>,
+    /// `[plant.nominal]`.
+    #[serde(skip_serializing_if = "is_default")]
+    pub nominal: NominalCfg,
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
+}
+
+/// A positive finite key or its error.
+fn pos(k: &str, v: f64) -> Result<f64, (String, String)> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err((k.to_string(), format!("must be finite and > 0 (got {v:?})")))
+    }
+}
+
+fn nonneg(k: &str, v: f64) -> Result<f64, (String, String)> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err((
+            k.to_string(),
+            format!("must be finite and >= 0 (got {v:?})"),
+        ))
+    }
+}
+
+fn fin(k: &str, v: f64) -> Result<f64, (String, String)> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err((k.to_string(), format!("must be finite (got {v:?})")))
+    }
+}
+
+/// Prefixes a key error with its table.
+fn at(prefix: &'static str) -> impl Fn((String, String)) -> (String, String) {
+    move |(k, r)| (format!("plant.{prefix}.{k}"), r)
+}
+
+impl CylinderCfg {
+    /// Checks every key; the error is the full key path and the reason.
+    pub fn resolve(&self, ctx: &PlantContext) -> Result<Cylinder, (String, String)> {
+        let g = &self.cylinder;
+        let cyl = at("cylinder");
+        let area = match (g.area_a, g.area_b, g.bore, g.rod_diameter) {
+            (Some(a), Some(b), None, None) => {
+                if g.rods.is_some() {
+                    return Err(cyl(("rods".into(), "goes with bore and rod_diameter, not areas".into())));
+                }
+                let a = pos("area_a", a).map_err(&cyl)?;
+                let b = pos("area_b", b).map_err(&cyl)?;
+                if b > a {
+                    return Err(cyl((
+                        "area_b".into(),
+                        format!("the rod side ({b} m²) is larger than the piston side ({a} m²): area_a is the piston side"),
+                    )));
+                }
+                [a, b]
+            }
+            (None, None, Some(d), Some(dr)) => {
+                let d = pos("bore", d).map_err(&cyl)?;
+                let dr = pos("rod_diameter", dr).map_err(&cyl)?;
+                if dr >= d {
+                    return Err(cyl((
+                        "rod_diameter".into(),
+                        format!("the rod ({dr} m) must be thinner than the bore ({d} m): A_rod ≥ A_A leaves no rod-side area"),
+                    )));
+                }
+                let q = core::f64::consts::PI / 4.0;
+                let annulus = q * (d * d - dr * dr);
+                match g.rods.unwrap_or(1) {
+                    1 => [q * d * d, annulus],
+                    2 => [annulus, annulus],
+                    n => {
+                        return Err(cyl((
+                            "rods".into(),
+                            format!("must be 1 (single-rod) or 2 (double-rod), got {n}"),
+                        )))
+                    }
+                }
+            }
+            (None, None, None, None) => {
+                return Err(cyl((
+                    "area_a".into(),
+                    "the geometry is required: area_a and area_b (m²), or bore and rod_diameter (m) with rods = 1 or 2".into(),
+                )))
+            }
+            _ => {
+                return Err(cyl((
+                    "area_a".into(),
+                    "give either area_a and area_b, or bore and rod_diameter, not a mix".into(),
+                )))
+            }
+        };
+        let stroke = pos("stroke", g.stroke).map_err(&cyl)?;
+        let v0a = g.dead_volume_a;
+        let v0b = g.dead_volume_b;
+        if !(v0a.is_finite() && v0a > 0.0) {
+            return Err(cyl((
+                "dead_volume_a".into(),
+                format!("must be finite and > 0 (got {v0a:?}): chamber A's volume V_0A + A_A·y would not be positive at y = 0"),
+            )));
+        }
+        if !(v0b.is_finite() && v0b > 0.0) {
+            return Err(cyl((
+                "dead_volume_b".into(),
+                format!("must be finite and > 0 (got {v0b:?}): chamber B's volume V_0B + A_B·(stroke − y) would not be positive at y = stroke"),
+            )));
+        }
+        let leakage = nonneg("leakage", g.leakage).map_err(&cyl)?;
+        let bp = nonneg("viscous", g.viscous).map_err(&cyl)?;
+        let fl = at("fluid");
+        let rho = pos("density", self.fluid.density).map_err(&fl)?;
+        let beta = pos("bulk_modulus", self.fluid.bulk_modulus).map_err(&fl)?;
+        let nu = pos("viscosity", self.fluid.viscosity).map_err(&fl)?;
+        let valve = SpoolValve::try_new(&self.valve, rho, nu).map_err(at("valve"))?;
+        let (supply, pt) = Supply::try_new(&self.supply, beta).map_err(at("supply"))?;
+        let l = &self.load;
+        let ld = at("load");
+        let mass = pos("mass", l.mass).map_err(&ld)?;
+        let spring = nonneg("spring", l.spring).map_err(&ld)?;
+        let spring_origin = fin("spring_origin", l.spring_origin).map_err(&ld)?;
+        let damping = nonneg("damping", l.damping).map_err(&ld)?;
+        let incline = fin("incline_deg", l.incline_deg).map_err(&ld)?;
+        if incline.abs() > 90.0 {
+            return Err(ld((
+                "incline_deg".into(),
+                format!("must be within ±90° (got {incline})"),
+            )));
+        }
+        let gravity = nonneg("gravity", l.gravity).map_err(&ld)?;
+        if let Some(f) = &l.friction {
+            f.validate().map_err(|e| {
+                (
+                    format!("plant.load.friction.{}", e.name),
+                    format!("{} (got {:?})", e.reason, e.value),
+                )
+            })?;
+        }
+        let force = match &l.force {
+            None => Force::Zero,
+            Some(f) => Force::try_new(f, ctx.base_dir.as_deref())
+                .map_err(|(k, r)| (format!("plant.load.force.{k}"), r))?,
+        };
+        let gravity_force = mass * gravity * incline.to_radians().sin();
+        // The oil column's stiffness at mid-stroke, for the stop's default.
+        let half = 0.5 * stroke;
+        let kh = beta
+            * (area[0] * area[0] / (v0a + area[0] * half)
+                + area[1] * area[1] / (v0b + area[1] * half));
+        let es = at("end_stop");
+        let ks = match self.end_stop.stiffness {
+            None => 100.0 * kh,
+            Some(k) => pos("stiffness", k).map_err(&es)?,
+        };
+        let cs = match self.end_stop.damping {
+            None => 2.0 * (ks * mass).sqrt(),
+            Some(c) => nonneg("damping", c).map_err(&es)?,
+        };
+        let radius = match &self.transmission {
+            None => None,
+            Some(t) => Some(pos("radius", t.radius).map_err(at("transmission"))?),
+        };
+        let ini = at("initial");
+        let initial = [
+            self.initial
+                .pressure_a
+                .map(|p| nonneg("pressure_a", p))
+                .transpose()
+                .map_err(&ini)?,
+            self.initial
+                .pressure_b
+                .map(|p| nonneg("pressure_b", p))
+                .transpose()
+                .map_err(&ini)?,
+        ];
+        if initial[0].is_some() != initial[1].is_some() {
+            return Err(ini((
+                "pressure_a".into(),
+                "give both pressure_a and pressure_b, or neither".into(),
+            )));
+        }
+        let c = Cylinder {
+            area,
+            stroke,
+            v0: [v0a, v0b],
+            leakage,
+            viscous: bp + damping,
+            beta,
+            rho,
+            mass,
+            spring,
+            spring_origin,
+            gravity_force,
+            friction: l.friction,
+            force,
+            stop: [ks, cs],
+            valve,
+            supply,
+            pt,
+            radius,
+            initial,
+        };
+        // The relief must be able to hold the static load: a supply that
+        // cannot push the load off the bottom of the stroke is a mistake.
+        let ps = c.supply.holding_pressure(pt);
+        let hold = c.area[0] * (ps - pt) - (c.area[0] - c.area[1]) * pt;
+        let static_load = c.gravity_force + c.force.static_part();
+        if static_load > 0.0 && hold <= static_load {
+            return Err((
+                match c.supply {
+                    Supply::Fixed { .. } => "plant.supply.pressure",
+                    Supply::Pump(_) => "plant.supply.relief_pressure",
+                }
+                .into(),
+                format!(
+                    "the supply ({:.4e} Pa) cannot hold the static load of {static_load:.4e} N on the piston side's {:.4e} m²",
+                    ps, c.area[0]
+                ),
+            ));
+        }
+        // The operating point and the run's positions inside the stroke.
+        let y_nom = self.nominal.position.unwrap_or(half);
+        if !(y_nom.is_finite() && (0.0..=stroke).contains(&y_nom)) {
+            return Err((
+                "plant.nominal.position".into(),
+                format!("must be within the stroke [0, {stroke}] m (got {y_nom:?})"),
+            ));
+        }
+        let to_y = |p: f64| match radius {
+            None => p,
+            Some(r) => half + r * p,
+        };
+        let y0 = to_y(ctx.x0[0]);
+        if !(0.0..=stroke).contains(&y0) {
+            return Err((
+                "simulation.x0".into(),
+                format!("the rod starts at y = {y0} m, outside the stroke [0, {stroke}] m"),
+            ));
+        }
+        if let Some((lo, hi)) = ctx.reference_range {
+            let (ylo, yhi) = (to_y(lo), to_y(hi));
+            if ylo < 0.0 || yhi > stroke {
+                return Err((
+                    "reference".into(),
+                    format!(
+                        "asks for y from {:.6} to {:.6} m: outside the stroke [0, {stroke}] m",
+                        ylo.min(yhi),
+                        ylo.max(yhi)
+                    ),
+                ));
+            }
+        }
+        Ok(c)
+    }
+}
+
+impl PlantConfig for CylinderCfg {
+    const MODEL: &'static str = "cylinder";
+    const DOC: &'static str =
+        "a valve-controlled single- or double-rod cylinder with its supply, load and end stops, in (y, ẏ, p_A, p_B, p_s, x_r)";
+    const PAPER_UNCERTAINTY: bool = false;
+    const USES_LOAD: bool = false;
+    const END_STOPS: bool = true;
+    type Plant = CylinderPlant;
+
+    fn axis(&self) -> Axis {
+        if self.transmission.is_some() {
+            Axis::Rotary
+        } else {
+            Axis::Linear
+        }
+    }
+
+    fn build(&self, ctx: &PlantContext) -> Result<CylinderPlant, (String, String)> {
+        let c = self.resolve(ctx)?;
+        let y = self.nominal.position.unwrap_or(0.5 * c.stroke);
+        let p = CylinderPlant::new(c, y);
+        // Values each finite can still make the model's constants overflow
+        // (an area of 1e308, a subnormal mass): what the controller would
+        // be designed on must be numbers.
+        let m = p.nominal();
+        let derived = m
+            .coeffs
+            .as_array()
+            .into_iter()
+            .chain([m.b_at_rest(), m.offset()]);
+        if let Err(e) = m.params.validate() {
+            return Err((
+                "plant".into(),
+                format!(
+                    "the cylinder's nominal model is not a model: its {} is {:?} ({}); check the sizes of the plant's keys",
+                    e.name, e.value, e.reason
+                ),
+            ));
+        }
+        if derived.into_iter().any(|v| !v.is_finite()) {
+            return Err((
+                "plant".into(),
+                format!(
+                    "the cylinder's nominal model overflows (a1, a2, a3 = {:?}, b at rest = {:e}): check the sizes of the plant's keys",
+                    m.coeffs.as_array(),
+                    m.b_at_rest()
+                ),
+            ));
+        }
+        Ok(p)
+    }
+}
