@@ -1,15 +1,20 @@
-//! Embeds the scenarios the page offers — every `*.toml` of
-//! `scenarios/paper` (but the manifest) and `scenarios/realistic` — as
+//! Embeds the scenarios the page offers — every scenario file (not a
+//! study, tune or league file: those name another `#:schema`) of
+//! `scenarios/paper` (but the manifest), `scenarios/realistic`,
+//! `scenarios/cylinders` and `scenarios/hopsan` — as
 //! `include_str!` entries, so the list follows the folders without a
 //! hand-kept copy.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// The folders of `scenarios/` the page offers.
+const GROUPS: [&str; 4] = ["paper", "realistic", "cylinders", "hopsan"];
+
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
     let mut out = String::from("&[\n");
-    for group in ["paper", "realistic"] {
+    for group in GROUPS {
         let dir = root.join(group);
         println!("cargo:rerun-if-changed={}", dir.display());
         let mut files: Vec<_> = std::fs::read_dir(&dir)
@@ -20,6 +25,9 @@ fn main() {
             .filter(|p| {
                 let text = std::fs::read_to_string(p).unwrap_or_default();
                 !text.lines().any(|l| l.trim() == "[[axis]]")
+                    && !text
+                        .lines()
+                        .any(|l| l.starts_with("#:schema") && !l.ends_with("scenario.schema.json"))
             })
             .collect();
         files.sort();

@@ -10,7 +10,7 @@
 //! Both implement [`Estimator`]. They are `Copy`, allocation-free and
 //! `no_std`; parameters are validated once at construction with a
 //! [`ParamError`] naming the parameter. The gains of the linear observer
-//! are designed on the `std` side (`ehservo::estimation`: matrix
+//! are designed on the `std` side (`ehservo::observer_design`: matrix
 //! exponential, Ackermann, discrete Riccati equation) and handed over as
 //! plain arrays through [`LinearObserver::from_matrices`].
 

@@ -3,7 +3,7 @@
 //! scenario.
 //!
 //! A plant is one file and one registry line
-//! (`crates/ehservo/src/scenario/plants.rs`):
+//! (`crates/ehservo-scenario/src/scenario/plants.rs`):
 //!
 //! | plant | file | axis | state |
 //! |---|---|---|---|

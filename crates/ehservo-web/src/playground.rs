@@ -8,13 +8,13 @@
 //! `--set key=value`, read by the same [`parse_value`] and applied by the
 //! same [`Scenario::with_values_built`].
 
-use ehservo::core::control::{Config, Controller, Signals, Tunable};
-use ehservo::metrics::Metrics;
-use ehservo::run::run_setup;
-use ehservo::scenario::{
+use ehservo_scenario::core::control::{Config, Controller, Signals, Tunable};
+use ehservo_scenario::metrics::Metrics;
+use ehservo_scenario::run::run_setup;
+use ehservo_scenario::scenario::{
     parse_value, set_path, ControllerCfg, ControllerConfig, Scenario, ScenarioError, Visit,
 };
-use ehservo::simulation::Sample;
+use ehservo_scenario::simulation::Sample;
 use serde::Serialize;
 
 /// A scenario file built into the page.
@@ -241,7 +241,7 @@ fn range_of(kind: &str, key: &str) -> Option<Param> {
 pub fn resolve(
     id: &str,
     overrides: &[(String, String)],
-) -> Result<(Scenario, ehservo::scenario::Setup), Vec<FieldError>> {
+) -> Result<(Scenario, ehservo_scenario::scenario::Setup), Vec<FieldError>> {
     let b = find(id).ok_or_else(|| {
         vec![FieldError::new(
             "scenario",
@@ -562,11 +562,11 @@ mod tests {
     }
 
     /// The CLI's own path: the file loaded with `--set` flags, run by
-    /// `ehservo::run::run` (what `ehservo run` writes to summary.json).
+    /// `ehservo_scenario::run::run` (what `ehservo run` writes to summary.json).
     fn cli_metrics(path: &str, flags: &[&str]) -> Metrics {
         let flags: Vec<String> = flags.iter().map(|s| s.to_string()).collect();
         let s = Scenario::load(&repo(path), &flags).unwrap();
-        ehservo::run::run(&s, ehservo::run::Keep::Nothing)
+        ehservo_scenario::run::run(&s, ehservo_scenario::run::Keep::Nothing)
             .unwrap()
             .metrics
     }
@@ -574,7 +574,7 @@ mod tests {
     #[test]
     fn every_scenario_file_is_offered_but_the_manifest() {
         let mut on_disk = Vec::new();
-        for group in ["paper", "realistic"] {
+        for group in ["paper", "realistic", "cylinders", "hopsan"] {
             for e in std::fs::read_dir(repo(&format!("scenarios/{group}"))).unwrap() {
                 let p = e.unwrap().path();
                 let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
@@ -592,6 +592,40 @@ mod tests {
         offered.sort();
         assert_eq!(offered, on_disk);
         assert!(offered.contains(&"paper/fig2".to_string()));
+        assert!(offered.contains(&"cylinders/chrono-single-rod".to_string()));
+        assert!(offered.contains(&"hopsan/position-servo".to_string()));
+    }
+
+    /// A linear axis in the page reads in mm, as `ehservo run` writes it:
+    /// the same metrics (e_max and its unit "mm", no key in degrees), the
+    /// trace's position in mm (the rod starts at the scenario's 142 mm).
+    #[test]
+    fn a_cylinder_runs_in_mm_as_the_cli_does() {
+        let flags = ["simulation.horizon=1.0", "simulation.settle=0.5"];
+        let run = simulate(
+            "cylinders/chrono-single-rod",
+            &set(&[("simulation.horizon", "1.0"), ("simulation.settle", "0.5")]),
+        )
+        .unwrap();
+        assert_eq!(run.unit, "mm");
+        let cli = cli_metrics("scenarios/cylinders/chrono-single-rod.toml", &flags);
+        assert_eq!(run.metrics, cli);
+        let json = serde_json::to_value(&run.metrics).unwrap();
+        assert_eq!(json["unit"], "mm");
+        assert!(json.get("e_max").is_some_and(|v| v.is_f64()), "{json}");
+        let keys: Vec<&String> = json.as_object().unwrap().keys().collect();
+        assert!(!keys.iter().any(|k| k.contains("deg")), "{keys:?}");
+        assert!(
+            (run.trace.theta[0] - 142.0).abs() < 1e-9,
+            "{}",
+            run.trace.theta[0]
+        );
+        let hopsan = simulate("hopsan/position-servo", &[]).unwrap();
+        assert_eq!(hopsan.unit, "mm");
+        assert_eq!(
+            hopsan.metrics,
+            cli_metrics("scenarios/hopsan/position-servo.toml", &[])
+        );
     }
 
     #[test]
@@ -686,7 +720,7 @@ mod tests {
             let s = Scenario::parse(&text).unwrap();
             let (resolved, _) = resolve(id, &o).unwrap();
             assert_eq!(s, resolved, "{id} {pairs:?}:\n{text}");
-            let cli = ehservo::run::run(&s, ehservo::run::Keep::Nothing).unwrap();
+            let cli = ehservo_scenario::run::run(&s, ehservo_scenario::run::Keep::Nothing).unwrap();
             assert_eq!(cli.metrics, simulate(id, &o).unwrap().metrics);
             for (k, v) in &pairs {
                 assert!(text.contains(&format!("--set {k}={v}")), "{text}");

@@ -2,48 +2,43 @@
 //!
 //! Simulation and control of electrohydraulic servo systems, built around
 //! C.-L. Hwang's neural-network-based variable structure control (NNBVSC).
-//! The controllers and the servo mathematics live in the `no_std` crate
-//! [`ehservo_core`]; this crate adds what experiments need:
+//! This crate is the lab and the command line. It stands on three crates
+//! that the bindings share without it: the `no_std` laws and servo
+//! mathematics ([`ehservo_core`]), the plants and the simulator
+//! (`ehservo-sim`, std, no I/O) and the scenario files with their runs
+//! (`ehservo-scenario`); their modules are re-exported here under the
+//! paths the lab has always used.
 //!
 //! | module | role |
 //! |---|---|
-//! | [`plant`], [`actuator`], [`sensor`], [`simulation`], [`metrics`] | the closed loop, re-exported from `ehservo-sim` (std, no I/O) |
-//! | [`scenario`] | TOML scenario files with the paper's defaults and clear errors; the controller registry |
-//! | [`run`] | scenario → plant + controller → result |
-//! | [`output`], [`plot`] | CSV, JSON and PNG/SVG outputs, written atomically |
+//! | [`plant`], [`actuator`], [`sensor`], [`simulation`], [`metrics`] | the closed loop, from `ehservo-sim` |
+//! | [`scenario`], [`run`], [`stepper`], [`observer_design`], [`limits`], [`cancel`], [`error`], [`input`] | the scenario files, their registries of plants and controllers, a run, a loop stepped by a caller, from `ehservo-scenario` |
+//! | [`output`] | CSV, JSON and PNG/SVG outputs of a run, written atomically |
+//! | [`plot`] | the figures' back end |
 //! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
-//! | [`estimation`] | design of the linear observers of `ehservo_core::estimate`: discretisation, Luenberger, steady-state Kalman, noise gains |
+//! | [`analysis`] | the paper's analysis: poles, K1/K2, the α bound of Theorem 2 |
 //! | [`study`] | sweeps and Monte Carlo, sharded across machines |
 //! | [`tune`], [`league`] | controller tuning by particle swarm; every controller of a suite, tuned alike, on every scenario |
-//! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
-//! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive |
+//! | [`fmu`] | `ehservo fmu`: the FMI 3.0 model description and archive (the contract it shares with `ehservo-ffi` is `ehservo_scenario::fmi`) |
+//! | [`freq`] | `ehservo linearize` and `ehservo freq`: linear models, frequency responses and margins, computed and measured |
 //! | [`identify`] | `ehservo excite` and `ehservo identify`: experiments designed, logged data turned into a scenario (docs/identification.md) |
 //! | [`pil`] | `ehservo pil`: the controller on a board (QEMU or serial), the rest simulated, in lock-step; `ehservo run --float f32` |
-//! | [`cancel`] | stopping long work from a host that stays alive (Python's Ctrl-C) |
-//! | [`limits`] | the work a run, a tune or a league may ask for, counted before any of it |
-//! | [`freq`] | `ehservo linearize` and `ehservo freq`: linear models, frequency responses and margins, computed and measured |
+//! | [`schema`] | `ehservo schema`: the file formats' JSON Schemas and reference pages |
+//! | [`signals`] | the command line's SIGINT/SIGTERM: what was being written is removed |
 
 pub mod analysis;
 pub mod bisection;
-pub mod cancel;
-pub mod error;
-pub mod estimation;
 pub mod fmu;
 pub mod freq;
 pub mod identify;
-pub mod input;
 pub mod league;
-pub mod limits;
 pub mod output;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod pil;
 pub mod plot;
 pub mod reproduce;
-pub mod run;
-pub mod scenario;
 pub mod schema;
 pub mod signals;
-pub mod stepper;
 pub mod study;
 pub mod tune;
 
@@ -52,3 +47,9 @@ pub use ehservo_sim::{
 };
 
 pub use ehservo_core as core;
+
+// What every binding needs (the scenario, a run, the stepper), from
+// `ehservo-scenario`, under the paths the lab and its users have always read.
+pub use ehservo_scenario::{
+    bad_input, cancel, error, input, limits, observer_design, run, scenario, stepper,
+};

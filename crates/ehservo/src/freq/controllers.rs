@@ -453,8 +453,8 @@ mod tests {
         let m = NominalModel::new(ServoParams::paper(), Load::paper());
         for h in [0.01, 0.001] {
             let obs = [
-                crate::estimation::luenberger(&m, [-60.0, -70.0, -80.0], h).unwrap(),
-                crate::estimation::kalman(&m, 1e3, 1e-8, h).unwrap(),
+                crate::observer_design::luenberger(&m, [-60.0, -70.0, -80.0], h).unwrap(),
+                crate::observer_design::kalman(&m, 1e3, 1e-8, h).unwrap(),
             ];
             for o in obs {
                 let model = observer_model(&o, h);

@@ -31,7 +31,7 @@ pub fn execute(
 ) -> Result<Vec<RunRow>> {
     use rayon::prelude::*;
     // The work of these runs, bounded before any of them.
-    crate::limits::check_study(plan, range.clone())?;
+    super::check_study(plan, range.clone())?;
     let work = || -> Vec<RunRow> {
         range
             .clone()

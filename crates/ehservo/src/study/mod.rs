@@ -35,6 +35,7 @@
 //! split (`--shard K/N` runs the K-th of N contiguous slices, K from 0).
 
 mod exec;
+mod limits;
 mod merge;
 mod plan;
 pub mod plots;
@@ -42,6 +43,7 @@ mod results;
 mod schema;
 
 pub use exec::{execute, resume_state, sweep, Resume, RunRow, SweepOptions};
+pub use limits::check_study;
 pub use merge::{check_shard, index_list, merge, missing, Missing};
 pub use plan::{derive_seed, parse_shard, Plan};
 pub use results::{as_f64, results_csv, StudyRecord, METRIC_COLUMNS};

@@ -384,17 +384,10 @@ impl Draw {
     }
 }
 
-/// A study file could not be used: file, key, reason (exit code 2).
-#[derive(Debug, Clone)]
-pub struct StudyError(pub String);
-
-impl std::fmt::Display for StudyError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for StudyError {}
+/// A study file could not be used: file, key, reason (exit code 2). It is
+/// the one kind of bad input, [`InputError`](crate::error::InputError),
+/// under the name the study's code reads best with.
+pub use crate::error::InputError as StudyError;
 
 /// Reads a TOML input file (a study, a tune file) into `T`; a failure is
 /// one line: the file, the line and column when TOML knows them, the key

@@ -377,7 +377,7 @@ fn build_estimator(
                     format!("must be finite and < 0 (got {p:?})"),
                 ));
             }
-            AnyEstimator::Linear(crate::estimation::luenberger(model, poles, h).map_err(err)?)
+            AnyEstimator::Linear(crate::observer_design::luenberger(model, poles, h).map_err(err)?)
         }
         EstimatorCfg::Kalman {
             process_noise,
@@ -400,7 +400,7 @@ fn build_estimator(
                 ));
             }
             AnyEstimator::Linear(
-                crate::estimation::kalman(model, process_noise, r, h).map_err(err)?,
+                crate::observer_design::kalman(model, process_noise, r, h).map_err(err)?,
             )
         }
     })

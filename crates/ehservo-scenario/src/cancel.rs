@@ -1,13 +1,13 @@
 //! Stopping long work from outside: what an interpreter's Ctrl-C needs.
 //!
 //! The command line needs none of this (a signal ends the process and
-//! [`crate::signals`] removes what it was writing). A host that stays
+//! `ehservo::signals` removes what it was writing). A host that stays
 //! alive — the Python package, whose `KeyboardInterrupt` must arrive while
 //! `ehservo.run`, `sweep`, `tune` or `league` is computing — calls
 //! [`request`]: every run in progress then stops at its next chunk of
 //! samples (at most about [`CHUNK_WORK`] evaluations, milliseconds), the
 //! sweeps, tunes and leagues start no new run, their entry points return
-//! [`Cancelled`], and no output is committed ([`crate::output::Staging`]
+//! [`Cancelled`], and no output is committed (`ehservo::output::Staging`
 //! refuses): an interrupted call leaves nothing behind.
 //!
 //! The request holds while any [`Scope`] is alive and is cleared when the

@@ -13,6 +13,7 @@
 //! full list of keys; [`Scenario::default`] is the paper's Fig. 2 case.
 
 mod build;
+pub mod json_schema;
 mod overrides;
 mod plants;
 mod reference;

@@ -91,7 +91,7 @@ pub fn run_setup(setup: &Setup, observe: &mut dyn FnMut(&Sample)) -> (Outcome, M
 
 /// What runs in place of the controller a scenario builds: the hook of the
 /// off-board runs (`ehservo run --float f32`, `ehservo pil`:
-/// [`crate::pil`]), which put the built controller's kind on a board and
+/// `ehservo::pil`), which put the built controller's kind on a board and
 /// keep the rest of the loop as it is.
 pub trait MapController {
     /// The controller that runs, for kind `K`.

@@ -1,12 +1,16 @@
-//! Errors by kind. Each layer has its typed error — the core's
-//! [`ParamError`](ehservo_core::error::ParamError), the scenario's
-//! [`ScenarioError`](crate::scenario::ScenarioError), the study's
-//! [`StudyError`](crate::study::StudyError) and [`InputError`] for any other
-//! input the user can fix (a manifest, a shard, a flag, an input file that
-//! is missing or unreadable) — and everything else is a failure of the
-//! machine (an output that cannot be written, a full disk). The command
-//! line's exit code follows the kind found in the error's chain, never the
-//! place it was raised: bad input 2, anything else 1.
+//! Errors by kind. Input the user can fix is one of three types, one per
+//! layer that reads input: [`InputError`] (a study, a tune or league file,
+//! a manifest, a shard, a flag, an input file that is missing or
+//! unreadable; the study's `StudyError` is this type under another name),
+//! the scenario's structured [`ScenarioError`](crate::scenario::ScenarioError)
+//! (file, key, line and column, reason), and the `no_std` core's
+//! [`ParamError`](ehservo_core::error::ParamError) (a law's parameters,
+//! which cannot depend on std's `Error`). A new kind of bad input is an
+//! [`InputError`] (or carries one in its chain): it needs no new line here.
+//! Everything else is a failure of the machine (an output that cannot be
+//! written, a full disk). The command line's exit code follows the kind
+//! found in the error's chain, never the place it was raised: bad input 2,
+//! anything else 1.
 
 use std::fmt;
 
@@ -35,7 +39,6 @@ pub fn is_bad_input(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
         c.is::<InputError>()
             || c.is::<crate::scenario::ScenarioError>()
-            || c.is::<crate::study::StudyError>()
             || c.is::<ehservo_core::error::ParamError>()
     })
 }

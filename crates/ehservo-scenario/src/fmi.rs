@@ -1,0 +1,271 @@
+//! The FMI 3.0 contract that `ehservo fmu` (which writes the FMU) and
+//! `ehservo-ffi` (whose `fmi3*` functions serve it) share: the kinds of
+//! FMU, their variables with value references and units, and the
+//! instantiation token that ties a binary to the scenario it was exported
+//! with. The archive and its `modelDescription.xml` are written by the
+//! lab's `ehservo::fmu`.
+//!
+//! Angles are in rad (SI, as everywhere in the C ABI); `e_deg` and
+//! `e_max_deg` are in degrees as `summary.json` gives them. On a linear
+//! axis ([`variables_on`]) the position is `y` in m and the error's display
+//! `e_mm` and metric `e_max` are in mm, at the same value references.
+/// The FMU's `modelIdentifier` (and the binary's file stem).
+pub const MODEL_IDENTIFIER: &str = "ehservo";
+
+/// The platform folder of the binary.
+pub const PLATFORM: &str = "x86_64-linux";
+
+/// Which FMU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FmuKind {
+    /// The controller alone: inputs θ, θ̇, θ̈; output u.
+    Controller,
+    /// The whole loop (plant, actuator, sensors, controller): no inputs.
+    ClosedLoop,
+}
+
+impl FmuKind {
+    /// Its name in the instantiation token.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FmuKind::Controller => "controller",
+            FmuKind::ClosedLoop => "closed-loop",
+        }
+    }
+}
+
+/// A variable's role.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Causality {
+    /// The independent variable, time.
+    Independent,
+    /// Set by the importer.
+    Input,
+    /// Computed by the FMU.
+    Output,
+}
+
+/// One Float64 variable of an FMU.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variable {
+    /// Its value reference.
+    pub vr: u32,
+    /// Its name.
+    pub name: &'static str,
+    /// Its role.
+    pub causality: Causality,
+    /// Its unit (a `<Unit>` of the model description).
+    pub unit: &'static str,
+    /// What it is.
+    pub description: &'static str,
+}
+
+/// Value references: the same numbers in both kinds where they mean the
+/// same thing.
+pub mod vr {
+    /// Time (s).
+    pub const TIME: u32 = 0;
+    /// θ (rad).
+    pub const THETA: u32 = 1;
+    /// θ̇ (rad/s).
+    pub const THETA_DOT: u32 = 2;
+    /// θ̈ (rad/s²).
+    pub const THETA_DDOT: u32 = 3;
+    /// u (V).
+    pub const U: u32 = 4;
+    /// θd (rad).
+    pub const THETA_D: u32 = 5;
+    /// e = θd − θ (rad).
+    pub const E: u32 = 6;
+    /// e in degrees.
+    pub const E_DEG: u32 = 7;
+    /// max |e| over t ≥ settle so far (deg).
+    pub const E_MAX_DEG: u32 = 8;
+    /// What the plant receives after the actuator (V).
+    pub const U_PLANT: u32 = 9;
+}
+
+const TIME: Variable = Variable {
+    vr: vr::TIME,
+    name: "time",
+    causality: Causality::Independent,
+    unit: "s",
+    description: "Simulation time",
+};
+
+const CONTROLLER: &[Variable] = &[
+    TIME,
+    Variable {
+        vr: vr::THETA,
+        name: "theta",
+        causality: Causality::Input,
+        unit: "rad",
+        description: "Measured angle θ",
+    },
+    Variable {
+        vr: vr::THETA_DOT,
+        name: "theta_dot",
+        causality: Causality::Input,
+        unit: "rad/s",
+        description: "Measured angular velocity θ̇",
+    },
+    Variable {
+        vr: vr::THETA_DDOT,
+        name: "theta_ddot",
+        causality: Causality::Input,
+        unit: "rad/s2",
+        description: "Measured angular acceleration θ̈",
+    },
+    Variable {
+        vr: vr::U,
+        name: "u",
+        causality: Causality::Output,
+        unit: "V",
+        description: "Command to the servo valve, the law at the current sample (direct feedthrough of the inputs)",
+    },
+    Variable {
+        vr: vr::THETA_D,
+        name: "theta_d",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "The scenario's reference θd at the current sample",
+    },
+];
+
+const CLOSED_LOOP: &[Variable] = &[
+    TIME,
+    Variable {
+        vr: vr::THETA,
+        name: "theta",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "Angle θ of the plant",
+    },
+    Variable {
+        vr: vr::THETA_DOT,
+        name: "theta_dot",
+        causality: Causality::Output,
+        unit: "rad/s",
+        description: "Angular velocity θ̇ of the plant",
+    },
+    Variable {
+        vr: vr::THETA_DDOT,
+        name: "theta_ddot",
+        causality: Causality::Output,
+        unit: "rad/s2",
+        description: "Angular acceleration θ̈ of the plant",
+    },
+    Variable {
+        vr: vr::U,
+        name: "u",
+        causality: Causality::Output,
+        unit: "V",
+        description: "The controller's command",
+    },
+    Variable {
+        vr: vr::THETA_D,
+        name: "theta_d",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "Reference θd",
+    },
+    Variable {
+        vr: vr::E,
+        name: "e",
+        causality: Causality::Output,
+        unit: "rad",
+        description: "Tracking error e = θd − θ",
+    },
+    Variable {
+        vr: vr::E_DEG,
+        name: "e_deg",
+        causality: Causality::Output,
+        unit: "deg",
+        description: "Tracking error in degrees",
+    },
+    Variable {
+        vr: vr::E_MAX_DEG,
+        name: "e_max_deg",
+        causality: Causality::Output,
+        unit: "deg",
+        description: "max |e| over the samples at t >= simulation.settle so far (summary.json's e_max_deg at the horizon; 0 before settle)",
+    },
+    Variable {
+        vr: vr::U_PLANT,
+        name: "u_plant",
+        causality: Causality::Output,
+        unit: "V",
+        description: "What the plant receives after the actuator",
+    },
+];
+
+/// The variables of a kind of FMU on `axis`: a rotary axis's are
+/// [`variables`]; on a linear one the position is `y` (m, m/s, m/s2), the
+/// error in the display unit `e_mm` and the metric `e_max` (mm), with the
+/// same value references.
+pub fn variables_on(kind: FmuKind, axis: crate::axis::Axis) -> Vec<Variable> {
+    let vars = variables(kind);
+    if axis == crate::axis::Axis::Rotary {
+        return vars.to_vec();
+    }
+    vars.iter()
+        .map(|v| {
+            let (name, unit, description) = match v.vr {
+                vr::THETA => ("y", "m", "Rod position y"),
+                vr::THETA_DOT => ("y_dot", "m/s", "Rod velocity ẏ"),
+                vr::THETA_DDOT => ("y_ddot", "m/s2", "Rod acceleration ÿ"),
+                vr::THETA_D => ("y_d", "m", "Reference yd"),
+                vr::E => ("e", "m", "Tracking error e = yd − y"),
+                vr::E_DEG => ("e_mm", "mm", "Tracking error in millimetres"),
+                vr::E_MAX_DEG => (
+                    "e_max",
+                    "mm",
+                    "max |e| over the samples at t >= simulation.settle so far (summary.json's e_max, in mm, at the horizon; 0 before settle)",
+                ),
+                _ => (v.name, v.unit, v.description),
+            };
+            Variable {
+                name,
+                unit,
+                description,
+                ..*v
+            }
+        })
+        .collect()
+}
+
+/// The variables of a kind of FMU (a rotary axis: [`variables_on`] gives
+/// a linear one's).
+pub fn variables(kind: FmuKind) -> &'static [Variable] {
+    match kind {
+        FmuKind::Controller => CONTROLLER,
+        FmuKind::ClosedLoop => CLOSED_LOOP,
+    }
+}
+
+/// The instantiation token of an FMU of `kind` built from `scenario_toml`:
+/// the kind and the scenario file's FNV-1a fingerprint
+/// ([`ehservo_wire::fnv1a`], 64 bits; not a security measure: it catches
+/// resources swapped by mistake).
+pub fn token(kind: FmuKind, scenario_toml: &str) -> String {
+    format!(
+        "{{ehservo-{}-{:016x}}}",
+        kind.as_str(),
+        ehservo_wire::fnv1a(scenario_toml.as_bytes())
+    )
+}
+
+/// The kind a token names, if it is one of ours for exactly this scenario
+/// text; otherwise why not.
+pub fn check_token(token_text: &str, scenario_toml: &str) -> Result<FmuKind, String> {
+    for kind in [FmuKind::Controller, FmuKind::ClosedLoop] {
+        if token_text == token(kind, scenario_toml) {
+            return Ok(kind);
+        }
+    }
+    Err(format!(
+        "the instantiation token {token_text:?} is not {:?} or {:?}: resources/scenario.toml is not the file this FMU was exported with",
+        token(FmuKind::Controller, scenario_toml),
+        token(FmuKind::ClosedLoop, scenario_toml)
+    ))
+}

@@ -1,0 +1,153 @@
+//! A reference read from a CSV table, and the piecewise-linear trajectory
+//! through the prefilter that it (and a square wave) becomes.
+
+use super::*;
+
+/// The rows of a reference CSV (`t,theta_deg`) as knots (s, rad). The
+/// error names the file, the line and the data row.
+pub fn read_csv(path: &Path) -> Result<Vec<Knot>, String> {
+    read_csv_on(path, Axis::Rotary)
+}
+
+/// The rows of a reference CSV on `axis` (`t,theta_deg` or `t,y_mm`) as
+/// knots (s, SI).
+pub fn read_csv_on(path: &Path, axis: Axis) -> Result<Vec<Knot>, String> {
+    let col = axis.column("", "");
+    let col = col.as_str();
+    let name = path.display();
+    let text =
+        crate::input::read_text(path).map_err(|r| format!("the reference file {name} {r}"))?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty());
+    let Some((hl, header)) = lines.next() else {
+        return Err(format!(
+            "{name}: is empty: expected the header `t,{col}` and at least two rows"
+        ));
+    };
+    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    if cols != ["t", col] {
+        return Err(format!(
+            "{name}: line {hl}: expected the header `t,{col}`, got `{header}`"
+        ));
+    }
+    let mut knots: Vec<Knot> = Vec::new();
+    for (row, (line, l)) in lines.enumerate() {
+        let row = row + 1;
+        let at = format!("{name}: line {line} (row {row})");
+        if knots.len() >= MAX_KNOTS {
+            return Err(format!("{at}: more than {MAX_KNOTS} rows"));
+        }
+        let fields: Vec<&str> = l.split(',').map(str::trim).collect();
+        if fields.len() != 2 {
+            return Err(format!(
+                "{at}: expected 2 columns (t, {col}), got {}",
+                fields.len()
+            ));
+        }
+        let mut v = [0.0; 2];
+        for (j, col) in ["t", col].iter().enumerate() {
+            let x: f64 = fields[j].parse().map_err(|_| {
+                format!(
+                    "{at}: cannot read `{}` in column {col} as a number",
+                    fields[j]
+                )
+            })?;
+            if x.is_nan() {
+                return Err(format!("{at}: NaN in column {col}"));
+            }
+            if !x.is_finite() {
+                return Err(format!("{at}: {x} in column {col}: values must be finite"));
+            }
+            v[j] = x;
+        }
+        if let Some(prev) = knots.last() {
+            if v[0] <= prev.t {
+                return Err(format!(
+                    "{at}: non-monotonic time: t = {} after {} (times must strictly increase)",
+                    v[0], prev.t
+                ));
+            }
+            // The interpolation divides by the rows' time step and
+            // measures time from the first row: both must be finite.
+            if !(v[0] - knots[0].t).is_finite() {
+                return Err(format!(
+                    "{at}: t = {:e} is too far from the first row's t = {:e}: the time span overflows",
+                    v[0], knots[0].t
+                ));
+            }
+            let slope = (v[1] * DR - prev.v) / (v[0] - prev.t);
+            if !slope.is_finite() {
+                return Err(format!(
+                    "{at}: θd changes by {:e}° in {:e} s from the row before: the slope overflows",
+                    v[1] - prev.v / DR,
+                    v[0] - prev.t
+                ));
+            }
+        }
+        knots.push(Knot {
+            t: v[0],
+            v: match axis {
+                Axis::Rotary => v[1] * DR,
+                Axis::Linear => v[1] / 1e3,
+            },
+        });
+    }
+    match knots.len() {
+        0 => Err(format!(
+            "{name}: no data rows: a CSV reference needs at least two"
+        )),
+        1 => Err(format!(
+            "{name}: a single data row: a CSV reference needs at least two"
+        )),
+        _ => Ok(knots),
+    }
+}
+
+/// A piecewise-linear reference through the prefilter, owning its knots
+/// and the filter's state at each.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    pub(super) knots: Vec<Knot>,
+    states: Vec<LagState>,
+    pub(super) tau: f64,
+}
+
+impl Table {
+    /// The knots through four lags of `tau`, as a reference.
+    pub(super) fn reference(knots: Vec<Knot>, tau: f64) -> Result<AnyReference, Bad> {
+        if tau == 0.0 {
+            // No prefilter: the pieces' slopes are θ̇d, and must be numbers.
+            for w in knots.windows(2) {
+                let dt = w[1].t - w[0].t;
+                if dt > 0.0 && !(w[1].v / dt - w[0].v / dt).is_finite() {
+                    return Err((
+                        "reference".into(),
+                        format!(
+                            "the reference changes by more than a double can hold per second at t = {}",
+                            w[1].t
+                        ),
+                    ));
+                }
+            }
+            return Ok(AnyReference::Pieces(Arc::new(knots)));
+        }
+        let mut states = vec![[0.0; 4]; knots.len()];
+        Prefiltered::fill_states(&knots, tau, &mut states)
+            .map_err(|e| ("reference".to_string(), e.to_string()))?;
+        Ok(AnyReference::Table(Arc::new(Table { knots, states, tau })))
+    }
+
+    /// The core's view of it.
+    pub fn prefiltered(&self) -> Prefiltered<'_> {
+        Prefiltered::new(&self.knots, &self.states, self.tau)
+            .expect("Table::new filled one state per knot with tau > 0")
+    }
+
+    /// The knots (s, rad).
+    pub fn knots(&self) -> &[Knot] {
+        &self.knots
+    }
+}
