@@ -10,7 +10,9 @@
 #    messages the library promises (the CLI's message for the scenario).
 # 2. `ehservo fmu` exports the controller and the closed-loop FMUs, and
 #    ci/fmu_check.py checks them with FMPy: validation, the closed loop's
-#    e_max_deg, the controller's commands, the controller on a Python plant.
+#    e_max_deg, the controller's commands, the controller on a Python plant;
+#    and a single-rod cylinder's closed-loop FMU read in mm (its variables,
+#    units and e_max against its run's summary.json).
 #
 # Missing tools are installed when possible; what cannot be had is reported
 # as "SKIPPED ...: reason" and does not fail CI.
@@ -95,6 +97,10 @@ fi
 echo "== FMI 3.0 export checked by FMPy"
 "$bin/ehservo" fmu scenarios/paper/fig2.toml --out "$d/controller.fmu"
 "$bin/ehservo" fmu scenarios/paper/fig2.toml --closed-loop --out "$d/closed-loop.fmu"
+# A linear axis: the single-rod cylinder, over 3 s (one period after settle).
+cyl=(scenarios/cylinders/chrono-single-rod.toml --set simulation.horizon=3.0)
+"$bin/ehservo" run "${cyl[@]}" --out "$d/cyl" --no-plot -q
+"$bin/ehservo" fmu "${cyl[@]}" --closed-loop --out "$d/cyl-loop.fmu"
 fmpy_skip=""
 if ! command -v python3 >/dev/null 2>&1; then
   fmpy_skip="python3 is not installed"
@@ -108,7 +114,8 @@ fi
 if [ -n "$fmpy_skip" ]; then
   echo "SKIPPED the FMPy checks: $fmpy_skip"
 else
-  python3 ci/fmu_check.py "$d/controller.fmu" "$d/closed-loop.fmu" "$d/fig2/summary.json"
+  python3 ci/fmu_check.py "$d/controller.fmu" "$d/closed-loop.fmu" "$d/fig2/summary.json" \
+    --linear "$d/cyl-loop.fmu" "$d/cyl/summary.json"
 fi
 
 echo "-- the guide's C and FMU blocks (docs/guide/python-c-fmi.md), and FMPy's where it is installed"

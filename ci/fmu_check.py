@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks the FMUs of `ehservo fmu` with FMPy (ci/ffi.sh runs it).
 
-  python3 ci/fmu_check.py CONTROLLER.fmu CLOSED_LOOP.fmu SUMMARY.json
+  python3 ci/fmu_check.py CONTROLLER.fmu CLOSED_LOOP.fmu SUMMARY.json \
+      [--linear LINEAR_CLOSED_LOOP.fmu LINEAR_SUMMARY.json]
 
 1. FMPy's model-description validation passes for both FMUs.
 2. The closed-loop FMU simulated by fmpy.simulate_fmu (its default
@@ -18,6 +19,13 @@
 5. Calls made wrong (a step before initialisation, a NaN input, an unknown
    value reference, a step that is not a whole number of periods) return
    fmi3Error.
+
+6. With --linear, a closed-loop FMU of a cylinder (a linear axis) reads
+   in mm: its variables are y (m), y_dot, y_ddot, y_d, e (m), e_mm and
+   e_max (mm), no name or unit says deg or rad, and simulated by
+   fmpy.simulate_fmu over its default experiment its e_max output at the
+   end and max |e_mm| over t >= settle (the FMU's resources/scenario.toml)
+   are the run's summary.json metrics.e_max (unit "mm").
 
 Relative tolerance 1e-6 for the e_max comparisons; u in check 3 must be
 the same double. Exit 1 on any failure.
@@ -64,8 +72,48 @@ def instantiate(path):
     return md, fmu, vrs
 
 
+def check_linear(loop_path, summary_path, check):
+    """6: a cylinder's closed-loop FMU, in mm."""
+    import tomllib
+
+    with open(summary_path) as f:
+        metrics = json.load(f)["metrics"]
+    expected = metrics["e_max"]
+    check(metrics.get("unit") == "mm", f"linear: summary.json's metrics unit is {metrics.get('unit')!r}")
+    problems = validate_fmu(loop_path)
+    check(not problems, f"{os.path.basename(loop_path)}: FMPy validation "
+          + ("passes" if not problems else f"fails: {problems}"))
+    md = read_model_description(loop_path)
+    units = {v.name: v.unit or (v.declaredType.unit if v.declaredType else None)
+             for v in md.modelVariables}
+    want = {"y": "m", "y_dot": "m/s", "y_ddot": "m/s2", "y_d": "m", "e": "m",
+            "e_mm": "mm", "e_max": "mm"}
+    got = {k: units.get(k) for k in want}
+    check(got == want, f"linear: variables and units {got}")
+    stray = [n for n, u in units.items() if "deg" in n or "theta" in n or (u or "") in ("deg", "rad")]
+    check(not stray, f"linear: no variable in degrees or radians ({stray})")
+    with open(os.path.join(extracted(loop_path), "resources", "scenario.toml"), "rb") as f:
+        settle = tomllib.load(f)["simulation"]["settle"]
+    res = simulate_fmu(loop_path, output=["e_mm", "e_max", "y"])
+    t = res["time"]
+    e_max_out = float(res["e_max"][-1])
+    e_max_rec = max(abs(float(e)) for tt, e in zip(t, res["e_mm"]) if tt >= settle - 1e-9)
+    check(rel_err(e_max_out, expected) <= REL,
+          f"linear closed loop: output e_max = {e_max_out!r} mm, run {expected!r} mm "
+          f"(rel. diff {rel_err(e_max_out, expected):.2e})")
+    check(rel_err(e_max_rec, expected) <= REL,
+          f"linear closed loop: max |e_mm| over t >= {settle} s = {e_max_rec!r} mm "
+          f"(rel. diff {rel_err(e_max_rec, expected):.2e})")
+
+
 def main():
     ctl_path, loop_path, summary_path = sys.argv[1:4]
+    linear = None
+    if len(sys.argv) > 4:
+        if sys.argv[4] != "--linear" or len(sys.argv) != 7:
+            print(__doc__)
+            return 2
+        linear = sys.argv[5:7]
     with open(summary_path) as f:
         expected = json.load(f)["metrics"]["e_max_deg"]
     failures = []
@@ -175,6 +223,9 @@ def main():
         refused.append("a step of half a period")
     fmu.freeInstance()
     check(len(refused) == 4, f"controller FMU: fmi3Error for {', '.join(refused)}")
+
+    if linear:
+        check_linear(*linear, check)
 
     if failures:
         print(f"{len(failures)} check(s) failed")

@@ -8,6 +8,8 @@
 //   - bad input (a letter, an empty field, a value out of range) shows the
 //     validator's message next to the field and keeps the last good run;
 //   - a Fig. 2 run takes under 5 ms (median of 50, performance.now());
+//   - a single-rod cylinder (a linear axis) reads in mm: its e_max card in
+//     mm equals `ehservo run`'s summary.json e_max, no card in degrees;
 // and writes a screenshot. Usage:
 //   node web/test/e2e.mjs --ehservo target/debug/ehservo --out target/web-test
 import { chromium } from 'playwright-core';
@@ -155,6 +157,19 @@ try {
   const shot = join(out, 'screenshot.png');
   await page.screenshot({ path: shot, fullPage: true });
   console.log(`screenshot: ${shot}`);
+
+  // A linear axis: the single-rod cylinder, opened by its URL, in mm.
+  const cyl = await open(base + '#scenario=cylinders/chrono-single-rod');
+  const cylCard = await cyl.$eval('[data-metric="e_max"]', (el) => ({ v: el.dataset.value, text: el.textContent }))
+    .catch(() => null);
+  const degCards = await cyl.$$eval('[data-metric$="_deg"]', (c) => c.map((x) => x.dataset.metric));
+  execFileSync(ehservo, ['run', join(repo, 'scenarios/cylinders/chrono-single-rod.toml'), '--out', join(out, 'run-cylinder'), '--no-plot', '-q']);
+  const cylSummary = JSON.parse(execFileSync('cat', [join(out, 'run-cylinder', 'summary.json')], { encoding: 'utf8' })).metrics;
+  check('a cylinder reads in mm: page e_max = ehservo run e_max',
+    cylCard !== null && cylCard.text.endsWith(' mm') && degCards.length === 0 && cylSummary.unit === 'mm'
+      && close(Number(cylCard.v), cylSummary.e_max),
+    `page ${cylCard && cylCard.text}, CLI ${cylSummary.e_max} ${cylSummary.unit}, cards in degrees: ${degCards.join() || 'none'}`);
+  await cyl.close();
 
   check('no console error', errors.length === 0, errors.join(' | '));
 } catch (e) {
