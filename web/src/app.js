@@ -131,7 +131,9 @@ function paramRow(p, container) {
 function setValues(values) {
   for (const [key, f] of Object.entries(state.fields)) {
     const v = key in values ? values[key] : null;
-    const text = typeof v === 'string' ? v : fmt(v);
+    // A number is shown exactly (String, the shortest round trip), so that
+    // a scenario's own value is not sent back rounded as a change.
+    const text = typeof v === 'string' ? v : v === null || v === undefined ? '' : String(v);
     f.input.value = text;
     const n = Number(text);
     f.slider.value = toSlider(f.param, text === '' || !Number.isFinite(n) ? null : n);
@@ -153,8 +155,16 @@ function loadKind(kind, given = {}) {
   $('controller-params').replaceChildren();
   $('uncertainty-params').replaceChildren();
   if (info.params.length === 0) $('controller-params').innerHTML = '<p class="desc">No declared tunables.</p>';
-  for (const p of info.params) paramRow(p, $('controller-params'));
-  for (const p of state.catalog.uncertainty) paramRow(p, $('uncertainty-params'));
+  // A declared range is where the slider explores; it is widened to hold
+  // the scenario's own value (as the validator does: playground.rs
+  // `Param::including`), e.g. a cylinder's P gain beyond the paper's scale.
+  const including = (p) => {
+    const b = state.base[p.key];
+    if (typeof b !== 'number' || !Number.isFinite(b) || (p.log && b <= 0)) return p;
+    return { ...p, low: Math.min(p.low, b), high: Math.max(p.high, b) };
+  };
+  for (const p of info.params) paramRow(including(p), $('controller-params'));
+  for (const p of state.catalog.uncertainty) paramRow(including(p), $('uncertainty-params'));
   setValues({ ...state.base, ...given });
   // Signals: what the kind writes; σ and ‖W‖ first when it has them.
   const keys = info.signals.map((s) => s.key);

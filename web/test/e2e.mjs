@@ -160,15 +160,17 @@ try {
 
   // A linear axis: the single-rod cylinder, opened by its URL, in mm.
   const cyl = await open(base + '#scenario=cylinders/chrono-single-rod');
+  await cyl.waitForSelector('[data-metric="e_max"]', { timeout: 30000 }).catch(() => null);
   const cylCard = await cyl.$eval('[data-metric="e_max"]', (el) => ({ v: el.dataset.value, text: el.textContent }))
     .catch(() => null);
   const degCards = await cyl.$$eval('[data-metric$="_deg"]', (c) => c.map((x) => x.dataset.metric));
+  const cylStatus = await cyl.$eval('#status', (el) => el.textContent).catch(() => '');
   execFileSync(ehservo, ['run', join(repo, 'scenarios/cylinders/chrono-single-rod.toml'), '--out', join(out, 'run-cylinder'), '--no-plot', '-q']);
   const cylSummary = JSON.parse(execFileSync('cat', [join(out, 'run-cylinder', 'summary.json')], { encoding: 'utf8' })).metrics;
   check('a cylinder reads in mm: page e_max = ehservo run e_max',
     cylCard !== null && cylCard.text.endsWith(' mm') && degCards.length === 0 && cylSummary.unit === 'mm'
       && close(Number(cylCard.v), cylSummary.e_max),
-    `page ${cylCard && cylCard.text}, CLI ${cylSummary.e_max} ${cylSummary.unit}, cards in degrees: ${degCards.join() || 'none'}`);
+    `page ${cylCard && cylCard.text}, CLI ${cylSummary.e_max} ${cylSummary.unit}, cards in degrees: ${degCards.join() || 'none'}; status "${cylStatus}"`);
   await cyl.close();
 
   check('no console error', errors.length === 0, errors.join(' | '));

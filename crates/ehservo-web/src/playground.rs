@@ -70,6 +70,18 @@ impl Param {
             log: t.log,
         }
     }
+
+    /// The range widened to hold the scenario's own value `base` (a
+    /// declared range is where the slider explores; a scenario's value
+    /// outside it, such as a cylinder's P gain of 11 162 V/m beyond the
+    /// paper-scale 10⁴, stays valid). A log range keeps a positive low end.
+    fn including(mut self, base: Option<f64>) -> Self {
+        if let Some(b) = base.filter(|b| b.is_finite() && (!self.log || *b > 0.0)) {
+            self.low = self.low.min(b);
+            self.high = self.high.max(b);
+        }
+        self
+    }
 }
 
 /// A signal of a controller's parts that traces write.
@@ -267,8 +279,10 @@ pub fn resolve(
         "controller.kind".to_string(),
         toml::Value::String(kind.clone()),
     );
-    base.with_values(std::slice::from_ref(&kind_value))
-        .map_err(|e| vec![e.into()])?;
+    let under_kind = base
+        .with_values(std::slice::from_ref(&kind_value))
+        .map_err(|e| vec![e.into()])?
+        .resolved_table();
     let mut errors = Vec::new();
     let mut values = vec![kind_value.clone()];
     for (key, raw) in overrides {
@@ -287,7 +301,7 @@ pub fn resolve(
             toml::Value::Integer(v) => Some(v as f64),
             _ => None,
         };
-        if let Some(p) = range_of(&kind, key) {
+        if let Some(p) = range_of(&kind, key).map(|p| p.including(value_at(&under_kind, key))) {
             match number {
                 None => {
                     errors.push(FieldError::new(key, format!("`{raw}` is not a number")));
@@ -523,24 +537,29 @@ pub fn base_values(
         .chain(UNCERTAINTY.iter().map(|t| Param::of("uncertainty", t)));
     Ok(params
         .map(|p| {
-            let mut cur = Some(&table);
-            let mut value = None;
-            let parts: Vec<&str> = p.key.split('.').collect();
-            for (i, part) in parts.iter().enumerate() {
-                let v = cur.and_then(|t| t.get(*part));
-                if i + 1 == parts.len() {
-                    value = match v {
-                        Some(toml::Value::Float(f)) => Some(*f),
-                        Some(toml::Value::Integer(n)) => Some(*n as f64),
-                        _ => None,
-                    };
-                } else {
-                    cur = v.and_then(toml::Value::as_table);
-                }
-            }
+            let value = value_at(&table, &p.key);
             (p.key, value)
         })
         .collect())
+}
+
+/// The number at the dotted `key` of a resolved scenario table, if it is
+/// set to one.
+fn value_at(table: &toml::Table, key: &str) -> Option<f64> {
+    let mut cur = Some(table);
+    let parts: Vec<&str> = key.split('.').collect();
+    for (i, part) in parts.iter().enumerate() {
+        let v = cur.and_then(|t| t.get(*part));
+        if i + 1 == parts.len() {
+            return match v {
+                Some(toml::Value::Float(f)) => Some(*f),
+                Some(toml::Value::Integer(n)) => Some(*n as f64),
+                _ => None,
+            };
+        }
+        cur = v.and_then(toml::Value::as_table);
+    }
+    None
 }
 
 #[cfg(test)]
@@ -620,6 +639,19 @@ mod tests {
             "{}",
             run.trace.theta[0]
         );
+        // Its P gain (11 162 V/m) is beyond the declared slider range of
+        // kp (10⁴): the range holds the scenario's own value, so the page
+        // may set it, and refuses what lies beyond both.
+        let kp = |v: &str| {
+            simulate(
+                "cylinders/chrono-single-rod",
+                &set(&[("simulation.horizon", "1.0"), ("controller.kp", v)]),
+            )
+        };
+        assert!(kp("11162").is_ok());
+        assert!(kp("11000").is_ok());
+        let e = kp("20000").unwrap_err();
+        assert!(e[0].reason.contains("[0.1, 11162]"), "{e:?}");
         let hopsan = simulate("hopsan/position-servo", &[]).unwrap();
         assert_eq!(hopsan.unit, "mm");
         assert_eq!(
