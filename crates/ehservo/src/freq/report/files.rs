@@ -1,0 +1,392 @@
+//! What `ehservo freq` writes: `freq.json` (the settings, the computed
+//! margins and peaks, the measured bandwidth and loop margins, the terminal
+//! lines beside it), `linearization.json`, and the CSV tables of the
+//! computed and measured curves; the figures are drawn in `figures`.
+
+use super::figures::{bode, measured_plot, nyquist};
+use super::measured::{measured_bandwidth, measured_margins};
+use super::{db, unwrap, FreqOptions, FreqSummary, MeasuredSet};
+use crate::freq::margins::{self, Margins};
+use crate::freq::measure::{Measured, Settings};
+use crate::freq::response::{Loop, Responses, CURVES};
+use crate::freq::ss::C64;
+use crate::freq::{linearisation_json, Linearised};
+use crate::output::Staging;
+use crate::scenario::{Scenario, Setup};
+use anyhow::{Context, Result};
+use serde_json::json;
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A CSV cell: the number, or empty.
+fn cell(v: Option<f64>) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{x:e}"),
+        _ => String::new(),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(super) fn write(
+    s: &Scenario,
+    setup: &Setup,
+    o: &FreqOptions,
+    computed: &std::result::Result<Linearised, String>,
+    sets: &[MeasuredSet],
+    f_max: f64,
+    settings: Settings,
+    stage: Staging,
+) -> Result<FreqSummary> {
+    let dirp = stage.path().to_path_buf();
+    let mut files = Vec::new();
+    let mut text = String::new();
+    let h = setup.sim.step;
+    let freqs: Vec<f64> = (0..o.points)
+        .map(|i| o.f_min * (f_max / o.f_min).powf(i as f64 / (o.points - 1) as f64))
+        .collect();
+    let mut summary = json!({
+        "scenario": s.name,
+        "ehservo": env!("CARGO_PKG_VERSION"),
+        "controller": s.controller.kind(),
+        "mode": setup.sim.mode.as_str(),
+        "dt_s": h,
+        "nyquist_Hz": 0.5 / h,
+        "grid": {"f_min_Hz": o.f_min, "f_max_Hz": f_max, "points": o.points},
+        "curves": CURVES.iter().map(|(n, u, d)| json!({"name": n, "unit": u, "what": d, "gain_dB": format!("20·log10 |{n}| re 1 {}", if u.is_empty() { "(dimensionless)" } else { u })})).collect::<Vec<_>>(),
+    });
+    let mut responses: Vec<Responses> = Vec::new();
+    let mut lp_opt = None;
+    match computed {
+        Ok(l) => {
+            let lp = &l.lp;
+            lp_opt = Some(lp);
+            let lj = linearisation_json(s, l);
+            let path = dirp.join("linearization.json");
+            std::fs::write(&path, serde_json::to_string_pretty(&lj)? + "\n")
+                .with_context(|| format!("writing {}", path.display()))?;
+            files.push(PathBuf::from("linearization.json"));
+            responses = freqs.iter().map(|&f| lp.at(2.0 * PI * f)).collect();
+            let hi = if lp.sampled() {
+                lp.nyquist() * (1.0 - 1e-9)
+            } else {
+                2.0 * PI * f_max
+            };
+            let lo = lp.lowest();
+            let c = |sel: fn(&Responses) -> Option<C64>| move |w: f64| sel(&lp.at(w));
+            let m: Option<Margins> = lp
+                .loop_l
+                .as_ref()
+                .map(|_| margins::margins(&c(|r| r.l), lo, hi, lp.sampled().then_some(h)));
+            let peak = |sel: fn(&Responses) -> Option<C64>| {
+                margins::peak(&c(sel), lo, hi).map(
+                    |(w, v)| json!({"value": v, "dB": 20.0 * v.log10(), "f_Hz": w / (2.0 * PI)}),
+                )
+            };
+            let bw = |sel: fn(&Responses) -> Option<C64>| {
+                let dc = sel(&lp.at(lo)).map(|z| z.norm())?;
+                margins::bandwidth(&c(sel), dc, lo, hi).map(|w| w / (2.0 * PI))
+            };
+            let computed_json = json!({
+                "operating_point": l.point,
+                "one_sided": l.side.map(|s| s.as_str()),
+                "kinks": lp.kinks.iter().map(|k| k.what.clone()).collect::<Vec<_>>(),
+                "notes": lp.notes,
+                "discretisation": lp.discretisation.as_str(),
+                "linear_controller": lp.controller.is_some(),
+                "closed_loop_stable": lp.closed_loop_stable(),
+                "margins": m,
+                "Ms": lp.loop_l.as_ref().and_then(|_| peak(|r| r.s)),
+                "Mt": lp.loop_l.as_ref().and_then(|_| peak(|r| r.t)),
+                "tracking_peak": lp.loop_l.as_ref().and_then(|_| peak(|r| r.track)),
+                "bandwidth_Hz": {
+                    "T": lp.loop_l.as_ref().and_then(|_| bw(|r| r.t)),
+                    "tracking": lp.loop_l.as_ref().and_then(|_| bw(|r| r.track)),
+                    "G": bw(|r| r.g),
+                },
+                "dc_gain": {
+                    "G_rad_V": lp.g.dc_gain(),
+                    "C_V_rad": lp.feedback.as_ref().and_then(|f| f.dc_gain()),
+                },
+            });
+            let _ = writeln!(
+                text,
+                "computed about the {} point θ = {:.4}°{}:",
+                l.point.kind,
+                l.point.theta_deg,
+                l.point
+                    .t_s
+                    .map(|t| format!(" (t = {t} s)"))
+                    .unwrap_or_default()
+            );
+            if let Some(m) = &m {
+                let _ = writeln!(
+                    text,
+                    "  L: gain margin {}, phase margin {}, delay margin {}; closed loop {}",
+                    m.gain_margin
+                        .map(|g| format!("{:.3} dB at {:.3} Hz", g.gain_margin_db, g.f_hz))
+                        .unwrap_or("none (no phase crossover)".into()),
+                    m.phase_margin
+                        .map(|g| format!("{:.3}° at {:.3} Hz", g.phase_margin_deg, g.f_hz))
+                        .unwrap_or("none (no gain crossover)".into()),
+                    m.delay_margin
+                        .and_then(|g| g.delay_margin_s)
+                        .map(|d| format!("{:.3} ms", d * 1e3))
+                        .unwrap_or("none".into()),
+                    match lp.closed_loop_stable() {
+                        Some(true) => "stable",
+                        Some(false) => "UNSTABLE",
+                        None => "?",
+                    }
+                );
+                let bt = computed_json["bandwidth_Hz"]["tracking"].as_f64();
+                let _ = writeln!(
+                    text,
+                    "  Ms {:.3}, Mt {:.3}; −3 dB bandwidth of T {}, of θ/θd {}",
+                    computed_json["Ms"]["value"].as_f64().unwrap_or(f64::NAN),
+                    computed_json["Mt"]["value"].as_f64().unwrap_or(f64::NAN),
+                    computed_json["bandwidth_Hz"]["T"]
+                        .as_f64()
+                        .map(|b| format!("{b:.3} Hz"))
+                        .unwrap_or("beyond the band".into()),
+                    bt.map(|b| format!("{b:.3} Hz"))
+                        .unwrap_or("beyond the band".into()),
+                );
+            } else {
+                let _ = writeln!(
+                    text,
+                    "  `{}` is not a linear law: the computed curves are the plant's alone",
+                    s.controller.kind()
+                );
+            }
+            summary["computed"] = computed_json;
+            write_response_csv(&dirp.join("response.csv"), &responses, &freqs)?;
+            files.push(PathBuf::from("response.csv"));
+        }
+        Err(why) => {
+            summary["computed"] = json!({"not_computed": why});
+            let _ = writeln!(text, "computed curves: not available ({why})");
+        }
+    }
+    let mut measured_json = serde_json::Map::new();
+    for set in sets {
+        let name = format!("measured_{}.csv", set.method.as_str());
+        write_measured_csv(&dirp.join(&name), set, lp_opt)?;
+        files.push(PathBuf::from(&name));
+        let loop_pts: Vec<(f64, Option<C64>, f64)> = set
+            .disturbance
+            .iter()
+            .map(|m| {
+                let l = m.s_c().filter(|s| s.norm() > 0.0).map(|s| 1.0 / s - 1.0);
+                (m.f_hz, l, m.quality.min(m.quality_s.unwrap_or(1.0)))
+            })
+            .collect();
+        let diverged = set
+            .tracking
+            .iter()
+            .chain(&set.disturbance)
+            .filter(|m| m.diverged_at_s.is_some())
+            .count();
+        let q_min = |v: &[Measured]| v.iter().map(|m| m.quality).fold(f64::INFINITY, f64::min);
+        let bw = measured_bandwidth(&set.tracking);
+        let mm = measured_margins(&loop_pts);
+        let _ = writeln!(
+            text,
+            "measured ({}, {} frequencies): tracking −3 dB bandwidth {}; loop at the plant's input: phase margin {}, delay margin {}{}",
+            set.method.as_str(),
+            set.tracking.len(),
+            bw["bandwidth_Hz"]
+                .as_f64()
+                .map(|b| format!("{b:.3} Hz"))
+                .unwrap_or_else(|| format!("not found ({})", bw["why"].as_str().unwrap_or(""))),
+            mm["phase_margin"]["phase_margin_deg"]
+                .as_f64()
+                .map(|p| format!("{p:.2}°"))
+                .unwrap_or("none".into()),
+            mm["delay_margin"]["delay_margin_s"]
+                .as_f64()
+                .map(|d| format!("{:.2} ms", d * 1e3))
+                .unwrap_or("none".into()),
+            if diverged > 0 {
+                format!("; {diverged} runs unbounded")
+            } else {
+                String::new()
+            }
+        );
+        measured_json.insert(
+            set.method.as_str().into(),
+            json!({
+                "file": name,
+                "tracking_bandwidth": bw,
+                "loop_margins": mm,
+                "unbounded_runs": diverged,
+                "least_quality": {"tracking": q_min(&set.tracking), "disturbance": q_min(&set.disturbance)},
+                "plan": set.plan,
+            }),
+        );
+    }
+    summary["measured"] = json!({
+        "settings": {
+            "theta0_deg": settings.theta0 / ehservo_core::math::DR,
+            "amplitude_deg": settings.amplitude / ehservo_core::math::DR,
+            "disturbance_V": settings.disturbance,
+            "settle_s": settings.settle_s,
+            "settle_cycles": settings.settle_cycles,
+            "cycles": settings.cycles,
+            "welch_periods": o.periods,
+            "f_min_Hz": o.measure_f_min,
+            "points": o.measure_points,
+        },
+        "methods": measured_json,
+        "quality": "sinestream: the fundamental fraction, the share of the output's variance at the excited frequency; Welch: the coherence γ²",
+    });
+    if o.plots {
+        if let Some(lp) = lp_opt {
+            for ext in ["png", "svg"] {
+                let p = dirp.join(format!("bode.{ext}"));
+                bode(&p, lp, &responses, &freqs, &summary)?;
+                files.push(PathBuf::from(format!("bode.{ext}")));
+                if lp.loop_l.is_some() {
+                    let p = dirp.join(format!("nyquist.{ext}"));
+                    nyquist(&p, &responses, &summary)?;
+                    files.push(PathBuf::from(format!("nyquist.{ext}")));
+                }
+            }
+        }
+        if !sets.is_empty() {
+            for ext in ["png", "svg"] {
+                let p = dirp.join(format!("measured.{ext}"));
+                measured_plot(&p, sets, lp_opt, &s.name)?;
+                files.push(PathBuf::from(format!("measured.{ext}")));
+            }
+        }
+    }
+    let path = dirp.join("freq.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+        .with_context(|| format!("writing {}", path.display()))?;
+    files.insert(0, PathBuf::from("freq.json"));
+    stage.commit()?;
+    Ok(FreqSummary { files, text })
+}
+
+fn write_response_csv(path: &Path, rs: &[Responses], freqs: &[f64]) -> Result<()> {
+    let mut head = vec!["f_Hz".to_string(), "omega_rad_s".to_string()];
+    for (n, u, _) in CURVES {
+        let u = u.replace('/', "_");
+        let suf = if u.is_empty() {
+            String::new()
+        } else {
+            format!("_{u}")
+        };
+        head.push(format!("{n}_gain_dB"));
+        head.push(format!("{n}_phase_deg"));
+        head.push(format!("{n}_re{suf}"));
+        head.push(format!("{n}_im{suf}"));
+    }
+    let cols: Vec<Vec<Option<C64>>> = (0..CURVES.len())
+        .map(|i| rs.iter().map(|r| r.all()[i]).collect())
+        .collect();
+    let phases: Vec<Vec<Option<f64>>> = cols.iter().map(|c| unwrap(c)).collect();
+    let mut out = head.join(",") + "\n";
+    for (k, f) in freqs.iter().enumerate() {
+        let mut row = vec![cell(Some(*f)), cell(Some(2.0 * PI * f))];
+        for i in 0..CURVES.len() {
+            let z = cols[i][k];
+            row.push(cell(z.map(db)));
+            row.push(cell(phases[i][k]));
+            row.push(cell(z.map(|z| z.re)));
+            row.push(cell(z.map(|z| z.im)));
+        }
+        out += &(row.join(",") + "\n");
+    }
+    std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))
+}
+
+fn write_measured_csv(path: &Path, set: &MeasuredSet, lp: Option<&Loop>) -> Result<()> {
+    let head = [
+        "f_Hz",
+        "track_gain_dB",
+        "track_phase_deg",
+        "track_re",
+        "track_im",
+        "track_quality",
+        "dist_gain_dB",
+        "dist_phase_deg",
+        "dist_re_rad_V",
+        "dist_im_rad_V",
+        "S_gain_dB",
+        "S_phase_deg",
+        "S_re",
+        "S_im",
+        "L_gain_dB",
+        "L_phase_deg",
+        "dist_quality",
+        "S_quality",
+        "track_computed_gain_dB",
+        "track_computed_phase_deg",
+        "dist_computed_gain_dB",
+        "dist_computed_phase_deg",
+        "S_computed_gain_dB",
+        "S_computed_phase_deg",
+        "track_unbounded_at_s",
+        "dist_unbounded_at_s",
+    ];
+    let tr: Vec<Option<C64>> = set.tracking.iter().map(|m| m.theta_c()).collect();
+    let di: Vec<Option<C64>> = set.disturbance.iter().map(|m| m.theta_c()).collect();
+    let sv: Vec<Option<C64>> = set.disturbance.iter().map(|m| m.s_c()).collect();
+    let lv: Vec<Option<C64>> = sv
+        .iter()
+        .map(|s| s.filter(|s| s.norm() > 0.0).map(|s| 1.0 / s - 1.0))
+        .collect();
+    let comp: Vec<Option<Responses>> = set
+        .tracking
+        .iter()
+        .map(|m| lp.map(|l| l.at(2.0 * PI * m.f_hz)))
+        .collect();
+    let ctr: Vec<Option<C64>> = comp.iter().map(|r| r.and_then(|r| r.track)).collect();
+    let cdi: Vec<Option<C64>> = comp.iter().map(|r| r.and_then(|r| r.dist)).collect();
+    let csv_: Vec<Option<C64>> = comp.iter().map(|r| r.and_then(|r| r.s)).collect();
+    let (ptr, pdi, psv, plv, pctr, pcdi, pcs) = (
+        unwrap(&tr),
+        unwrap(&di),
+        unwrap(&sv),
+        unwrap(&lv),
+        unwrap(&ctr),
+        unwrap(&cdi),
+        unwrap(&csv_),
+    );
+    let mut out = head.join(",") + "\n";
+    for k in 0..set.tracking.len() {
+        let (t, d) = (&set.tracking[k], &set.disturbance[k]);
+        let row = [
+            cell(Some(t.f_hz)),
+            cell(tr[k].map(db)),
+            cell(ptr[k]),
+            cell(tr[k].map(|z| z.re)),
+            cell(tr[k].map(|z| z.im)),
+            cell(tr[k].map(|_| t.quality)),
+            cell(di[k].map(db)),
+            cell(pdi[k]),
+            cell(di[k].map(|z| z.re)),
+            cell(di[k].map(|z| z.im)),
+            cell(sv[k].map(db)),
+            cell(psv[k]),
+            cell(sv[k].map(|z| z.re)),
+            cell(sv[k].map(|z| z.im)),
+            cell(lv[k].map(db)),
+            cell(plv[k]),
+            cell(di[k].map(|_| d.quality)),
+            cell(d.quality_s),
+            cell(ctr[k].map(db)),
+            cell(pctr[k]),
+            cell(cdi[k].map(db)),
+            cell(pcdi[k]),
+            cell(csv_[k].map(db)),
+            cell(pcs[k]),
+            cell(t.diverged_at_s),
+            cell(d.diverged_at_s),
+        ];
+        out += &(row.join(",") + "\n");
+    }
+    std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))
+}
