@@ -37,7 +37,8 @@ pub mod limits;
 pub mod output;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod pil;
-pub mod plot;
+/// Figures (PNG/SVG): the `ehservo-plot` crate.
+pub use ehservo_plot as plot;
 pub mod reproduce;
 pub mod run;
 pub mod scenario;
