@@ -14,7 +14,7 @@
 //! | [`plant`], [`actuator`], [`sensor`], [`simulation`], [`metrics`] | the closed loop, from `ehservo-sim` |
 //! | [`scenario`], [`run`], [`stepper`], [`observer_design`], [`limits`], [`cancel`], [`error`], [`input`] | the scenario files, their registries of plants and controllers, a run, a loop stepped by a caller, from `ehservo-scenario` |
 //! | [`output`] | CSV, JSON and PNG/SVG outputs of a run, written atomically |
-//! | [`plot`] | the figures' back end |
+//! | [`plot`] | the figures' back end (PNG/SVG), the `ehservo-plot` crate |
 //! | [`reproduce`] | the paper's Section IV: cases, claims, figures, report |
 //! | [`analysis`] | the paper's analysis: poles, K1/K2, the α bound of Theorem 2 |
 //! | [`study`] | sweeps and Monte Carlo, sharded across machines |
@@ -35,7 +35,8 @@ pub mod league;
 pub mod output;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod pil;
-pub mod plot;
+/// Figures (PNG/SVG): the `ehservo-plot` crate.
+pub use ehservo_plot as plot;
 pub mod reproduce;
 pub mod schema;
 pub mod signals;
