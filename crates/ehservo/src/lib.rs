@@ -22,10 +22,13 @@
 //! | [`cancel`] | stopping long work from a host that stays alive (Python's Ctrl-C) |
 //! | [`limits`] | the work a run, a tune or a league may ask for, counted before any of it |
 //! | [`freq`] | `ehservo linearize` and `ehservo freq`: linear models, frequency responses and margins, computed and measured |
+//! | `cli` | the command line's arguments and commands, one file per family (feature `cli`; `src/main.rs` only parses and dispatches) |
 
 pub mod analysis;
 pub mod bisection;
 pub mod cancel;
+#[cfg(feature = "cli")]
+pub mod cli;
 pub mod error;
 pub mod estimation;
 pub mod fmu;
