@@ -157,8 +157,6 @@ pub fn closed_stdout(e: &anyhow::Error) -> bool {
     })
 }
 
-/// The scenario's name as the folder of its default output, `out/<name>`:
-/// one plain name, never a path that leads elsewhere.
 /// `--threads`, when given, within 1..=MAX_THREADS.
 fn check_threads(threads: Option<usize>) -> Result<()> {
     if let Some(t) = threads {
@@ -179,6 +177,8 @@ fn progress_bar(n: u64, quiet: bool) -> indicatif::ProgressBar {
     }
 }
 
+/// The scenario's name as the folder of its default output, `out/<name>`:
+/// one plain name, never a path that leads elsewhere.
 fn default_out(name: &str) -> Result<PathBuf> {
     if name.is_empty() || name == "." || name.contains("..") || name.contains(['/', '\\', '\0']) {
         crate::bad_input!(
@@ -188,6 +188,7 @@ fn default_out(name: &str) -> Result<PathBuf> {
     Ok(PathBuf::from("out").join(name))
 }
 
+/// A scenario file, read with its `--set` overrides.
 fn load(path: &std::path::Path, set: &[String]) -> Result<Scenario> {
     Ok(Scenario::load(path, set)?)
 }
