@@ -25,9 +25,12 @@
 //! | [`pil`] | `ehservo pil`: the controller on a board (QEMU or serial), the rest simulated, in lock-step; `ehservo run --float f32` |
 //! | [`schema`] | `ehservo schema`: the file formats' JSON Schemas and reference pages |
 //! | [`signals`] | the command line's SIGINT/SIGTERM: what was being written is removed |
+//! | `cli` | the command line's arguments and commands, one file per family (feature `cli`; `src/main.rs` only parses and dispatches) |
 
 pub mod analysis;
 pub mod bisection;
+#[cfg(feature = "cli")]
+pub mod cli;
 pub mod fmu;
 pub mod freq;
 pub mod identify;

@@ -1,0 +1,129 @@
+//! `ehservo tune` and `league`: a controller tuned by particle swarm, and every
+//! controller of a suite tuned alike and run on every scenario.
+
+use super::{check_threads, progress_bar, StdoutError};
+use crate::output;
+use anyhow::Result;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// `ehservo tune`.
+#[derive(clap::Args)]
+pub(super) struct TuneArgs {
+    /// The tune file (TOML).
+    file: PathBuf,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Worker threads, 1 to 1024 (default: every core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// No progress bar, no summary.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Do not draw the convergence plot.
+    #[arg(long)]
+    no_plot: bool,
+}
+
+/// `ehservo league`.
+#[derive(clap::Args)]
+pub(super) struct LeagueArgs {
+    /// The suite file (TOML).
+    file: PathBuf,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Worker threads, 1 to 1024 (default: every core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// No progress bar, no summary.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Do not draw figures.
+    #[arg(long)]
+    no_plot: bool,
+}
+
+/// `ehservo tune`.
+pub(super) fn tune(a: TuneArgs, w: &mut impl Write) -> Result<()> {
+    let TuneArgs {
+        file,
+        out,
+        threads,
+        quiet,
+        no_plot,
+    } = a;
+    check_threads(threads)?;
+    let tune = crate::tune::Tune::load(&file)?;
+    output::probe_destination(&out)?;
+    let pb = progress_bar(tune.file.budget, quiet);
+    let start = Instant::now();
+    let r = crate::tune::tune_to_dir(&tune, &out, threads, &pb, !no_plot)?;
+    pb.finish_and_clear();
+    if !quiet {
+        let params: Vec<String> = r
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.6}"))
+            .collect();
+        out!(
+            w,
+            "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}{}\n  {}\nwrote {}/tuned.toml",
+            tune.file.name,
+            tune.kind,
+            r.evaluations,
+            start.elapsed().as_secs_f64(),
+            r.objective,
+            tune.axis.suffix(),
+            if r.kept_defaults {
+                " — no better than the defaults, which are kept".to_string()
+            } else {
+                format!(" (defaults: {:.5}{})", r.defaults, tune.axis.suffix())
+            },
+            params.join(", "),
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// `ehservo league`.
+pub(super) fn league(a: LeagueArgs, w: &mut impl Write) -> Result<()> {
+    let LeagueArgs {
+        file,
+        out,
+        threads,
+        quiet,
+        no_plot,
+    } = a;
+    check_threads(threads)?;
+    let league = crate::league::League::load(&file)?;
+    output::probe_destination(&out)?;
+    let pb = progress_bar(league.work(), quiet);
+    let start = Instant::now();
+    let r = crate::league::league_to_dir(&league, &out, threads, &pb, !no_plot)?;
+    pb.finish_and_clear();
+    if !quiet {
+        let rows = crate::league::report::rows(&league, &r);
+        let ranks = crate::league::report::ranks(&league, &rows);
+        let mut best: Vec<usize> = (0..ranks.len()).collect();
+        best.sort_by(|&a, &b| ranks[a].1.total_cmp(&ranks[b].1).then(a.cmp(&b)));
+        out!(
+            w,
+            "{}: {} controllers × {} scenarios ({} runs) in {:.1} s; mean rank: {}\nwrote {}/league.md, league.html, league.csv",
+            league.file.name,
+            league.contestants.len(),
+            league.cases.len(),
+            r.cells.len(),
+            start.elapsed().as_secs_f64(),
+            best.iter()
+                .map(|&i| format!("{} {:.2}", r.standings[i].name, ranks[i].1))
+                .collect::<Vec<_>>()
+                .join(", "),
+            out.display()
+        );
+    }
+    Ok(())
+}

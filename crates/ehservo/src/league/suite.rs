@@ -1,0 +1,676 @@
+//! The suite file: its format (`[[controller]]`, `[[scenario]]`,
+//! `[tuning]`, `[margin]`), and [`League`], the file checked, its
+//! scenarios loaded and its tunes built, with the work it asks for.
+
+use super::{build_with, Margin};
+use crate::scenario::{ControllerCfg, Scenario};
+use crate::study::StudyError;
+use crate::tune::{Objective, Penalty, Tune, TuneFile};
+use anyhow::Result;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One `[[controller]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerEntry {
+    /// The controller kind.
+    #[schemars(schema_with = "crate::schema::controller_kind")]
+    pub kind: String,
+    /// Its label in the report (default: the kind).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Tuned by `[tuning]` (default), or run with the kind's defaults and
+    /// `params`.
+    #[serde(default = "yes")]
+    pub tune: bool,
+    /// Given parameters (with `tune = false`), on top of the kind's defaults.
+    #[serde(default)]
+    #[schemars(with = "crate::schema::TomlTable")]
+    pub params: toml::Table,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// One `[[scenario]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioEntry {
+    /// The scenario file, relative to the suite file.
+    pub file: PathBuf,
+    /// Its label (default: the file's stem).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Overrides, `key.path=value` as `ehservo run --set`.
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// Uncertainty draws (default 1).
+    #[serde(default = "one")]
+    pub draws: u64,
+    /// The first draw's `uncertainty.seed` (default: the scenario's own
+    /// with one draw, 0 with several).
+    #[serde(default)]
+    pub first_seed: Option<u64>,
+}
+
+fn one() -> u64 {
+    1
+}
+
+/// `[tuning]`: the budget every tuned controller gets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TuningCfg {
+    /// The scenarios of the objective (relative to the suite file).
+    pub scenarios: Vec<PathBuf>,
+    /// Evaluations of the objective per controller.
+    #[serde(default = "crate::tune::default_budget")]
+    pub budget: u64,
+    /// Particles of the swarm.
+    #[serde(default = "crate::tune::default_particles")]
+    pub particles: u64,
+    /// Seed of the swarm.
+    #[serde(default = "crate::tune::default_seed")]
+    pub seed: u64,
+    /// `"mean"` or `"worst"`.
+    #[serde(default)]
+    pub objective: Objective,
+    /// Uncertainty seeds per scenario.
+    #[serde(default = "crate::tune::default_draws")]
+    pub draws: u64,
+    /// Penalties.
+    #[serde(default)]
+    pub penalty: Penalty,
+}
+
+/// `[margin]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MarginCfg {
+    /// The scenario varied (relative to the suite file).
+    pub scenario: PathBuf,
+    /// Its overrides.
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// The keys all set to `scale`·x, x the bisected value.
+    pub keys: Vec<String>,
+    /// The factor on x (default 1; −1 bisects a negative bias).
+    #[serde(default = "unit")]
+    pub scale: f64,
+    /// The lowest x (default 0).
+    #[serde(default)]
+    pub low: f64,
+    /// The highest x.
+    pub high: f64,
+    /// Bisection stops when the bracket is narrower (default 0.01).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// e_max above this (°, a rotary axis) counts as unbounded.
+    #[serde(default)]
+    pub e_limit_deg: Option<f64>,
+    /// e_max above this (mm, a linear axis) counts as unbounded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub e_limit_mm: Option<f64>,
+}
+
+impl MarginCfg {
+    /// The error limit in the axis's unit, whichever key gives it.
+    pub fn e_limit(&self) -> Option<f64> {
+        self.e_limit_deg.or(self.e_limit_mm)
+    }
+}
+
+fn default_tolerance() -> f64 {
+    0.01
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+/// A suite file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SuiteFile {
+    /// Name (default: the file's stem).
+    #[serde(default)]
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The controllers.
+    #[serde(default)]
+    pub controller: Vec<ControllerEntry>,
+    /// The scenarios.
+    #[serde(default)]
+    pub scenario: Vec<ScenarioEntry>,
+    /// The tuning budget.
+    #[serde(default)]
+    pub tuning: Option<TuningCfg>,
+    /// The robustness margin.
+    #[serde(default)]
+    pub margin: Option<MarginCfg>,
+}
+
+/// How a controller of the league gets its parameters.
+#[derive(Debug, Clone)]
+pub enum Source {
+    /// Tuned by the suite's `[tuning]`.
+    Tuned(Box<Tune>),
+    /// The kind's defaults with the given parameters.
+    Given,
+}
+
+/// A checked `[[controller]]`.
+#[derive(Debug, Clone)]
+pub struct Contestant {
+    /// Its label.
+    pub name: String,
+    /// Its kind.
+    pub kind: &'static str,
+    /// Its `[controller]` table before tuning.
+    pub table: toml::Table,
+    /// Tuned or given.
+    pub source: Source,
+}
+
+/// A checked `[[scenario]]`.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Its label.
+    pub name: String,
+    /// The scenario (overrides applied).
+    pub scenario: Scenario,
+    pub(super) table: toml::Table,
+    /// The seed of each draw (None: the scenario's own).
+    pub seeds: Vec<Option<u64>>,
+}
+
+/// A suite, checked.
+#[derive(Debug, Clone)]
+pub struct League {
+    /// As written.
+    pub file: SuiteFile,
+    /// The controllers.
+    pub contestants: Vec<Contestant>,
+    /// The scenarios.
+    pub cases: Vec<Case>,
+    /// The margin.
+    pub margin: Option<Margin>,
+    /// The scenarios' axis: the unit of every error (deg or mm).
+    pub axis: crate::axis::Axis,
+}
+
+/// The most draws of one scenario.
+pub const MAX_DRAWS: u64 = 10_000;
+
+impl League {
+    /// Reads and checks a suite file and the scenarios it names.
+    pub fn load(path: &Path) -> Result<League, StudyError> {
+        let file = path.display().to_string();
+        let mut sf: SuiteFile = crate::study::load_toml(path, "suite")?;
+        if sf.name.is_empty() {
+            sf.name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "league".into());
+        }
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let bad = |key: &str, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+        if sf.controller.is_empty() {
+            return Err(bad(
+                "controller",
+                "the suite has no [[controller]]: list at least one".into(),
+            ));
+        }
+        if sf.scenario.is_empty() {
+            return Err(bad(
+                "scenario",
+                "the suite has no [[scenario]]: list at least one".into(),
+            ));
+        }
+        // A scenario that fails to load is named by its file, or by its
+        // `set` when an override is what fails.
+        let load = |key: &str, p: &Path, set: &[String]| {
+            Scenario::load(&dir.join(p), set).map_err(|e| {
+                let msg = e.to_string();
+                let at = if msg.starts_with("--set") {
+                    "set"
+                } else {
+                    "file"
+                };
+                let key = match key.strip_suffix(".file") {
+                    Some(k) => format!("{k}.{at}"),
+                    None => key.to_string(),
+                };
+                bad(&key, msg)
+            })
+        };
+        let table_of = |key: &str, s: &Scenario| s.table().map_err(|e| bad(key, e.to_string()));
+
+        // Scenarios.
+        let mut cases = Vec::new();
+        for (i, e) in sf.scenario.iter().enumerate() {
+            let key = format!("scenario[{i}]");
+            if !(1..=MAX_DRAWS).contains(&e.draws) {
+                return Err(bad(
+                    &format!("{key}.draws"),
+                    format!("must be in 1..={MAX_DRAWS} (got {})", e.draws),
+                ));
+            }
+            let scenario = load(&format!("{key}.file"), &e.file, &e.set)?;
+            let name = e.name.clone().unwrap_or_else(|| {
+                e.file
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| format!("scenario-{i}"))
+            });
+            check_label(&name).map_err(|r| bad(&format!("{key}.name"), r))?;
+            if cases.iter().any(|c: &Case| c.name == name) {
+                return Err(bad(
+                    &format!("{key}.name"),
+                    format!("`{name}` names two scenarios: give each a distinct `name`"),
+                ));
+            }
+            let seeds = if e.draws == 1 && e.first_seed.is_none() {
+                vec![None]
+            } else {
+                let first = e.first_seed.unwrap_or(0);
+                // `uncertainty.seed` is a TOML integer: at most 2⁶³ − 1.
+                let last = first
+                    .checked_add(e.draws - 1)
+                    .filter(|&l| l <= i64::MAX as u64);
+                if last.is_none() {
+                    return Err(bad(
+                        &format!("{key}.first_seed"),
+                        format!(
+                            "{first} + {} draws runs past the largest seed, 2^63 − 1 = {}: lower first_seed",
+                            e.draws,
+                            i64::MAX
+                        ),
+                    ));
+                }
+                (0..e.draws).map(|d| Some(first + d)).collect()
+            };
+            let table = table_of(&key, &scenario)?;
+            cases.push(Case {
+                name,
+                scenario,
+                table,
+                seeds,
+            });
+        }
+
+        // Controllers.
+        let mut contestants: Vec<Contestant> = Vec::new();
+        for (i, e) in sf.controller.iter().enumerate() {
+            let key = format!("controller[{i}]");
+            let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == e.kind) else {
+                return Err(bad(
+                    &format!("{key}.kind"),
+                    format!(
+                        "unknown controller kind `{}`: expected one of {}",
+                        e.kind,
+                        ControllerCfg::KINDS.join(", ")
+                    ),
+                ));
+            };
+            let name = e.name.clone().unwrap_or_else(|| kind.to_string());
+            check_label(&name).map_err(|r| bad(&format!("{key}.name"), r))?;
+            if contestants.iter().any(|c| c.name == name) {
+                return Err(bad(
+                    &format!("{key}.name"),
+                    format!("`{name}` names two controllers: give each a distinct `name`"),
+                ));
+            }
+            let mut table = ControllerCfg::default_of(kind)
+                .expect("a listed kind has defaults")
+                .to_table();
+            if e.tune && !e.params.is_empty() {
+                return Err(bad(
+                    &format!("{key}.params"),
+                    "given parameters with `tune = true`: set `tune = false` to run them as given, or drop `params` to tune".into(),
+                ));
+            }
+            if e.params.contains_key("kind") {
+                return Err(bad(
+                    &format!("{key}.params.kind"),
+                    "the kind is `kind`, not a parameter".into(),
+                ));
+            }
+            table.extend(e.params.clone());
+            // The table must build on every scenario of the suite.
+            for c in &cases {
+                build_with(c, &table, None).map_err(|r| {
+                    bad(
+                        &format!("{key}.params"),
+                        format!("on scenario `{}`: {r}", c.name),
+                    )
+                })?;
+            }
+            let source = if e.tune {
+                let Some(t) = &sf.tuning else {
+                    return Err(bad(
+                        "tuning",
+                        format!(
+                            "controller `{name}` is to be tuned (`tune` defaults to true) but the suite has no [tuning] section: add one, or set `tune = false`"
+                        ),
+                    ));
+                };
+                Source::Tuned(Box::new(tune_for(t, kind, &table, dir, &file)?))
+            } else {
+                Source::Given
+            };
+            contestants.push(Contestant {
+                name,
+                kind,
+                table,
+                source,
+            });
+        }
+        if sf.tuning.is_some()
+            && !contestants
+                .iter()
+                .any(|c| matches!(c.source, Source::Tuned(_)))
+        {
+            return Err(bad(
+                "tuning",
+                "no controller is tuned (every one has `tune = false`): drop [tuning]".into(),
+            ));
+        }
+
+        // Margin.
+        let margin = match &sf.margin {
+            None => None,
+            Some(m) => {
+                if m.keys.is_empty() {
+                    return Err(bad("margin.keys", "is empty: name the keys to vary".into()));
+                }
+                if !(m.low.is_finite() && m.high.is_finite() && m.low < m.high) {
+                    return Err(bad(
+                        "margin.high",
+                        format!("low = {} must be < high = {}, both finite", m.low, m.high),
+                    ));
+                }
+                if !(m.high - m.low).is_finite() {
+                    return Err(bad(
+                        "margin.high",
+                        format!(
+                            "high − low = {:e} − {:e} overflows: narrow the bracket",
+                            m.high, m.low
+                        ),
+                    ));
+                }
+                crate::bisection::check_tolerance(m.low, m.high, m.tolerance)
+                    .map_err(|r| bad("margin.tolerance", r))?;
+                if !(m.scale.is_finite() && m.scale != 0.0) {
+                    return Err(bad(
+                        "margin.scale",
+                        format!("must be finite and nonzero (got {:?})", m.scale),
+                    ));
+                }
+                if !((m.scale * m.low).is_finite() && (m.scale * m.high).is_finite()) {
+                    return Err(bad(
+                        "margin.scale",
+                        format!(
+                            "scale·low and scale·high must be finite (got {:?}·[{:e}, {:e}])",
+                            m.scale, m.low, m.high
+                        ),
+                    ));
+                }
+                let scenario = load("margin.file", &m.scenario, &m.set)
+                    .map_err(|e| StudyError(e.0.replace("`margin.file`", "`margin.scenario`")))?;
+                // The limit's key says its unit: the one of the scenario's axis.
+                let (own, other) = match scenario.plant.axis() {
+                    crate::axis::Axis::Rotary => {
+                        (("e_limit_deg", m.e_limit_deg), ("e_limit_mm", m.e_limit_mm))
+                    }
+                    crate::axis::Axis::Linear => {
+                        (("e_limit_mm", m.e_limit_mm), ("e_limit_deg", m.e_limit_deg))
+                    }
+                };
+                if other.1.is_some() {
+                    return Err(bad(
+                        &format!("margin.{}", other.0),
+                        format!(
+                            "the margin's scenario is on a {} axis: give its error limit as `{}`",
+                            scenario.plant.axis().name(),
+                            own.0
+                        ),
+                    ));
+                }
+                if let Some(l) = own.1 {
+                    if !(l.is_finite() && l > 0.0) {
+                        return Err(bad(
+                            &format!("margin.{}", own.0),
+                            format!("must be finite and > 0 (got {l:?})"),
+                        ));
+                    }
+                }
+                let table = table_of("margin", &scenario)?;
+                let margin = Margin {
+                    cfg: m.clone(),
+                    scenario,
+                    table,
+                };
+                // The keys must exist and take a number at both ends.
+                for k in &m.keys {
+                    if let Some(v) = lookup(&margin.table, k) {
+                        crate::tune::numeric(v).map_err(|what| {
+                            bad(
+                                "margin.keys",
+                                format!("`{k}` is {what}, not a real number: a margin varies numeric keys"),
+                            )
+                        })?;
+                    }
+                }
+                for x in [m.low, m.high] {
+                    for c in &contestants {
+                        if let Err(r) = margin.build(&c.table, x) {
+                            if r.contains("unknown") || crate::tune::not_a_result(&r) {
+                                return Err(bad("margin.keys", r));
+                            }
+                        }
+                    }
+                }
+                Some(margin)
+            }
+        };
+        // One league, one unit: every scenario on the first one's axis.
+        let axis = cases[0].scenario.plant.axis();
+        let mut axes: Vec<(String, &Scenario)> = cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (format!("scenario[{i}].file"), &c.scenario))
+            .collect();
+        if let Some(m) = &margin {
+            axes.push(("margin.scenario".into(), &m.scenario));
+        }
+        if let Some((key, s)) = axes.iter().find(|(_, s)| s.plant.axis() != axis) {
+            return Err(bad(
+                key,
+                format!(
+                    "`{}` is on a {} axis, `{}` on a {} one: a league's errors share one unit",
+                    s.name,
+                    s.plant.axis().name(),
+                    cases[0].scenario.name,
+                    axis.name()
+                ),
+            ));
+        }
+        let league = League {
+            file: sf,
+            contestants,
+            cases,
+            margin,
+            axis,
+        };
+        league
+            .work_asked()
+            .check("league")
+            .map_err(|(k, r)| bad(&k, r))?;
+        Ok(league)
+    }
+
+    /// The evaluations the league asks for, by the key that asks: the
+    /// tunes, every run of every scenario, the margins' bisections.
+    fn work_asked(&self) -> crate::limits::Batch {
+        use crate::limits::{run_evaluations, RUN_OVERHEAD};
+        let mut b = crate::limits::Batch::default();
+        let n = self.contestants.len() as f64;
+        let tuned: Vec<&Tune> = self
+            .contestants
+            .iter()
+            .filter_map(|c| match &c.source {
+                Source::Tuned(t) => Some(&**t),
+                Source::Given => None,
+            })
+            .collect();
+        if let Some(t) = tuned.first() {
+            let per: f64 = t
+                .scenarios
+                .iter()
+                .map(|s| run_evaluations(s) + RUN_OVERHEAD)
+                .sum::<f64>()
+                * t.file.draws as f64;
+            b.add(
+                "tuning.budget",
+                tuned.len() as f64 * (t.file.budget + 1) as f64,
+                per - RUN_OVERHEAD,
+                format!(
+                    "tuning {} controllers × {} evaluations × {} runs each",
+                    tuned.len(),
+                    t.file.budget,
+                    t.scenarios.len() as u64 * t.file.draws
+                ),
+            );
+        }
+        for (i, c) in self.cases.iter().enumerate() {
+            b.add(
+                &format!("scenario[{i}].draws"),
+                n * c.seeds.len() as f64,
+                run_evaluations(&c.scenario),
+                format!(
+                    "scenario `{}`: {} controllers × {} draws",
+                    c.name,
+                    self.contestants.len(),
+                    c.seeds.len()
+                ),
+            );
+        }
+        if let Some(m) = &self.margin {
+            b.add(
+                "margin.tolerance",
+                n * m.steps() as f64,
+                run_evaluations(&m.scenario),
+                format!(
+                    "the margin: {} controllers × {} bisection runs",
+                    self.contestants.len(),
+                    m.steps()
+                ),
+            );
+        }
+        b
+    }
+
+    /// The runs of the league, in report order: (controller, scenario,
+    /// draw).
+    pub fn cells(&self) -> Vec<(usize, usize, usize)> {
+        let mut out = Vec::new();
+        for ci in 0..self.contestants.len() {
+            for (si, c) in self.cases.iter().enumerate() {
+                for d in 0..c.seeds.len() {
+                    out.push((ci, si, d));
+                }
+            }
+        }
+        out
+    }
+
+    /// Evaluations the league makes (tuning, runs, and a bound on the
+    /// margin's), for a progress bar.
+    pub fn work(&self) -> u64 {
+        let tunes: u64 = self
+            .contestants
+            .iter()
+            .map(|c| match &c.source {
+                Source::Tuned(t) => t.file.budget,
+                Source::Given => 0,
+            })
+            .sum();
+        let margin = self
+            .margin
+            .as_ref()
+            .map(|m| m.steps() as u64 * self.contestants.len() as u64)
+            .unwrap_or(0);
+        tunes + self.cells().len() as u64 + margin
+    }
+}
+
+/// The value at a dotted key path of a table (`uncertainty.a_bias`).
+fn lookup<'a>(t: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
+    let mut parts = path.split('.');
+    let mut v = t.get(parts.next()?.trim())?;
+    for p in parts {
+        v = v.as_table()?.get(p.trim())?;
+    }
+    Some(v)
+}
+
+/// A label used as a file name and a CSV cell.
+fn check_label(s: &str) -> Result<(), String> {
+    if s.is_empty()
+        || !s
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+        || s.starts_with('.')
+    {
+        return Err(format!(
+            "`{s}` must be letters, digits, `-`, `_` or `.` (it names files), not starting with `.`"
+        ));
+    }
+    Ok(())
+}
+
+/// The tune of `kind` with the suite's budget, every tuning scenario
+/// starting from the league's table for the kind.
+fn tune_for(
+    t: &TuningCfg,
+    kind: &'static str,
+    table: &toml::Table,
+    dir: &Path,
+    file: &str,
+) -> Result<Tune, StudyError> {
+    let bad = |key: &str, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+    let scenarios = t
+        .scenarios
+        .iter()
+        .map(|p| {
+            let s = Scenario::load(&dir.join(p), &[])
+                .map_err(|e| bad("tuning.scenarios", e.to_string()))?;
+            let mut tab = s
+                .table()
+                .map_err(|e| bad("tuning.scenarios", e.to_string()))?;
+            tab.insert("controller".into(), toml::Value::Table(table.clone()));
+            s.with_values_built_on(tab, &[])
+                .map(|(s, _)| s)
+                .map_err(|e| bad("tuning.scenarios", e.to_string()))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let tf = TuneFile {
+        name: format!("league-{kind}"),
+        scenarios: t.scenarios.clone(),
+        controller: Some(kind.to_string()),
+        budget: t.budget,
+        particles: t.particles,
+        seed: t.seed,
+        objective: t.objective,
+        draws: t.draws,
+        penalty: t.penalty,
+        param: Vec::new(),
+    };
+    // The tune's keys sit under `tuning` in a suite.
+    Tune::build_under(tf, scenarios, file, "tuning")
+}

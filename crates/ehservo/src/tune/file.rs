@@ -1,0 +1,460 @@
+//! The tune file: its format (ranges, penalties, objective), its defaults,
+//! and [`Tune`], the file checked against its scenarios and the kind's
+//! tunables.
+
+use crate::scenario::{ControllerCfg, Scenario};
+use crate::study::StudyError;
+use anyhow::Result;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// How the scores of the scenarios × draws make one objective.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Objective {
+    /// Their mean.
+    #[default]
+    Mean,
+    /// Their largest.
+    Worst,
+}
+
+/// Spacing of a parameter's search.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    /// Searched as given.
+    #[default]
+    Linear,
+    /// Searched as its log10.
+    Log,
+}
+
+/// One searched parameter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ParamRange {
+    /// Key in `[controller]`.
+    pub key: String,
+    /// Lowest value.
+    pub low: f64,
+    /// Highest value.
+    pub high: f64,
+    /// `"linear"` (default) or `"log"`.
+    #[serde(default)]
+    pub scale: Scale,
+}
+
+/// `[penalty]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Penalty {
+    /// Weight on the chattering index (L2[Δu]/L2[u] after the transient).
+    pub chattering: f64,
+    /// The valve's range (V): u_max beyond it is penalised.
+    pub u_limit: Option<f64>,
+    /// Weight on u_max beyond `u_limit`, in the axis's unit per volt
+    /// (°/V on a rotary axis, mm/V on a linear one).
+    pub u_excess: f64,
+}
+
+impl Default for Penalty {
+    fn default() -> Self {
+        Self {
+            chattering: 0.0,
+            u_limit: None,
+            u_excess: 1.0,
+        }
+    }
+}
+
+/// A tune file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TuneFile {
+    /// Name (default: the file's stem).
+    #[serde(default)]
+    pub name: String,
+    /// The scenarios the objective runs (relative to the tune file).
+    pub scenarios: Vec<PathBuf>,
+    /// The controller kind tuned (default: the first scenario's).
+    #[serde(default)]
+    #[schemars(schema_with = "crate::schema::controller_kind")]
+    pub controller: Option<String>,
+    /// Evaluations of the objective (default 2000).
+    #[serde(default = "default_budget")]
+    pub budget: u64,
+    /// Particles of the swarm (default 40).
+    #[serde(default = "default_particles")]
+    pub particles: u64,
+    /// Seed of the swarm (default 1).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// `"mean"` (default) or `"worst"`.
+    #[serde(default)]
+    pub objective: Objective,
+    /// Uncertainty seeds per scenario (default 1: the scenario's own).
+    #[serde(default = "default_draws")]
+    pub draws: u64,
+    /// Penalties.
+    #[serde(default)]
+    pub penalty: Penalty,
+    /// The parameters searched (default: the kind's declared tunables).
+    #[serde(default)]
+    pub param: Vec<ParamRange>,
+}
+
+pub(crate) fn default_budget() -> u64 {
+    2000
+}
+pub(crate) fn default_particles() -> u64 {
+    40
+}
+pub(crate) fn default_seed() -> u64 {
+    1
+}
+pub(crate) fn default_draws() -> u64 {
+    1
+}
+
+/// Most evaluations one tune may ask for.
+pub const MAX_BUDGET: u64 = 1_000_000;
+
+/// A tune file, checked: its scenarios as TOML tables to start each
+/// evaluation from, the kind and the searched ranges.
+#[derive(Debug, Clone)]
+pub struct Tune {
+    /// The file as written (defaults filled).
+    pub file: TuneFile,
+    /// The scenarios.
+    pub scenarios: Vec<Scenario>,
+    pub(super) tables: Vec<toml::Table>,
+    /// The kind tuned.
+    pub kind: &'static str,
+    /// The searched parameters.
+    pub params: Vec<ParamRange>,
+    /// The scenarios' axis: the unit of every score (deg or mm).
+    pub axis: crate::axis::Axis,
+}
+
+/// The one axis of a tune's or a league's scenarios (their scores add up
+/// in one unit): the first's, or the index of the first that differs.
+pub fn common_axis(scenarios: &[Scenario]) -> Result<crate::axis::Axis, usize> {
+    let axis = scenarios
+        .first()
+        .map(|s| s.plant.axis())
+        .unwrap_or_default();
+    match scenarios.iter().position(|s| s.plant.axis() != axis) {
+        Some(i) => Err(i),
+        None => Ok(axis),
+    }
+}
+
+/// The declared tunables of a kind.
+struct Tunables;
+
+impl crate::scenario::Visit for Tunables {
+    type Out = &'static [ehservo_core::control::Tunable];
+    fn visit<K: crate::scenario::ControllerConfig>(self, _: &K) -> Self::Out {
+        <K as ehservo_core::control::Config>::TUNABLE
+    }
+}
+
+impl Tune {
+    /// Reads and checks a tune file and its scenarios.
+    pub fn load(path: &Path) -> Result<Tune, StudyError> {
+        let file = path.display().to_string();
+        let mut tf: TuneFile = crate::study::load_toml(path, "tune")?;
+        if tf.name.is_empty() {
+            tf.name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "tune".into());
+        }
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let scenarios = tf
+            .scenarios
+            .iter()
+            .map(|p| {
+                Scenario::load(&dir.join(p), &[])
+                    .map_err(|e| StudyError(format!("{file}: `scenarios`: {e}")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Self::build(tf, scenarios, &file)
+    }
+
+    /// Checks a parsed tune file against its loaded scenarios.
+    pub fn build(tf: TuneFile, scenarios: Vec<Scenario>, file: &str) -> Result<Tune, StudyError> {
+        Self::build_under(tf, scenarios, file, "")
+    }
+
+    /// As [`Tune::build`] for a tune file's keys that sit under `section`
+    /// in `file` (a league suite's `[tuning]`: `section = "tuning"`), so an
+    /// error names the key as it is written there (`tuning.budget`).
+    pub fn build_under(
+        tf: TuneFile,
+        scenarios: Vec<Scenario>,
+        file: &str,
+        section: &str,
+    ) -> Result<Tune, StudyError> {
+        let dot = if section.is_empty() { "" } else { "." };
+        let bad = |key: &str, reason: String| {
+            StudyError(format!("{file}: `{section}{dot}{key}`: {reason}"))
+        };
+        if scenarios.is_empty() {
+            return Err(bad(
+                "scenarios",
+                "is empty: list at least one scenario file".into(),
+            ));
+        }
+        let axis = common_axis(&scenarios).map_err(|i| {
+            bad(
+                &format!("scenarios[{i}]"),
+                format!(
+                    "`{}` is on a {} axis, `{}` on a {} one: the scores of one tune share one unit",
+                    scenarios[i].name,
+                    scenarios[i].plant.axis().name(),
+                    scenarios[0].name,
+                    scenarios[0].plant.axis().name()
+                ),
+            )
+        })?;
+        if !(1..=MAX_BUDGET).contains(&tf.budget) {
+            return Err(bad(
+                "budget",
+                format!("must be in 1..={MAX_BUDGET} (got {})", tf.budget),
+            ));
+        }
+        if !(2..=10_000).contains(&tf.particles) {
+            return Err(bad(
+                "particles",
+                format!("must be in 2..=10000 (got {})", tf.particles),
+            ));
+        }
+        if tf.budget < 2 * tf.particles {
+            return Err(bad(
+                "budget",
+                format!(
+                    "{} evaluations are fewer than two generations of {} particles",
+                    tf.budget, tf.particles
+                ),
+            ));
+        }
+        if !(1..=10_000).contains(&tf.draws) {
+            return Err(bad(
+                "draws",
+                format!("must be in 1..=10000 (got {})", tf.draws),
+            ));
+        }
+        let p = &tf.penalty;
+        if !(p.chattering.is_finite() && p.chattering >= 0.0) {
+            return Err(bad(
+                "penalty.chattering",
+                format!("must be finite and >= 0 (got {:?})", p.chattering),
+            ));
+        }
+        if !(p.u_excess.is_finite() && p.u_excess >= 0.0) {
+            return Err(bad(
+                "penalty.u_excess",
+                format!("must be finite and >= 0 (got {:?})", p.u_excess),
+            ));
+        }
+        if let Some(l) = p.u_limit {
+            if !(l.is_finite() && l > 0.0) {
+                return Err(bad(
+                    "penalty.u_limit",
+                    format!("must be finite and > 0 (got {l:?})"),
+                ));
+            }
+        }
+        let kind_name = tf
+            .controller
+            .clone()
+            .unwrap_or_else(|| scenarios[0].controller.kind().to_string());
+        let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == kind_name) else {
+            return Err(bad(
+                "controller",
+                format!(
+                    "unknown controller kind `{kind_name}`: expected one of {}",
+                    ControllerCfg::KINDS.join(", ")
+                ),
+            ));
+        };
+        let declared = ControllerCfg::default_of(kind)
+            .map(|c| c.visit(Tunables))
+            .unwrap_or(&[]);
+        let params: Vec<ParamRange> = if tf.param.is_empty() {
+            declared
+                .iter()
+                .map(|t| ParamRange {
+                    key: t.key.to_string(),
+                    low: t.low,
+                    high: t.high,
+                    scale: if t.log { Scale::Log } else { Scale::Linear },
+                })
+                .collect()
+        } else {
+            tf.param.clone()
+        };
+        if params.is_empty() {
+            return Err(bad(
+                "param",
+                format!("controller kind `{kind}` declares no tunable parameters: list them as [[param]]"),
+            ));
+        }
+        let defaults = ControllerCfg::default_of(kind)
+            .map(|c| c.to_table())
+            .unwrap_or_default();
+        for (i, r) in params.iter().enumerate() {
+            let key = format!("param[{i}]");
+            if params[..i].iter().any(|q| q.key == r.key) {
+                return Err(bad(&key, format!("`{}` is listed twice", r.key)));
+            }
+            if let Some(v) = defaults.get(&r.key) {
+                numeric(v).map_err(|what| {
+                    bad(
+                        &key,
+                        format!(
+                            "`{}` of `{kind}` is {what}, not a real number: only numeric parameters can be tuned",
+                            r.key
+                        ),
+                    )
+                })?;
+            }
+            if !(r.low.is_finite() && r.high.is_finite()) {
+                return Err(bad(
+                    &key,
+                    format!("`{}`: low and high must be finite", r.key),
+                ));
+            }
+            if r.low >= r.high {
+                return Err(bad(
+                    &key,
+                    format!("`{}`: low = {} must be < high = {}", r.key, r.low, r.high),
+                ));
+            }
+            if r.scale == Scale::Log && r.low <= 0.0 {
+                return Err(bad(
+                    &key,
+                    format!(
+                        "`{}`: a log range must lie above 0 (low = {})",
+                        r.key, r.low
+                    ),
+                ));
+            }
+            // The swarm draws velocities up to ±(high − low) and moves a
+            // particle by at most (c1 + c2)/(1 − w) ≈ 8.6 times that
+            // (argmin's SPSO 2011 weights): with a margin, all it computes
+            // must stay finite.
+            let (lo, hi) = r.bounds();
+            let reach = lo.abs().max(hi.abs()) + SWARM_REACH * (hi - lo);
+            if !reach.is_finite() {
+                return Err(bad(
+                    &key,
+                    format!(
+                        "`{}`: the swarm computes up to {SWARM_REACH}·(high − low) beyond the range, which overflows for [{:e}, {:e}]: narrow it (or use scale = \"log\")",
+                        r.key, r.low, r.high
+                    ),
+                ));
+            }
+        }
+        // The work asked for, bounded before any of it: every evaluation of
+        // the objective runs every scenario × draw (and the defaults once).
+        let mut work = crate::limits::Batch::default();
+        let per: f64 = scenarios
+            .iter()
+            .map(|s| crate::limits::run_evaluations(s) + crate::limits::RUN_OVERHEAD)
+            .sum::<f64>()
+            * tf.draws as f64;
+        let runs = (scenarios.len() as u64 * tf.draws) as f64;
+        work.add(
+            "budget",
+            (tf.budget + 1) as f64,
+            per - crate::limits::RUN_OVERHEAD,
+            format!(
+                "{} evaluations of the objective × {runs} runs each ({} scenario(s) × {} draw(s))",
+                tf.budget,
+                scenarios.len(),
+                tf.draws
+            ),
+        );
+        work.check("tune").map_err(|(k, r)| bad(&k, r))?;
+        let tables = scenarios
+            .iter()
+            .map(|s| s.table().map_err(|e| StudyError(format!("{file}: {e}"))))
+            .collect::<Result<Vec<_>, _>>()?;
+        let t = Tune {
+            file: tf,
+            scenarios,
+            tables,
+            kind,
+            params,
+            axis,
+        };
+        // Every scenario must take the kind and every parameter: check the
+        // two ends and the middle of the ranges now, not in the search.
+        for x in [0.0, 0.5, 1.0] {
+            let values: Vec<f64> = t.params.iter().map(|r| r.at(x)).collect();
+            for (i, sets) in t.sets(&values).iter().enumerate() {
+                if let Err(e) = t.build_run(i, sets) {
+                    // A refused parameter value inside its range is a
+                    // result (+∞), an unknown key is not.
+                    if not_a_result(&e.reason) {
+                        return Err(bad(&e.key, e.reason));
+                    }
+                }
+            }
+        }
+        Ok(t)
+    }
+}
+
+/// How far beyond its range the swarm computes, in widths of the range
+/// (with a margin over argmin's bound of about 8.6).
+const SWARM_REACH: f64 = 16.0;
+
+/// Whether a value of a parameter's default table is a number the tune
+/// can set; otherwise what it is.
+pub(crate) fn numeric(v: &toml::Value) -> Result<(), &'static str> {
+    match v {
+        toml::Value::Float(_) => Ok(()),
+        toml::Value::Integer(_) => Err("an integer"),
+        toml::Value::Boolean(_) => Err("a boolean"),
+        toml::Value::String(_) => Err("a string (a choice of names)"),
+        toml::Value::Array(_) => Err("an array"),
+        toml::Value::Table(_) => Err("a table"),
+        toml::Value::Datetime(_) => Err("a date"),
+    }
+}
+
+/// Whether a refusal of a trial value is the key's fault (unknown, unused,
+/// or not a number at all) rather than a result (a value the controller
+/// refuses inside its range, scored +∞).
+pub(crate) fn not_a_result(reason: &str) -> bool {
+    reason.contains("unknown field")
+        || reason.contains("not used by")
+        || reason.contains("invalid type")
+}
+
+impl ParamRange {
+    /// The value at fraction `x` of the range (on its scale).
+    fn at(&self, x: f64) -> f64 {
+        match self.scale {
+            Scale::Log => 10f64.powf(self.low.log10() + x * (self.high.log10() - self.low.log10())),
+            Scale::Linear => self.low + x * (self.high - self.low),
+        }
+        .clamp(self.low, self.high)
+    }
+
+    /// The search-space bounds.
+    pub(super) fn bounds(&self) -> (f64, f64) {
+        match self.scale {
+            Scale::Log => (self.low.log10(), self.high.log10()),
+            Scale::Linear => (self.low, self.high),
+        }
+    }
+}

@@ -1,0 +1,115 @@
+//! One evaluation of the objective: a candidate's parameters set on every
+//! scenario × draw, run, and scored (e_max plus the penalties).
+
+use super::{Objective, Scale, Tune};
+use crate::metrics::Metrics;
+use crate::scenario::{Scenario, Setup};
+
+impl Tune {
+    /// The overrides of one evaluation of `values`: one list per
+    /// scenario × draw.
+    pub(super) fn sets(&self, values: &[f64]) -> Vec<Vec<(String, toml::Value)>> {
+        self.sets_of(Some(values))
+    }
+
+    /// [`Tune::sets`] of `values`, or of the kind's default parameters.
+    pub(super) fn sets_of(&self, values: Option<&[f64]>) -> Vec<Vec<(String, toml::Value)>> {
+        let mut out = Vec::new();
+        for _ in &self.scenarios {
+            for d in 0..self.file.draws {
+                let mut sets = vec![(
+                    "controller.kind".to_string(),
+                    toml::Value::String(self.kind.into()),
+                )];
+                for (r, &v) in self.params.iter().zip(values.unwrap_or(&[])) {
+                    sets.push((format!("controller.{}", r.key), toml::Value::Float(v)));
+                }
+                if self.file.draws > 1 {
+                    sets.push(("uncertainty.seed".into(), toml::Value::Integer(d as i64)));
+                }
+                out.push(sets);
+            }
+        }
+        out
+    }
+
+    pub(super) fn build_run(
+        &self,
+        run: usize,
+        sets: &[(String, toml::Value)],
+    ) -> Result<(Scenario, Setup), crate::scenario::ScenarioError> {
+        let i = run / self.file.draws as usize;
+        self.scenarios[i].with_values_built_on(self.tables[i].clone(), sets)
+    }
+
+    /// The parameter values of a point of the search space.
+    pub fn values(&self, p: &[f64]) -> Vec<f64> {
+        self.params
+            .iter()
+            .zip(p)
+            .map(|(r, &x)| match r.scale {
+                Scale::Log => 10f64.powf(x).clamp(r.low, r.high),
+                Scale::Linear => x.clamp(r.low, r.high),
+            })
+            .collect()
+    }
+
+    /// The metrics of every scenario × draw at `values` (None where the
+    /// controller refused them).
+    pub fn evaluate(&self, values: &[f64]) -> Vec<Option<Metrics>> {
+        self.evaluate_sets(&self.sets(values))
+    }
+
+    fn evaluate_sets(&self, sets: &[Vec<(String, toml::Value)>]) -> Vec<Option<Metrics>> {
+        sets.iter()
+            .enumerate()
+            .map(|(i, sets)| {
+                self.build_run(i, sets)
+                    .ok()
+                    .map(|(_, setup)| crate::run::run_setup(&setup, &mut |_| {}).1)
+            })
+            .collect()
+    }
+
+    /// One run's score: e_max (in the axis's unit, ° or mm) plus the penalties; +∞ when unbounded,
+    /// refused or undefined.
+    pub fn score(&self, m: Option<&Metrics>) -> f64 {
+        let Some(m) = m else {
+            return f64::INFINITY;
+        };
+        let (Some(e), false) = (m.e_max, m.diverged) else {
+            return f64::INFINITY;
+        };
+        let p = &self.file.penalty;
+        let mut s = e;
+        if p.chattering > 0.0 {
+            s += p.chattering * m.chattering.unwrap_or(f64::INFINITY);
+        }
+        if let Some(l) = p.u_limit {
+            s += p.u_excess * (m.u_max.unwrap_or(f64::INFINITY) - l).max(0.0);
+        }
+        if s.is_nan() {
+            f64::INFINITY
+        } else {
+            s
+        }
+    }
+
+    /// The objective at parameter `values`.
+    pub fn objective(&self, values: &[f64]) -> f64 {
+        self.objective_of(Some(values))
+    }
+
+    /// The objective at `values`, or at the kind's default parameters.
+    pub fn objective_of(&self, values: Option<&[f64]>) -> f64 {
+        let scores: Vec<f64> = self
+            .evaluate_sets(&self.sets_of(values))
+            .iter()
+            .map(|m| self.score(m.as_ref()))
+            .collect();
+        match self.file.objective {
+            Objective::Mean => scores.iter().sum::<f64>() / scores.len() as f64,
+            Objective::Worst => scores.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+}
