@@ -1,7 +1,7 @@
 //! Stopping long work from outside: what an interpreter's Ctrl-C needs.
 //!
 //! The command line needs none of this (a signal ends the process and
-//! `ehservo::signals` removes what it was writing). A host that stays
+//! `ehservo::interrupt` removes what it was writing). A host that stays
 //! alive — the Python package, whose `KeyboardInterrupt` must arrive while
 //! `ehservo.run`, `sweep`, `tune` or `league` is computing — calls
 //! [`request`]: every run in progress then stops at its next chunk of

@@ -187,8 +187,8 @@ pub fn write_fmu(out: &Path, kind: FmuKind, s: &Scenario, binary: &Path) -> Resu
     let toml_text = resource_toml(s, kind)?;
     let xml = model_description(kind, s, &toml_text);
     let tmp = tempfile_in(&dir, out)?;
-    // On SIGINT/SIGTERM the handler removes it (crate::signals).
-    let _listed = crate::signals::TempFile::register(tmp.clone());
+    // On SIGINT/SIGTERM the handler removes it (crate::interrupt).
+    let _listed = crate::interrupt::TempFile::register(tmp.clone());
     let result = (|| -> Result<()> {
         let f =
             std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;

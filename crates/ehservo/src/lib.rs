@@ -24,7 +24,7 @@
 //! | [`identify`] | `ehservo excite` and `ehservo identify`: experiments designed, logged data turned into a scenario (docs/identification.md) |
 //! | [`pil`] | `ehservo pil`: the controller on a board (QEMU or serial), the rest simulated, in lock-step; `ehservo run --float f32` |
 //! | [`schema`] | `ehservo schema`: the file formats' JSON Schemas and reference pages |
-//! | [`signals`] | the command line's SIGINT/SIGTERM: what was being written is removed |
+//! | [`interrupt`] | the command line's SIGINT/SIGTERM: what was being written is removed |
 //! | `cli` | the command line's arguments and commands, one file per family (feature `cli`; `src/main.rs` only parses and dispatches) |
 
 pub mod analysis;
@@ -34,6 +34,7 @@ pub mod cli;
 pub mod fmu;
 pub mod freq;
 pub mod identify;
+pub mod interrupt;
 pub mod league;
 pub mod output;
 #[cfg(not(target_arch = "wasm32"))]
@@ -42,7 +43,6 @@ pub mod pil;
 pub use ehservo_plot as plot;
 pub mod reproduce;
 pub mod schema;
-pub mod signals;
 pub mod study;
 pub mod tune;
 

@@ -10,7 +10,7 @@
 //!   an input file that is missing, unreadable, not a file or too large);
 //! - 130: interrupted by `SIGINT`, `SIGTERM` or `SIGHUP`; the staging
 //!   folders of the outputs being written are removed, the previous outputs
-//!   stay as they were ([`ehservo::signals`]).
+//!   stay as they were ([`ehservo::interrupt`]).
 
 use clap::Parser;
 use ehservo::cli::{closed_stdout, dispatch, Cli, StdoutError};
@@ -45,7 +45,7 @@ fn main() -> ExitCode {
     };
     // Without it a signal still ends the process, but leaves the staging
     // folders; that is all a failure here costs.
-    if let Err(e) = ehservo::signals::install() {
+    if let Err(e) = ehservo::interrupt::install() {
         note!("warning: no handler for Ctrl-C and SIGTERM: {e}");
     }
     let stdout = std::io::stdout();

@@ -198,7 +198,7 @@ pub fn probe_destination(dest: &Path) -> Result<()> {
 /// A directory written under a temporary name and moved into place on
 /// [`Staging::commit`], replacing the destination whole. Dropped without
 /// commit (an error, a panic) it is removed, and so are the parent folders
-/// it had to create; on a signal, [`crate::signals`] removes them: a failed
+/// it had to create; on a signal, [`crate::interrupt`] removes them: a failed
 /// or interrupted run leaves nothing half-written.
 #[derive(Debug)]
 pub struct Staging {
@@ -245,9 +245,9 @@ impl Staging {
         }
         // Created and listed under the registry's lock: a signal sees both
         // or neither.
-        let mut reg = crate::signals::registry();
+        let mut reg = crate::interrupt::registry();
         if let Err(e) = fs::create_dir_all(&parent) {
-            crate::signals::remove_created(&created);
+            crate::interrupt::remove_created(&created);
             return Err(e).with_context(|| format!("creating {}", parent.display()));
         }
         let mut i = 0u32;
@@ -257,7 +257,7 @@ impl Staging {
                 Ok(()) => break cand,
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && i < 1000 => i += 1,
                 Err(e) => {
-                    crate::signals::remove_created(&created);
+                    crate::interrupt::remove_created(&created);
                     return Err(e).with_context(|| format!("creating {}", cand.display()));
                 }
             }
@@ -296,7 +296,7 @@ impl Staging {
             return Err(crate::cancel::Cancelled.into());
         }
         // A signal arriving now waits until the output is in place.
-        let mut reg = crate::signals::registry();
+        let mut reg = crate::interrupt::registry();
         let moved = self.move_into_place();
         if moved.is_ok() {
             self.committed = true;
@@ -360,7 +360,7 @@ impl Staging {
                 Ok(()) if is_occupied(&e) => Err(lost(e)),
                 Ok(()) => Err(anyhow::Error::from(e).context(moving())),
                 Err(back) => {
-                    crate::signals::remove_tree(&aside);
+                    crate::interrupt::remove_tree(&aside);
                     Err(lost(e).context(format!(
                         "the previous output could not be put back ({back}) and was removed"
                     )))
@@ -368,7 +368,7 @@ impl Staging {
             };
         }
         drop(lock);
-        crate::signals::remove_tree(&aside);
+        crate::interrupt::remove_tree(&aside);
         Ok(())
     }
 }
@@ -376,9 +376,9 @@ impl Staging {
 impl Drop for Staging {
     fn drop(&mut self) {
         if !self.committed {
-            let mut reg = crate::signals::registry();
-            crate::signals::remove_tree(&self.tmp);
-            crate::signals::remove_created(&self.created);
+            let mut reg = crate::interrupt::registry();
+            crate::interrupt::remove_tree(&self.tmp);
+            crate::interrupt::remove_created(&self.created);
             reg.remove(self.id);
         }
     }

@@ -103,7 +103,7 @@ impl Qemu {
                 }
             })?;
         let pid = child.id();
-        crate::signals::add_child(pid);
+        crate::interrupt::add_child(pid);
         Ok(Self {
             child: Some(child),
             pid,
@@ -148,7 +148,7 @@ impl Qemu {
         if let Some(mut c) = self.child.take() {
             let _ = c.kill();
             let _ = c.wait();
-            crate::signals::remove_child(self.pid);
+            crate::interrupt::remove_child(self.pid);
         }
     }
 }

@@ -363,13 +363,13 @@ fn a_long_output_name_works_and_a_failed_staging_removes_its_folders() {
 
     // A staging that is dropped (an error, a panic) takes the folders it
     // made with it, and only those.
-    let before = ehservo::signals::live_staging_dirs();
+    let before = ehservo::interrupt::live_staging_dirs();
     let stage = ehservo::output::Staging::new(&tmp.path().join("x/y/out")).unwrap();
     std::fs::write(stage.path().join("part.csv"), "half").unwrap();
     assert!(tmp.path().join("x/y").is_dir());
-    assert_eq!(ehservo::signals::live_staging_dirs(), before + 1);
+    assert_eq!(ehservo::interrupt::live_staging_dirs(), before + 1);
     drop(stage);
-    assert_eq!(ehservo::signals::live_staging_dirs(), before);
+    assert_eq!(ehservo::interrupt::live_staging_dirs(), before);
     assert_eq!(names(tmp.path()), ["new"]);
 
     let stage = ehservo::output::Staging::new(&tmp.path().join("new/out")).unwrap();
