@@ -226,7 +226,9 @@ impl Linearize for ActuatorStage {
     fn scales(&self) -> Vec<f64> {
         match self.spool {
             Spool::None => Vec::new(),
-            Spool::First { tau } => vec![1.0 / tau.max(1e-300) * 0.0 + 1.0],
+            // The spool's position is a command in V: 1 V is its typical
+            // size; its rate in V/s scales with the natural frequency.
+            Spool::First { .. } => vec![1.0],
             Spool::Second { wn2, .. } => vec![1.0, wn2.sqrt()],
         }
     }
