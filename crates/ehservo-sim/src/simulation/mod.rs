@@ -29,20 +29,25 @@
 //! faults (a non-finite command or state update) ([`Stop`]). Nothing here
 //! does I/O.
 
+mod continuous;
+mod sample;
+mod sampled;
+
+pub use sample::{Divergence, DivergenceReason, Outcome, Sample, Stop, MAX_PARTS, MAX_STATES};
+use sampled::FirstStage;
+
 use crate::actuator::Actuator;
 use crate::estimator::AnyEstimator;
-pub use crate::plant::MAX_STATES;
-use crate::plant::{refinement, Plant, UncertaintySpec};
+use crate::plant::{Plant, UncertaintySpec};
 use crate::sensor::{Channels, Sensor};
 use crate::uncertainty::Varying;
-use ehservo_core::control::{flags, Controller, Measurement, Output, Signal, Signals, Truth};
+use ehservo_core::control::{flags, Controller, Output, Signals, Truth};
 use ehservo_core::error::ParamError;
-use ehservo_core::math::DR;
 use ehservo_core::reference::Reference;
-use ehservo_core::rk4::{rk4_step, rk4_step_with_k1, OdeState};
+use ehservo_core::rk4::OdeState;
 use ehservo_core::sampled::{FaultPolicy, SampledController};
 use serde::{Deserialize, Serialize};
-use std::cell::Cell;
+use std::ops::ControlFlow;
 
 /// How the controller is coupled to the integrator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -82,190 +87,6 @@ pub struct SimConfig {
     /// Sampled mode: the command computed at t_k is applied from t_{k+1}
     /// (a controller whose computation takes one sample period).
     pub computation_delay: bool,
-}
-
-/// Most parts a controller may log per sample.
-pub const MAX_PARTS: usize = 32;
-
-/// One logged sample at `t_k`: the true plant, the command, and the
-/// controller's parts as named signals.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sample {
-    /// Sample index k.
-    pub k: u64,
-    /// t_k (s).
-    pub t: f64,
-    /// z = (θd, θ̇d, θ̈d, θ⃛d).
-    pub z: [f64; 4],
-    /// The true x = (θ, θ̇, θ̈).
-    pub x: [f64; 3],
-    /// The controller's command u (V).
-    pub u: f64,
-    /// What the plant receives after the actuator (V).
-    pub u_plant: f64,
-    /// Tracking error e = θd − θ (rad).
-    pub e: f64,
-    /// The law's flags ([`ehservo_core::control::flags`]).
-    pub flags: u8,
-    /// The controller's signals, in the order of `values`.
-    pub signals: &'static [Signal],
-    /// Their values (the first `signals.len()`).
-    pub values: [f64; MAX_PARTS],
-    /// What the controller was given as x: the measured channels after
-    /// the sensors, the others from the estimator.
-    pub x_ctrl: [f64; 3],
-    /// The estimator's (θ̂, θ̂̇, θ̂̈); zero without one.
-    pub x_est: [f64; 3],
-    /// The spool position (V), before the dead band and the null bias.
-    pub spool: f64,
-    /// The plant's physical states ([`Plant::STATES`]), when the
-    /// simulation is asked for them ([`Simulation::log_states`]).
-    pub states: [f64; MAX_STATES],
-}
-
-impl Default for Sample {
-    fn default() -> Self {
-        Self {
-            k: 0,
-            t: 0.0,
-            z: [0.0; 4],
-            x: [0.0; 3],
-            u: 0.0,
-            u_plant: 0.0,
-            e: 0.0,
-            flags: 0,
-            signals: &[],
-            values: [0.0; MAX_PARTS],
-            x_ctrl: [0.0; 3],
-            x_est: [0.0; 3],
-            spool: 0.0,
-            states: [0.0; MAX_STATES],
-        }
-    }
-}
-
-impl Sample {
-    /// θd in degrees.
-    pub fn theta_d_deg(&self) -> f64 {
-        self.z[0] / DR
-    }
-    /// θ in degrees.
-    pub fn theta_deg(&self) -> f64 {
-        self.x[0] / DR
-    }
-    /// e in degrees.
-    pub fn e_deg(&self) -> f64 {
-        self.e / DR
-    }
-    /// The index of signal `key` among this sample's signals.
-    pub fn index_of(&self, key: &str) -> Option<usize> {
-        self.signals.iter().position(|s| s.key == key)
-    }
-    /// A controller signal by key (`"sigma"`, `"wphi"`, `"p"`).
-    pub fn get(&self, key: &str) -> Option<f64> {
-        self.index_of(key).map(|i| self.values[i])
-    }
-    /// A controller signal by key, 0 when this controller has none.
-    pub fn part(&self, key: &str) -> f64 {
-        self.get(key).unwrap_or(0.0)
-    }
-    /// Every logged number is finite. Branch-free: `0·v` is ±0 for a
-    /// finite `v` and NaN for ±∞ or NaN, so the sum is 0 exactly when all
-    /// are finite (as `ehservo_core::rk4::axpy_results_finite`).
-    #[cfg(test)]
-    fn is_finite(&self) -> bool {
-        self.finite_with(self.signals.len())
-    }
-
-    /// The finiteness check with `n = signals.len()` given: the loop
-    /// passes its controller's constant count, so that the check unrolls.
-    /// The order of the sum does not change the verdict: four lanes.
-    #[inline(always)]
-    fn finite_with(&self, n: usize) -> bool {
-        let mut lane = [
-            0.0 * self.u + 0.0 * self.x[1],
-            0.0 * self.u_plant + 0.0 * self.x[2],
-            0.0 * self.e + 0.0 * self.z[0],
-            0.0 * self.x[0] + 0.0 * self.z[1],
-        ];
-        lane[0] += 0.0 * self.z[2];
-        lane[1] += 0.0 * self.z[3];
-        let values = self.values[..n].chunks_exact(4);
-        let rest = values.remainder();
-        for chunk in values {
-            for (l, v) in lane.iter_mut().zip(chunk) {
-                *l += 0.0 * v;
-            }
-        }
-        for (l, v) in lane.iter_mut().zip(rest) {
-            *l += 0.0 * v;
-        }
-        (lane[0] + lane[1]) + (lane[2] + lane[3]) == 0.0
-    }
-}
-
-/// Why a run stopped before its horizon.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum DivergenceReason {
-    /// A plant or controller state became NaN or infinite.
-    NonFiniteState,
-    /// |θ| exceeded the limit.
-    ThetaLimit,
-    /// The law returned a non-finite u, or a non-finite part of its law
-    /// (σ, ‖E‖, WᵀΦ, …) that would have been logged.
-    NonFiniteControl,
-}
-
-impl DivergenceReason {
-    /// A short human sentence.
-    pub fn describe(&self) -> &'static str {
-        match self {
-            DivergenceReason::NonFiniteState => "the state became non-finite",
-            DivergenceReason::ThetaLimit => "|θ| exceeded the divergence limit",
-            DivergenceReason::NonFiniteControl => {
-                "the control law returned a non-finite value (u or one of its parts)"
-            }
-        }
-    }
-}
-
-/// The end of a diverged run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Divergence {
-    /// When (s).
-    pub t: f64,
-    /// Why.
-    pub reason: DivergenceReason,
-}
-
-/// Why a simulation stopped.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Stop {
-    /// The last sample, at the horizon, was produced.
-    Horizon,
-    /// The run diverged, or the controller faulted (a non-finite command
-    /// or state update), at the time and for the reason given.
-    Diverged(Divergence),
-}
-
-/// What the loop reports besides the samples it logged.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Outcome {
-    /// Samples produced.
-    pub samples: u64,
-    /// Set when the run ended early.
-    pub diverged: Option<Divergence>,
-    /// Samples at which the valve root of (2) was clamped in the law.
-    pub valve_root_clamped: u64,
-    /// Samples at which ‖E‖ = 0 was guarded.
-    pub zero_error_norm: u64,
-    /// Samples at which the command exceeded the valve range (clamped by
-    /// the sampled loop or saturated by the actuator).
-    pub saturated: u64,
-    /// Samples at which the sampled loop refused a measurement and
-    /// commanded its safe value.
-    pub measurement_faults: u64,
 }
 
 /// The plant and actuator states, integrated together.
@@ -341,42 +162,6 @@ struct TruthAt<'a, P: Plant> {
     stage: Option<FirstStage<'a, P>>,
 }
 
-/// The first RK4 stage of a sampled step: at the sample's time and state,
-/// under the command the law returns. [`Plant::deriv_and_lumped`]
-/// gives it with the lumped uncertainty (the third-order plant computes
-/// the b and d both need once, from what [`Plant::prepare`] made as the
-/// sample began); the step starts from it ([`rk4_step_with_k1`]) if it
-/// was for the command the plant gets, else from [`FirstStage::k1`] when
-/// the plant prepared something, else it is `rk4_step`'s.
-struct FirstStage<'a, P: Plant> {
-    t: f64,
-    y: &'a PlantAct<P::State>,
-    act: &'a Actuator,
-    /// What the plant's derivative needs of the state alone
-    /// ([`Plant::prepare`]), made as the sample began.
-    prepared: Option<P::Prepared>,
-    /// The command's bits and k1.
-    k1: Cell<Option<(u64, PlantAct<P::State>)>>,
-}
-
-impl<P: Plant> FirstStage<'_, P> {
-    /// k1 for the command `u`, under the variation `var`: the plant's
-    /// derivative from [`FirstStage::prepared`] and the valve's.
-    fn k1(&self, plant: &P, var: &P::Variation, u: f64) -> PlantAct<P::State> {
-        let mut k1 = PlantAct::<P::State>::zero();
-        plant.deriv_prepared(
-            self.prepared.as_ref(),
-            self.t,
-            &self.y.x,
-            self.act.output(&self.y.a, u),
-            var,
-            &mut k1.x,
-        );
-        self.act.deriv(&self.y.a, u, &mut k1.a);
-        k1
-    }
-}
-
 impl<P: Plant> Truth for TruthAt<'_, P> {
     fn lumped_uncertainty(&self, u: f64, u_eq: f64, b_bar: f64) -> f64 {
         let Some(st) = &self.stage else {
@@ -400,21 +185,6 @@ impl<P: Plant> Truth for TruthAt<'_, P> {
         st.act.deriv(&st.y.a, u, &mut k1.a);
         st.k1.set(Some((u.to_bits(), k1)));
         lumped
-    }
-}
-
-/// One RK4 step of `f` from `t`, from the first stage `k1` when it is known.
-#[inline]
-fn stage_step<S: OdeState, F: FnMut(f64, &S, &mut S)>(
-    f: F,
-    t: f64,
-    y: &mut S,
-    k1: Option<&S>,
-    h: f64,
-) {
-    match k1 {
-        Some(k1) => rk4_step_with_k1(f, t, y, k1, h),
-        None => rk4_step(f, t, y, h),
     }
 }
 
@@ -611,184 +381,12 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         let var = self.unc.at_step(&self.plant, j0, hs, self.per_hold);
         let x = self.plant.measure(t, &self.y.pa.x, &var);
         let z = self.reference.z(t);
-        match self.cfg.mode {
-            Mode::Sampled => {
-                // First: what the step's first RK4 stage needs of the state
-                // alone (a sine, divisions, roots), so that it runs beside
-                // the law rather than after the command it waits for.
-                let prepared = self.plant.prepare(&self.y.pa.x);
-                let xs = self.sensor.sample(x);
-                // A new array rather than element writes into the sensor's:
-                // the measurement can then stay in registers up to the
-                // sampled loop's range check (written in place, it is
-                // stored and reloaded, across the stores, which stalls).
-                let xm = match &mut self.estimator {
-                    None => xs,
-                    Some(est) => {
-                        if k == 0 {
-                            est.reset(xs[0]);
-                        }
-                        let xe = est.update(xs[0], self.u_applied);
-                        sample.x_est = xe;
-                        let measured = self.sensor.measured();
-                        let pick = |i: usize| if measured.has(i) { xs[i] } else { xe[i] };
-                        [xs[0], pick(1), pick(2)]
-                    }
-                };
-                let truth = TruthAt {
-                    plant: &self.plant,
-                    s: &self.y.pa.x,
-                    x,
-                    var,
-                    stage: Some(FirstStage {
-                        t,
-                        y: &self.y.pa,
-                        act: &self.actuator,
-                        prepared,
-                        k1: Cell::new(None),
-                    }),
-                };
-                let out = self
-                    .ctrl
-                    .step_with(t, xm, z, |c, s, o| c.annotate_stepped(s, o, &truth));
-                let u = if self.cfg.computation_delay {
-                    self.u_applied
-                } else {
-                    out.u
-                };
-                // The step's k1: the one the law's diagnostics evaluated, if
-                // for the command the plant now gets; else from what was
-                // prepared (as rk4_step would compute it, the same bits).
-                let k1 = truth.stage.and_then(|st| match st.k1.get() {
-                    Some((bits, k1)) if bits == u.to_bits() => Some(k1),
-                    _ if st.prepared.is_some() => Some(st.k1(&self.plant, &var, u)),
-                    _ => None,
-                });
-                if !self.log(sample, t, z, x, xm, u, &out) {
-                    return false;
-                }
-                self.u_applied = out.u;
-                if k == self.cfg.steps {
-                    self.stop = Some(Stop::Horizon);
-                    return true;
-                }
-                let (plant, act) = (&self.plant, &self.actuator);
-                // A valve without spool dynamics gives the plant the same
-                // input at every stage, and its state derivative is zero:
-                // computed once here instead of at each stage (the same bits).
-                let held = act.held_output(u);
-                for j in 0..m {
-                    let ts = t + j as f64 * hs;
-                    let v = if j == 0 {
-                        var
-                    } else {
-                        self.unc.at_step(&self.plant, j0 + j, hs, self.per_hold)
-                    };
-                    // The same k1 = f(t, y) that rk4_step would compute.
-                    let k1 = k1.as_ref().filter(|_| j == 0);
-                    let y = &mut self.y.pa;
-                    // A stiff plant (Plant::stiffness) splits this step so
-                    // that RK4 stays stable; never for the paper's plants,
-                    // whose step is then the one below, untouched.
-                    let n = refinement(plant.stiffness(ts, &y.x, act.output(&y.a, u), &v), hs);
-                    if n > 1 {
-                        let hr = hs / f64::from(n);
-                        for i in 0..n {
-                            rk4_step(
-                                |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
-                                    plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
-                                    act.deriv(&s.a, u, &mut ds.a);
-                                },
-                                ts + f64::from(i) * hr,
-                                y,
-                                hr,
-                            );
-                        }
-                        continue;
-                    }
-                    match held {
-                        // The valve's state has a zero derivative at every
-                        // stage, so RK4 would leave it as it is (+0, its
-                        // initial state, plus h/6·0): the step integrates
-                        // the plant's state alone. The same bits, and no
-                        // plant+valve state whose copies the stages would
-                        // reload across store boundaries.
-                        Some(u_plant) => stage_step(
-                            |tt: f64, s: &P::State, ds: &mut P::State| {
-                                plant.deriv(tt, s, u_plant, &v, ds);
-                            },
-                            ts,
-                            &mut y.x,
-                            k1.map(|k1| &k1.x),
-                            hs,
-                        ),
-                        None => stage_step(
-                            |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
-                                plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
-                                act.deriv(&s.a, u, &mut ds.a);
-                            },
-                            ts,
-                            y,
-                            k1,
-                            hs,
-                        ),
-                    }
-                }
-            }
-            Mode::Continuous => {
-                // The first RK4 stage: ξ̇ from the logged law, the plant's
-                // derivative below (the sampled mode never needs this 1 kB
-                // state, so only this mode makes one).
-                let mut dy = Augmented::<P::State, C::State>::zero();
-                let truth = TruthAt {
-                    plant: &self.plant,
-                    s: &self.y.pa.x,
-                    x,
-                    var,
-                    stage: None,
-                };
-                let c = self.ctrl.controller();
-                let xm = self.sensor.measure(x);
-                let mut out = c.law(&Measurement { t, x: xm, z }, &self.y.xi, &mut dy.xi);
-                if out.u.is_finite() {
-                    c.annotate(&self.y.xi, &mut out, &truth);
-                }
-                if !self.log(sample, t, z, x, xm, out.u, &out) {
-                    return false;
-                }
-                if k == self.cfg.steps {
-                    self.stop = Some(Stop::Horizon);
-                    return true;
-                }
-                let (plant, act, u) = (&self.plant, &self.actuator, out.u);
-                plant.deriv(t, &self.y.pa.x, sample.u_plant, &var, &mut dy.pa.x);
-                act.deriv(&self.y.pa.a, u, &mut dy.pa.a);
-                let (c, sensor, reference) =
-                    (self.ctrl.controller(), &self.sensor, &self.reference);
-                let f = |tt: f64,
-                         s: &Augmented<P::State, C::State>,
-                         ds: &mut Augmented<P::State, C::State>| {
-                    let xs = sensor.measure(plant.measure(tt, &s.pa.x, &var));
-                    let meas = Measurement {
-                        t: tt,
-                        x: xs,
-                        z: reference.z(tt),
-                    };
-                    let o = c.law(&meas, &s.xi, &mut ds.xi);
-                    plant.deriv(tt, &s.pa.x, act.output(&s.pa.a, o.u), &var, &mut ds.pa.x);
-                    act.deriv(&s.pa.a, o.u, &mut ds.pa.a);
-                };
-                let n = refinement(plant.stiffness(t, &self.y.pa.x, sample.u_plant, &var), h);
-                if n > 1 {
-                    let hr = h / f64::from(n);
-                    rk4_step_with_k1(f, t, &mut self.y, &dy, hr);
-                    for i in 1..n {
-                        rk4_step(f, t + f64::from(i) * hr, &mut self.y, hr);
-                    }
-                } else {
-                    rk4_step_with_k1(f, t, &mut self.y, &dy, h);
-                }
-            }
+        let flow = match self.cfg.mode {
+            Mode::Sampled => self.advance_sampled(sample, k, t, x, z, var, j0, hs, m),
+            Mode::Continuous => self.advance_continuous(sample, k, t, x, z, var, h),
+        };
+        if let ControlFlow::Break(produced) = flow {
+            return produced;
         }
         self.k += 1;
         let t_next = self.k as f64 * h;
@@ -899,6 +497,7 @@ mod tests {
     use crate::plant::{Draw, ThirdOrderPlant, Variation};
     use ehservo_core::control::nnvsc::{NnVsc, NnVscParams};
     use ehservo_core::prelude::{Load, NominalModel, Rbf, ServoParams, Sine, SwitchingSurface};
+    use ehservo_core::rk4::rk4_step;
 
     fn nn() -> NnVsc {
         NnVsc::try_new(

@@ -1,0 +1,208 @@
+//! The sampled mode: at `t_k` the core's sampled loop computes `u` once and
+//! holds it over the period while the plant and the actuator are integrated
+//! by `substeps` RK4 steps, the first of which may start from the stage the
+//! law's diagnostics already evaluated ([`FirstStage`]).
+
+use super::{PlantAct, Sample, Simulation, Stop, TruthAt};
+use crate::actuator::Actuator;
+use crate::plant::{refinement, Plant};
+use ehservo_core::control::Controller;
+use ehservo_core::reference::Reference;
+use ehservo_core::rk4::{rk4_step, rk4_step_with_k1, OdeState};
+use std::cell::Cell;
+use std::ops::ControlFlow;
+
+/// The first RK4 stage of a sampled step: at the sample's time and state,
+/// under the command the law returns. [`Plant::deriv_and_lumped`]
+/// gives it with the lumped uncertainty (the third-order plant computes
+/// the b and d both need once, from what [`Plant::prepare`] made as the
+/// sample began); the step starts from it ([`rk4_step_with_k1`]) if it
+/// was for the command the plant gets, else from [`FirstStage::k1`] when
+/// the plant prepared something, else it is `rk4_step`'s.
+pub(super) struct FirstStage<'a, P: Plant> {
+    pub(super) t: f64,
+    pub(super) y: &'a PlantAct<P::State>,
+    pub(super) act: &'a Actuator,
+    /// What the plant's derivative needs of the state alone
+    /// ([`Plant::prepare`]), made as the sample began.
+    pub(super) prepared: Option<P::Prepared>,
+    /// The command's bits and k1.
+    pub(super) k1: Cell<Option<(u64, PlantAct<P::State>)>>,
+}
+
+impl<P: Plant> FirstStage<'_, P> {
+    /// k1 for the command `u`, under the variation `var`: the plant's
+    /// derivative from [`FirstStage::prepared`] and the valve's.
+    fn k1(&self, plant: &P, var: &P::Variation, u: f64) -> PlantAct<P::State> {
+        let mut k1 = PlantAct::<P::State>::zero();
+        plant.deriv_prepared(
+            self.prepared.as_ref(),
+            self.t,
+            &self.y.x,
+            self.act.output(&self.y.a, u),
+            var,
+            &mut k1.x,
+        );
+        self.act.deriv(&self.y.a, u, &mut k1.a);
+        k1
+    }
+}
+
+/// One RK4 step of `f` from `t`, from the first stage `k1` when it is known.
+#[inline]
+fn stage_step<S: OdeState, F: FnMut(f64, &S, &mut S)>(
+    f: F,
+    t: f64,
+    y: &mut S,
+    k1: Option<&S>,
+    h: f64,
+) {
+    match k1 {
+        Some(k1) => rk4_step_with_k1(f, t, y, k1, h),
+        None => rk4_step(f, t, y, h),
+    }
+}
+
+impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
+    /// [`Simulation::advance`] in sampled mode, from the measurement `x`
+    /// and the reference `z` at `t_k`: `Break` with what `advance` returns
+    /// when the sample ends the run, else `Continue` once the plant has been
+    /// integrated to `t_{k+1}`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn advance_sampled(
+        &mut self,
+        sample: &mut Sample,
+        k: u64,
+        t: f64,
+        x: [f64; 3],
+        z: [f64; 4],
+        var: P::Variation,
+        j0: u64,
+        hs: f64,
+        m: u64,
+    ) -> ControlFlow<bool> {
+        // First: what the step's first RK4 stage needs of the state
+        // alone (a sine, divisions, roots), so that it runs beside
+        // the law rather than after the command it waits for.
+        let prepared = self.plant.prepare(&self.y.pa.x);
+        let xs = self.sensor.sample(x);
+        // A new array rather than element writes into the sensor's:
+        // the measurement can then stay in registers up to the
+        // sampled loop's range check (written in place, it is
+        // stored and reloaded, across the stores, which stalls).
+        let xm = match &mut self.estimator {
+            None => xs,
+            Some(est) => {
+                if k == 0 {
+                    est.reset(xs[0]);
+                }
+                let xe = est.update(xs[0], self.u_applied);
+                sample.x_est = xe;
+                let measured = self.sensor.measured();
+                let pick = |i: usize| if measured.has(i) { xs[i] } else { xe[i] };
+                [xs[0], pick(1), pick(2)]
+            }
+        };
+        let truth = TruthAt {
+            plant: &self.plant,
+            s: &self.y.pa.x,
+            x,
+            var,
+            stage: Some(FirstStage {
+                t,
+                y: &self.y.pa,
+                act: &self.actuator,
+                prepared,
+                k1: Cell::new(None),
+            }),
+        };
+        let out = self
+            .ctrl
+            .step_with(t, xm, z, |c, s, o| c.annotate_stepped(s, o, &truth));
+        let u = if self.cfg.computation_delay {
+            self.u_applied
+        } else {
+            out.u
+        };
+        // The step's k1: the one the law's diagnostics evaluated, if
+        // for the command the plant now gets; else from what was
+        // prepared (as rk4_step would compute it, the same bits).
+        let k1 = truth.stage.and_then(|st| match st.k1.get() {
+            Some((bits, k1)) if bits == u.to_bits() => Some(k1),
+            _ if st.prepared.is_some() => Some(st.k1(&self.plant, &var, u)),
+            _ => None,
+        });
+        if !self.log(sample, t, z, x, xm, u, &out) {
+            return ControlFlow::Break(false);
+        }
+        self.u_applied = out.u;
+        if k == self.cfg.steps {
+            self.stop = Some(Stop::Horizon);
+            return ControlFlow::Break(true);
+        }
+        let (plant, act) = (&self.plant, &self.actuator);
+        // A valve without spool dynamics gives the plant the same
+        // input at every stage, and its state derivative is zero:
+        // computed once here instead of at each stage (the same bits).
+        let held = act.held_output(u);
+        for j in 0..m {
+            let ts = t + j as f64 * hs;
+            let v = if j == 0 {
+                var
+            } else {
+                self.unc.at_step(&self.plant, j0 + j, hs, self.per_hold)
+            };
+            // The same k1 = f(t, y) that rk4_step would compute.
+            let k1 = k1.as_ref().filter(|_| j == 0);
+            let y = &mut self.y.pa;
+            // A stiff plant (Plant::stiffness) splits this step so
+            // that RK4 stays stable; never for the paper's plants,
+            // whose step is then the one below, untouched.
+            let n = refinement(plant.stiffness(ts, &y.x, act.output(&y.a, u), &v), hs);
+            if n > 1 {
+                let hr = hs / f64::from(n);
+                for i in 0..n {
+                    rk4_step(
+                        |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+                            plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
+                            act.deriv(&s.a, u, &mut ds.a);
+                        },
+                        ts + f64::from(i) * hr,
+                        y,
+                        hr,
+                    );
+                }
+                continue;
+            }
+            match held {
+                // The valve's state has a zero derivative at every
+                // stage, so RK4 would leave it as it is (+0, its
+                // initial state, plus h/6·0): the step integrates
+                // the plant's state alone. The same bits, and no
+                // plant+valve state whose copies the stages would
+                // reload across store boundaries.
+                Some(u_plant) => stage_step(
+                    |tt: f64, s: &P::State, ds: &mut P::State| {
+                        plant.deriv(tt, s, u_plant, &v, ds);
+                    },
+                    ts,
+                    &mut y.x,
+                    k1.map(|k1| &k1.x),
+                    hs,
+                ),
+                None => stage_step(
+                    |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+                        plant.deriv(tt, &s.x, act.output(&s.a, u), &v, &mut ds.x);
+                        act.deriv(&s.a, u, &mut ds.a);
+                    },
+                    ts,
+                    y,
+                    k1,
+                    hs,
+                ),
+            }
+        }
+        ControlFlow::Continue(())
+    }
+}
