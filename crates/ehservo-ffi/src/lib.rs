@@ -36,9 +36,9 @@
 /// cbindgen:ignore
 pub mod fmi3;
 
-use ehservo::scenario::Scenario;
-use ehservo::simulation::Stop;
-use ehservo::stepper::{ControllerStepper, LoopStepper};
+use ehservo_scenario::scenario::Scenario;
+use ehservo_scenario::simulation::Stop;
+use ehservo_scenario::stepper::{ControllerStepper, LoopStepper};
 use std::cell::RefCell;
 use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -270,7 +270,7 @@ pub const EHSERVO_FLAG_NON_FINITE_STATE: u32 = 32;
 /// frame, a board reset); the safe command was applied (bit 6).
 pub const EHSERVO_FLAG_LINK_FAULT: u32 = 64;
 
-/// The C constants in the order of `ehservo::core::control::flags::ALL`
+/// The C constants in the order of `ehservo_scenario::core::control::flags::ALL`
 /// (the header's literals, checked against the law's values at compile
 /// time and by `tests/header.rs`).
 ///
@@ -301,7 +301,7 @@ pub const FLAGS: [(&str, u32); 7] = [
 ///
 /// cbindgen:ignore
 const _: () = {
-    use ehservo::core::control::flags::ALL;
+    use ehservo_scenario::core::control::flags::ALL;
     let mut i = 0;
     while i < ALL.len() {
         assert!(FLAGS[i].1 == ALL[i].1 as u32);
@@ -446,7 +446,7 @@ pub unsafe extern "C" fn ehservo_sim_metric(
             return Err(null(F, "out"));
         }
         let m = sim.inner.metrics();
-        use ehservo::metrics::Metrics;
+        use ehservo_scenario::metrics::Metrics;
         let names = Metrics::names(m.axis);
         let known = names.contains(&name)
             || Metrics::csv_names(m.axis).contains(&name)
@@ -514,8 +514,8 @@ pub unsafe extern "C" fn ehservo_sim_axis_unit(sim: *const EhservoSim) -> *const
     match unsafe { sim.as_ref() } {
         None => std::ptr::null(),
         Some(s) => match s.inner.metrics().axis {
-            ehservo::axis::Axis::Rotary => c"deg".as_ptr(),
-            ehservo::axis::Axis::Linear => c"mm".as_ptr(),
+            ehservo_scenario::axis::Axis::Rotary => c"deg".as_ptr(),
+            ehservo_scenario::axis::Axis::Linear => c"mm".as_ptr(),
         },
     }
 }
@@ -682,7 +682,7 @@ pub unsafe extern "C" fn ehservo_controller_step(
         let o = ctl.inner.step(t, xv, zv);
         // SAFETY: checked non-null above.
         unsafe { put(F, "u", u, o.u) }?;
-        use ehservo::core::control::flags;
+        use ehservo_scenario::core::control::flags;
         if o.flags & flags::MEASUREMENT_FAULT != 0 {
             let which = xv
                 .iter()

@@ -2,7 +2,7 @@
 #![allow(clippy::float_cmp)] // bit-identical results are the point
 
 use super::*;
-use ehservo::run::{run, Keep};
+use ehservo_scenario::run::{run, Keep};
 use std::ffi::CString;
 use std::ptr::{null, null_mut};
 
@@ -417,5 +417,5 @@ fn a_linear_axis_says_mm_and_refuses_degrees() {
     let scen = Scenario::load(std::path::Path::new(path.to_str().unwrap()), &[]).unwrap();
     let r = run(&scen, Keep::Nothing).unwrap();
     assert_eq!(r.metrics.e_max, Some(e_mm));
-    assert_eq!(r.metrics.axis, ehservo::axis::Axis::Linear);
+    assert_eq!(r.metrics.axis, ehservo_scenario::axis::Axis::Linear);
 }

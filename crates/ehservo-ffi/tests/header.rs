@@ -35,12 +35,12 @@ fn the_committed_header_is_up_to_date() {
 
 /// `EhservoSample.flags` is documented by the constants themselves: the
 /// header defines `EHSERVO_FLAG_<NAME>` with the law's value for every flag
-/// of `ehservo::core::control::flags::ALL` (and no other), and docs/flags.md
+/// of `ehservo_scenario::core::control::flags::ALL` (and no other), and docs/flags.md
 /// lists each with that value and bit. (The header once said "bit 0
 /// saturated" while saturated was bit 4.)
 #[test]
 fn the_header_the_constants_and_the_docs_agree_on_the_flags() {
-    use ehservo::core::control::flags::ALL;
+    use ehservo_scenario::core::control::flags::ALL;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
     let header = std::fs::read_to_string(dir.join("include/ehservo.h")).unwrap();
     let defined: Vec<(String, u32)> = header

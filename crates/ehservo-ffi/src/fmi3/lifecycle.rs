@@ -3,8 +3,8 @@
 //! free.
 
 use super::{build, log_to, text, with, Body, Instance, LogFn, Phase, Status, ERROR, FATAL, OK};
-use ehservo::fmu::check_token;
-use ehservo::scenario::Scenario;
+use ehservo_scenario::fmi::check_token;
+use ehservo_scenario::scenario::Scenario;
 use std::ffi::{c_char, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -47,7 +47,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
         })?;
         let path = std::path::Path::new(&res).join("scenario.toml");
         // Bounded as every input file is (a regular file, ≤ 1 MiB).
-        let toml_text = ehservo::input::read_text(&path)
+        let toml_text = ehservo_scenario::input::read_text(&path)
             .map_err(|e| fail(format!("reading {}: {e}", path.display())))?;
         let kind = check_token(&token, &toml_text).map_err(fail)?;
         let scenario = Scenario::load(&path, &[]).map_err(|e| fail(e.to_string()))?;

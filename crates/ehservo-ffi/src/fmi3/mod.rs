@@ -1,6 +1,6 @@
 //! The FMI 3.0 co-simulation entry points of the FMUs `ehservo fmu`
 //! writes (the model description, the variables and the token are in
-//! `ehservo::fmu`).
+//! `ehservo_scenario::fmu`).
 //!
 //! Two kinds of FMU, told apart by the instantiation token:
 //!
@@ -38,10 +38,10 @@ pub use step::*;
 pub use unsupported::*;
 pub use variables::*;
 
-use ehservo::fmu::FmuKind;
-use ehservo::scenario::Scenario;
-use ehservo::simulation::Sample;
-use ehservo::stepper::{ControllerStepper, LawOutput, LoopStepper};
+use ehservo_scenario::fmi::FmuKind;
+use ehservo_scenario::scenario::Scenario;
+use ehservo_scenario::simulation::Sample;
+use ehservo_scenario::stepper::{ControllerStepper, LawOutput, LoopStepper};
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 

@@ -3,8 +3,8 @@
 //! held) and for the closed loop (run to the step's end, or its stop).
 
 use super::{with, Body, Instance, Phase, Status, FATAL, OK, WARNING};
-use ehservo::fmu::FmuKind;
-use ehservo::simulation::Stop;
+use ehservo_scenario::fmi::FmuKind;
+use ehservo_scenario::simulation::Stop;
 use std::ffi::c_void;
 
 impl Instance {

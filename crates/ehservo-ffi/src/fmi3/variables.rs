@@ -3,7 +3,7 @@
 //! other types, of which this FMU has none.
 
 use super::{with, Body, Instance, Phase, Status, OK};
-use ehservo::fmu::{vr, FmuKind};
+use ehservo_scenario::fmi::{vr, FmuKind};
 use std::ffi::{c_char, c_int, c_void};
 
 impl Instance {

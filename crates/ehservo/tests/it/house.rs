@@ -61,7 +61,8 @@ fn no_source_file_is_beyond_the_limit() {
         .iter()
         .filter_map(|p| {
             let n = code_lines(&std::fs::read_to_string(p).unwrap());
-            (n > MAX_CODE_LINES).then(|| format!("{} ({n})", p.strip_prefix(&root).unwrap_or(p).display()))
+            (n > MAX_CODE_LINES)
+                .then(|| format!("{} ({n})", p.strip_prefix(&root).unwrap_or(p).display()))
         })
         .collect();
     big.sort();

@@ -18,6 +18,7 @@ mod freq;
 mod golden;
 mod guide;
 mod hopsan;
+mod house;
 mod identify;
 mod independent;
 mod k1_closed_form;
