@@ -192,10 +192,7 @@ impl Cylinder {
     /// (a fixed supply's Ps scaled by the variation).
     #[inline]
     fn supply_pressure(&self, ps_state: f64, f: &Factors) -> f64 {
-        match self.supply {
-            Supply::Fixed { ps } => ps * f.supply_pressure,
-            Supply::Pump(_) => ps_state.max(0.0),
-        }
+        self.supply.pressure(ps_state, f.supply_pressure)
     }
 
     /// The load force on the rod (N, opposing extension): the spring and
@@ -252,20 +249,9 @@ impl Cylinder {
         ds[1] = force / (self.mass * f.mass);
         ds[2] = beta / va * (q.a - self.area[0] * v - leak);
         ds[3] = beta / vb * (q.b + self.area[1] * v + leak);
-        match &self.supply {
-            Supply::Fixed { .. } => {
-                ds[4] = 0.0;
-                ds[5] = 0.0;
-            }
-            Supply::Pump(p) => {
-                let p_max = p.p_max * f.supply_pressure;
-                let relief = crate::supply::Pump { p_max, ..*p };
-                let xs = relief.steady_opening(ps, self.pt);
-                let qr = relief.q_relief(xr, ps, self.pt);
-                ds[4] = p.stiffness * f.bulk_modulus * (p.q_pump(ps, self.pt) - qr - q.p);
-                ds[5] = (xs - xr) * p.rate;
-            }
-        }
+        [ds[4], ds[5]] = self
+            .supply
+            .deriv(ps, xr, self.pt, q.p, f.supply_pressure, f.bulk_modulus);
     }
 
     /// The largest rate the state's dynamics have here (1/s): chamber and

@@ -253,6 +253,52 @@ impl Supply {
     }
 }
 
+impl Supply {
+    /// The pressure the supply delivers (Pa) at its state `ps_state`: a
+    /// fixed supply's Ps scaled by `pressure_factor` (the variation's), a
+    /// pump's line pressure, floored at 0.
+    #[inline]
+    pub fn pressure(&self, ps_state: f64, pressure_factor: f64) -> f64 {
+        match self {
+            Supply::Fixed { ps } => ps * pressure_factor,
+            Supply::Pump(_) => ps_state.max(0.0),
+        }
+    }
+
+    /// The derivatives of the supply's own two states, the line pressure
+    /// Ps (Pa/s) and the relief valve's opening xr (1/s), when the valve
+    /// draws `q_p` (m³/s) from the line at the pressure `ps` (Pa, from
+    /// [`Supply::pressure`]), over the tank at `pt`: the module's
+    /// equations, with the relief setting scaled by `pressure_factor` and
+    /// βe by `bulk_factor`. Both are 0 for a fixed supply. A plant that has
+    /// a supply holds one and integrates these two states with its own
+    /// (the cylinder: its slots 4 and 5).
+    #[inline]
+    pub fn deriv(
+        &self,
+        ps: f64,
+        xr: f64,
+        pt: f64,
+        q_p: f64,
+        pressure_factor: f64,
+        bulk_factor: f64,
+    ) -> [f64; 2] {
+        match self {
+            Supply::Fixed { .. } => [0.0, 0.0],
+            Supply::Pump(p) => {
+                let p_max = p.p_max * pressure_factor;
+                let relief = Pump { p_max, ..*p };
+                let xs = relief.steady_opening(ps, pt);
+                let qr = relief.q_relief(xr, ps, pt);
+                [
+                    p.stiffness * bulk_factor * (p.q_pump(ps, pt) - qr - q_p),
+                    (xs - xr) * p.rate,
+                ]
+            }
+        }
+    }
+}
+
 impl Pump {
     /// The pump's delivery at Ps (m³/s).
     #[inline]
@@ -303,6 +349,39 @@ mod tests {
             1e9,
         )
         .unwrap()
+    }
+
+    /// The line's pressure integrates the flow balance, by hand: at
+    /// Ps = 10 MPa (below the 20 MPa relief, so closed and staying so) the
+    /// pump delivers D·n/(2π) − C_lp·(Ps − Pt) = 25e-5·200/(2π) − 1e-12·9.9e6
+    /// m³/s; drawing half of that, Ṗs = (βe/V)·(the other half) with
+    /// βe/V = 1e9/1e-3. With the relief open by x above its setting its flow
+    /// x·√(Ps − Pt) leaves the line too, and x relaxes towards the steady
+    /// opening at 1/τ (at 20.5 MPa, 2.5 % over its setting, the steady
+    /// opening is within x_max). A fixed supply has no dynamics.
+    #[test]
+    fn the_line_integrates_the_flow_balance() {
+        let (s, pt) = hopsan_pump();
+        let q_pump = 25e-5 * 200.0 / (2.0 * std::f64::consts::PI) - 1e-12 * (1e7 - 1e5);
+        let [dps, dxr] = s.deriv(1e7, 0.0, pt, 0.5 * q_pump, 1.0, 1.0);
+        let want = 1e9 / 1e-3 * 0.5 * q_pump;
+        assert!((dps - want).abs() <= 1e-12 * want, "{dps} vs {want}");
+        assert_eq!(dxr, 0.0);
+        let Supply::Pump(p) = s else { unreachable!() };
+        let (ps, x) = (2.05e7, 0.5 * p.x_max);
+        let q_pump = 25e-5 * 200.0 / (2.0 * std::f64::consts::PI) - 1e-12 * (ps - 1e5);
+        let [dps, dxr] = s.deriv(ps, x, pt, 0.0, 1.0, 1.0);
+        let want = 1e9 / 1e-3 * (q_pump - x * (ps - 1e5_f64).sqrt());
+        assert!((dps - want).abs() <= 1e-9 * want.abs(), "{dps} vs {want}");
+        let xs = p.steady_opening(ps, pt);
+        assert!(xs > 0.0 && xs < p.x_max, "{xs}");
+        assert!((dxr - (xs - x) / 1e-3).abs() <= 1e-9 * dxr.abs(), "{dxr}");
+        // A 10 % lower relief setting opens it further.
+        let [_, dxr_low] = s.deriv(ps, x, pt, 0.0, 0.9, 1.0);
+        assert!(dxr_low > dxr);
+        let fixed = Supply::Fixed { ps: 7e6 };
+        assert_eq!(fixed.deriv(7e6, 0.0, pt, 1e-3, 1.0, 1.0), [0.0, 0.0]);
+        assert_eq!(fixed.pressure(123.0, 0.5), 3.5e6);
     }
 
     /// The holding pressure balances the pump's flow against the relief's
