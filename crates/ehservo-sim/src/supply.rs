@@ -360,6 +360,7 @@ mod tests {
     /// opening at 1/τ (at 20.5 MPa, 2.5 % over its setting, the steady
     /// opening is within x_max). A fixed supply has no dynamics.
     #[test]
+    #[allow(clippy::float_cmp)] // 0 and 7e6·0.5 are exact
     fn the_line_integrates_the_flow_balance() {
         let (s, pt) = hopsan_pump();
         let q_pump = 25e-5 * 200.0 / (2.0 * std::f64::consts::PI) - 1e-12 * (1e7 - 1e5);
