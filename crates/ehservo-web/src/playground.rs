@@ -629,7 +629,7 @@ mod tests {
         assert_eq!(run.unit, "mm");
         let cli = cli_metrics("scenarios/cylinders/chrono-single-rod.toml", &flags);
         assert_eq!(run.metrics, cli);
-        let json = serde_json::to_value(&run.metrics).unwrap();
+        let json = serde_json::to_value(run.metrics).unwrap();
         assert_eq!(json["unit"], "mm");
         assert!(json.get("e_max").is_some_and(|v| v.is_f64()), "{json}");
         let keys: Vec<&String> = json.as_object().unwrap().keys().collect();
