@@ -1,6 +1,6 @@
 #!/bin/bash
 # Two builds of `ehservo` give the same outputs, bit for bit: every shipped
-# scenario (scenarios/{paper,examples,realistic}) is run by both with
+# scenario (every folder of scenarios/ but studies/) is run by both with
 # `run --no-plot`, and their trace.csv and summary.json compared byte by
 # byte; so is the exit code. A file that `run` refuses in both builds is
 # tried as a study (`sweep --no-plot`: results.csv and study.json
@@ -25,7 +25,10 @@ trap 'exit 130' INT TERM
 n=0
 skipped=0
 bad=0
-files=("$root"/scenarios/paper/*.toml "$root"/scenarios/examples/*.toml "$root"/scenarios/realistic/*.toml)
+files=()
+for f in "$root"/scenarios/*/*.toml; do
+    case "$f" in */scenarios/studies/*) ;; *) files+=("$f") ;; esac
+done
 if [ "${STUDIES:-0}" = 1 ]; then
     files+=("$root"/scenarios/studies/*.toml)
 fi

@@ -1,7 +1,7 @@
 //! `ehservo._ehservo`: the Rust half of the Python package `ehservo`.
 //!
 //! Thin on purpose: every number comes from the same functions the command
-//! line calls (`Scenario::load` with `--set` overrides, `run::run_observed`,
+//! line calls (`formats::load` with `--set` overrides, `run::run_observed`,
 //! `output::TraceLayout`, `study::execute`/`study::sweep`,
 //! `stepper::ControllerStepper`, as the C ABI and the FMU; `freq::linearise`), so the Python results are the CLI's
 //! bits. The Python side (`python/ehservo/__init__.py`) turns the keyword
@@ -12,7 +12,7 @@
 
 use ehservo::metrics::Metrics;
 use ehservo::output::TraceLayout;
-use ehservo::scenario::{Scenario, ScenarioError as RsScenarioError};
+use ehservo::scenario::{Loop, ScenarioError as RsScenarioError};
 use ehservo::stepper::ControllerStepper;
 use ehservo::study::Plan;
 use numpy::PyArray1;
@@ -44,7 +44,7 @@ fn scenario_error(py: Python<'_>, e: &RsScenarioError) -> PyErr {
     let _ = v.setattr("key", key);
     let _ = v.setattr("line", e.line_col.map(|(l, _)| l));
     let _ = v.setattr("column", e.line_col.map(|(_, c)| c));
-    let _ = v.setattr("reason", e.reason.clone());
+    let _ = v.setattr("reason", e.reason.to_string());
     err
 }
 
@@ -147,7 +147,6 @@ fn check_threads(threads: Option<usize>) -> PyResult<()> {
 
 /// Why a run gave no result.
 enum RunFailure {
-    Scenario(RsScenarioError),
     Memory(String),
 }
 
@@ -157,24 +156,25 @@ fn load(
     path: Option<PathBuf>,
     text: Option<String>,
     overrides: &[String],
-) -> Result<Scenario, RsScenarioError> {
+) -> Result<Loop, RsScenarioError> {
+    let unnamed = |s: Loop, name: &str| {
+        if s.name().is_empty() {
+            s.named(name)
+        } else {
+            s
+        }
+    };
     match (path, text) {
-        (Some(p), _) => Scenario::load(&p, overrides),
-        (None, Some(t)) => {
-            let mut s = Scenario::parse_with(&t, "<string>", overrides)?;
-            if s.name.is_empty() {
-                s.name = "scenario".into();
-            }
-            Ok(s)
-        }
-        (None, None) => {
-            // The defaults: the paper's Fig. 2 case, overrides applied.
-            let mut s = Scenario::parse_with("", "<defaults>", overrides)?;
-            if s.name.is_empty() {
-                s.name = "defaults".into();
-            }
-            Ok(s)
-        }
+        (Some(p), _) => ehservo::formats::load(&p, overrides),
+        (None, Some(t)) => Ok(unnamed(
+            ehservo::formats::parse_in(&t, "<string>", overrides, None)?,
+            "scenario",
+        )),
+        // The defaults: the paper's Fig. 2 case, overrides applied.
+        (None, None) => Ok(unnamed(
+            Loop::parse_with("", "<defaults>", overrides)?,
+            "defaults",
+        )),
     }
 }
 
@@ -219,17 +219,17 @@ fn run<'py>(
     Vec<Bound<'py, PyArray1<f64>>>,
     String,
 )> {
-    let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
-    // Validated before any work (and before any memory is asked for).
-    s.setup().map_err(|e| scenario_error(py, &e))?;
+    // Built (so checked) before any work, and before any memory is asked for.
+    let lp = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
+    let s = lp.scenario();
     let result = interruptible(py, || -> Result<_, RunFailure> {
-        let layout = TraceLayout::of(&s);
+        let layout = TraceLayout::of(&lp);
         let mut names: Vec<String> = layout.columns.iter().map(|c| c.to_string()).collect();
         if raw {
             names.extend(RAW_COLUMNS.iter().map(|c| c.to_string()));
         }
         let decimate = s.output.decimate.max(1) as u64;
-        let rows = (s.sim_config().steps / decimate + 1) as usize;
+        let rows = (lp.sim().steps / decimate + 1) as usize;
         // The whole trace, asked for up front and fallibly: a run too long
         // for the memory there is raises MemoryError before it starts
         // (an infallible allocation would abort the interpreter), and the
@@ -247,7 +247,7 @@ fn run<'py>(
             cols.push(c);
         }
         let mut row = Vec::with_capacity(names.len());
-        let (outcome, metrics) = ehservo::run::run_observed(&s, &mut |smp| {
+        let (outcome, metrics) = ehservo::run::run_observed(&lp, &mut |smp| {
             if smp.k % decimate != 0 {
                 return;
             }
@@ -262,8 +262,7 @@ fn run<'py>(
                     c.push(*v);
                 }
             }
-        })
-        .map_err(RunFailure::Scenario)?;
+        });
         let info = serde_json::json!({
             "divergence": outcome.diverged.map(ehservo::output::DivergenceInfo::from),
             "faults": ehservo::output::Faults {
@@ -276,7 +275,6 @@ fn run<'py>(
         Ok((names, cols, metrics, info.to_string()))
     });
     let (names, cols, metrics, info) = result?.map_err(|e| match e {
-        RunFailure::Scenario(e) => scenario_error(py, &e),
         RunFailure::Memory(m) => PyMemoryError::new_err(m),
     })?;
     let arrays = cols
@@ -313,9 +311,8 @@ fn check(
     text: Option<String>,
     overrides: Vec<String>,
 ) -> PyResult<String> {
-    let s = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
-    s.setup().map_err(|e| scenario_error(py, &e))?;
-    Ok(s.to_toml())
+    let lp = load(path, text, &overrides).map_err(|e| scenario_error(py, &e))?;
+    Ok(lp.scenario().to_toml())
 }
 
 /// A column of results.csv as Python data.
@@ -621,7 +618,7 @@ impl RawController {
         Ok(Self {
             ctrl,
             kind,
-            name: s.name.clone(),
+            name: s.name().to_string(),
             buf: vec![0.0; n],
         })
     }
@@ -736,7 +733,7 @@ fn linearize(
             "{file}: the linearised models are not finite"
         )));
     }
-    serde_json::to_string(&ehservo::freq::linearisation_json(&s, &l))
+    serde_json::to_string(&ehservo::freq::linearisation_json(&l))
         .map_err(|e| PyOSError::new_err(e.to_string()))
 }
 

@@ -102,6 +102,42 @@ impl<T: Real> FaultPolicy<T> {
     }
 }
 
+/// A sample period and a fault policy, checked together: what a
+/// [`SampledController`] is made of besides its controller. A value of
+/// this type is valid, so [`SampledController::sampled`] cannot fail.
+///
+/// ```
+/// use ehservo_core::sampled::{FaultPolicy, Sampling};
+/// let s = Sampling::try_new(0.01, FaultPolicy::default()).unwrap();
+/// assert_eq!(s.dt(), 0.01);
+/// // A period must be finite and > 0.
+/// assert_eq!(Sampling::try_new(0.0, FaultPolicy::default()).unwrap_err().name, "dt");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sampling<T = f64> {
+    dt: T,
+    policy: FaultPolicy<T>,
+}
+
+impl<T: Real> Sampling<T> {
+    /// The period `dt` (s, finite and > 0) with `policy` (its limits > 0).
+    pub fn try_new(dt: T, policy: FaultPolicy<T>) -> Result<Self, ParamError> {
+        positive("dt", dt)?;
+        policy.validate()?;
+        Ok(Self { dt, policy })
+    }
+
+    /// The sample period (s).
+    pub fn dt(&self) -> T {
+        self.dt
+    }
+
+    /// The fault policy.
+    pub fn policy(&self) -> &FaultPolicy<T> {
+        &self.policy
+    }
+}
+
 /// A controller with its state, a fixed sample period and a fault policy.
 ///
 /// The state is double-buffered: the law writes ξ + dt·ξ̇ into the spare
@@ -149,18 +185,22 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
 
     /// As [`SampledController::new`] with a fault policy.
     pub fn with_policy(ctrl: C, dt: T, policy: FaultPolicy<T>) -> Result<Self, ParamError> {
-        positive("dt", dt)?;
-        policy.validate()?;
-        Ok(Self {
+        Sampling::try_new(dt, policy).map(|s| Self::sampled(ctrl, s))
+    }
+
+    /// Wraps `ctrl` with its initial state and a checked period and
+    /// policy: infallible.
+    pub fn sampled(ctrl: C, sampling: Sampling<T>) -> Self {
+        Self {
             states: [ctrl.initial_state(), C::State::zero()],
             cur: 0,
             ctrl,
-            dt,
-            policy,
+            dt: sampling.dt,
+            policy: sampling.policy,
             last_u: T::ZERO,
             faults: 0,
             saturations: 0,
-        })
+        }
     }
 
     fn safe_output(&mut self, fault: u8) -> Output<C::Parts, T> {

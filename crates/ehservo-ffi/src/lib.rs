@@ -36,7 +36,7 @@
 /// cbindgen:ignore
 pub mod fmi3;
 
-use ehservo_scenario::scenario::Scenario;
+use ehservo_scenario::scenario::Loop;
 use ehservo_scenario::simulation::Stop;
 use ehservo_scenario::stepper::{ControllerStepper, LoopStepper};
 use std::cell::RefCell;
@@ -194,8 +194,8 @@ fn finite(func: &str, name: &str, v: f64) -> Result<f64, Fail> {
 }
 
 /// Loads and validates a scenario file as `ehservo run` does.
-pub(crate) fn load_scenario(path: &std::path::Path) -> Result<Scenario, Fail> {
-    Scenario::load(path, &[]).map_err(|e| Fail(EhservoStatus::Scenario, e.to_string()))
+pub(crate) fn load_scenario(path: &std::path::Path) -> Result<Loop, Fail> {
+    Loop::load(path, &[]).map_err(|e| Fail(EhservoStatus::Scenario, e.to_string()))
 }
 
 /// Writes `value` through `out`, checked for null.
@@ -331,11 +331,10 @@ pub unsafe extern "C" fn ehservo_sim_new(
         // SAFETY: the caller's contract on `path`.
         let path = unsafe { path_arg(F, "path", path) }?;
         let s = load_scenario(&path)?;
-        let inner =
-            LoopStepper::new(&s).map_err(|e| Fail(EhservoStatus::Scenario, e.to_string()))?;
+        let inner = LoopStepper::new(&s);
         let sim = Box::new(EhservoSim {
             inner,
-            name: s.name,
+            name: s.name().to_string(),
         });
         // SAFETY: as above.
         unsafe { out.write(Box::into_raw(sim)) };

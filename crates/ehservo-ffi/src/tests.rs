@@ -76,8 +76,8 @@ fn stepping_fig2_from_c_gives_the_runs_e_max_to_the_bit() {
         assert_eq!(ehservo_sim_e_max_deg(sim, &mut e), EhservoStatus::Ok);
         ehservo_sim_free(sim);
     }
-    let scen = Scenario::load(std::path::Path::new(path.to_str().unwrap()), &[]).unwrap();
-    let r = run(&scen, Keep::Nothing).unwrap();
+    let scen = Loop::load(std::path::Path::new(path.to_str().unwrap()), &[]).unwrap();
+    let r = run(&scen, Keep::Nothing);
     assert_eq!(e.to_bits(), r.metrics.e_max.unwrap().to_bits());
     // The README's figure for this case, as an order-of-magnitude check of
     // what was compared.
@@ -414,8 +414,8 @@ fn a_linear_axis_says_mm_and_refuses_degrees() {
         ehservo_sim_free(sim);
     }
     // The same run by the library: e_max over t ≥ settle, in mm.
-    let scen = Scenario::load(std::path::Path::new(path.to_str().unwrap()), &[]).unwrap();
-    let r = run(&scen, Keep::Nothing).unwrap();
+    let scen = Loop::load(std::path::Path::new(path.to_str().unwrap()), &[]).unwrap();
+    let r = run(&scen, Keep::Nothing);
     assert_eq!(r.metrics.e_max, Some(e_mm));
     assert_eq!(r.metrics.axis, ehservo_scenario::axis::Axis::Linear);
 }

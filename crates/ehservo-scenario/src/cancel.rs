@@ -14,7 +14,7 @@
 //! last one ends, so a call that began before the request always sees it
 //! (and none of its truncated runs can pass for a result).
 
-use crate::scenario::Setup;
+use crate::scenario::Loop;
 use crate::simulation::{Outcome, Sample, Simulation};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
@@ -83,7 +83,7 @@ impl Drop for Scope {
 /// then describes a truncated run: the caller discards it).
 pub(crate) fn run_chunked<P, C, R>(
     sim: &mut Simulation<P, C, R>,
-    setup: &Setup,
+    lp: &Loop,
     observe: &mut dyn FnMut(&Sample),
 ) -> Outcome
 where
@@ -91,8 +91,8 @@ where
     C: ehservo_core::control::Controller,
     R: ehservo_core::reference::Reference,
 {
-    let s = &setup.sim;
-    let per_sample = crate::limits::sample_evaluations(s, &setup.stages);
+    let s = lp.sim();
+    let per_sample = crate::limits::sample_evaluations(s, lp.stages());
     let chunk = (CHUNK_WORK / per_sample.max(1)).max(1);
     loop {
         if requested() {

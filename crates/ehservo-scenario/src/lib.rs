@@ -9,8 +9,8 @@
 //!
 //! | module | role |
 //! |---|---|
-//! | [`scenario`] | the TOML schema with the paper's defaults, `--set` overrides, validation (file, key, reason); the plant and controller registries; [`scenario::Setup`]: the built loop's parts |
-//! | [`run`] | scenario → plant + controller → trace and metrics |
+//! | [`scenario`] | the TOML schema with the paper's defaults, `--set` overrides, validation (file, key, reason); the plant and controller registries; [`Loop`]: a scenario built, once, and the one way into its typed loop |
+//! | [`run`] | a [`Loop`] run to its horizon: trace and metrics |
 //! | [`stepper`] | a scenario's loop, or its controller alone, stepped one sample at a time by a caller (the C ABI, FMUs) |
 //! | [`observer_design`] | design of the linear observers of `ehservo_core::estimate`: discretisation, Luenberger, steady-state Kalman, noise gains |
 //! | [`limits`] | the work one run may ask for, counted before any of it |
@@ -34,3 +34,4 @@ pub use ehservo_sim::{
 };
 
 pub use ehservo_core as core;
+pub use scenario::{Loop, ScenarioError};

@@ -15,6 +15,7 @@
 
 use crate::scenario::{EstimatorCfg, Scenario};
 use crate::simulation::Mode;
+use ehservo_sim::error::KeyError;
 
 /// Most evaluations one run may ask for (checked by `Setup::new`, through
 /// [`check_run`]).
@@ -75,12 +76,12 @@ pub const MAX_MAGNITUDE: f64 = ehservo_sim::sensor::MAX_MAGNITUDE;
 /// sub-steps, or the horizon), the reason the figure. Also refuses a
 /// finite x0 or θ limit beyond [`MAX_MAGNITUDE`] (the non-finite ones are
 /// refused by their own checks).
-pub fn check_run(s: &Scenario) -> Result<(), (String, String)> {
+pub fn check_run(s: &Scenario) -> Result<(), KeyError> {
     let sim = &s.simulation;
     let huge = |v: f64| v.is_finite() && v.abs() > MAX_MAGNITUDE;
     if huge(sim.theta_limit) {
-        return Err((
-            "simulation.theta_limit".into(),
+        return Err(KeyError::new(
+            "simulation.theta_limit",
             format!(
                 "must be at most 1e300 rad (beyond, θ in degrees overflows; got {:e})",
                 sim.theta_limit
@@ -88,8 +89,8 @@ pub fn check_run(s: &Scenario) -> Result<(), (String, String)> {
         ));
     }
     if let Some(v) = sim.x0.iter().find(|v| huge(**v)) {
-        return Err((
-            "simulation.x0".into(),
+        return Err(KeyError::new(
+            "simulation.x0",
             format!(
                 "must be within ±1e300 (rad, rad/s, rad/s²: beyond, the trace in degrees overflows; got {v:e})"
             ),
@@ -119,8 +120,8 @@ pub fn check_run(s: &Scenario) -> Result<(), (String, String)> {
         Mode::Sampled => format!("(1 + {} sub-steps)", sim.substeps),
         Mode::Continuous => "4 (the law in each RK4 stage)".to_string(),
     };
-    Err((
-        key.to_string(),
+    Err(KeyError::new(
+        key,
         format!(
             "{steps:.3e} steps × {per} is about {work:.2e} evaluations, more than the limit of \
              {MAX_RUN_WORK:.0e} for one run (minutes of computing): lower the horizon or the sub-steps"
@@ -150,7 +151,7 @@ impl Batch {
 
     /// Refuses a batch beyond [`MAX_BATCH_WORK`]: `(key, reason)` naming the
     /// key of the largest part, what it asks for and the total.
-    pub fn check(&self, command: &str) -> Result<(), (String, String)> {
+    pub fn check(&self, command: &str) -> Result<(), KeyError> {
         let total = self.total();
         if total <= MAX_BATCH_WORK {
             return Ok(());
@@ -161,7 +162,7 @@ impl Batch {
             .max_by(|a, b| a.1.total_cmp(&b.1))
             .cloned()
             .unwrap_or_default();
-        Err((
+        Err(KeyError::new(
             key,
             format!(
                 "{what} is about {work:.2e} evaluations ({total:.2e} for the whole {command}), \
@@ -183,7 +184,10 @@ mod tests {
     /// continuous, 4000.
     #[test]
     fn evaluations_by_hand() {
-        let mut s = Scenario::parse("name = \"x\"").unwrap();
+        let mut s = crate::scenario::Loop::parse("name = \"x\"")
+            .unwrap()
+            .scenario()
+            .clone();
         assert_eq!(run_evaluations(&s), 2000.0);
         s.estimator = Some(EstimatorCfg::Levant {
             lipschitz: 10.0,
@@ -199,12 +203,16 @@ mod tests {
     /// are named; at 10⁵ they are 1.0e8 and pass.
     #[test]
     fn an_estimator_s_sub_steps_count() {
-        let mut s = Scenario::parse("name = \"x\"").unwrap();
+        let mut s = crate::scenario::Loop::parse("name = \"x\"")
+            .unwrap()
+            .scenario()
+            .clone();
         s.estimator = Some(EstimatorCfg::Levant {
             lipschitz: 10.0,
             substeps: 1_000_000,
         });
-        let (key, reason) = check_run(&s).unwrap_err();
+        let e = check_run(&s).unwrap_err();
+        let (key, reason) = (e.key, e.reason.to_string());
         assert_eq!(key, "estimator.substeps");
         assert!(reason.contains("1.00e9"), "{reason}");
         s.estimator = Some(EstimatorCfg::Levant {
@@ -223,7 +231,8 @@ mod tests {
         assert_eq!(b.total(), 3e9);
         assert!(b.check("tune").is_ok());
         b.add("draws", 1e9, 2000.0, "many draws".into());
-        let (key, reason) = b.check("tune").unwrap_err();
+        let e = b.check("tune").unwrap_err();
+        let (key, reason) = (e.key, e.reason.to_string());
         assert_eq!(key, "draws");
         assert!(
             reason.starts_with("many draws is about 3.00e12"),

@@ -1,13 +1,24 @@
-//! From a validated [`Scenario`] to a finished run: the registry hands the
-//! typed controller parameters to [`Runner`], which builds the plant and the
-//! controller and runs the [`Simulation`], keeping the metrics (and the
-//! trace if asked).
+//! A built [`Loop`] run to its horizon: the loop's plant and controller,
+//! typed ([`Loop::simulate`]), in the [`Simulation`], keeping the metrics
+//! (and the trace if asked).
+//!
+//! ```
+//! use ehservo_scenario::run::{run, Keep};
+//! use ehservo_scenario::scenario::Loop;
+//!
+//! let lp = Loop::parse("[controller]\nkind = \"pid\"\n[simulation]\nhorizon = 3.0\n").unwrap();
+//! let r = run(&lp, Keep::Every(10));
+//! // 300 steps, every 10th sample kept: k = 0, 10, …, 300.
+//! assert_eq!(r.trace.len(), 31);
+//! assert_eq!(r.trace.last().unwrap().k, 300);
+//! assert!(r.metrics.e_max.is_some());
+//! ```
 
 use crate::metrics::{Metrics, MetricsAccumulator};
-use crate::plant::Plant;
-use crate::scenario::{ControllerConfig, PlantVisit, Scenario, ScenarioError, Setup, Visit};
+use crate::scenario::{ControllerConfig, Loop, LoopPlant, LoopVisit, Typed};
 use crate::simulation::{Outcome, Sample, Simulation};
 use ehservo_core::control::Controller;
+use ehservo_core::reference::Reference;
 use ehservo_core::rk4::OdeState;
 
 /// A finished run.
@@ -30,59 +41,80 @@ pub enum Keep {
     Every(u32),
 }
 
-/// Runs a scenario.
-pub fn run(s: &Scenario, keep: Keep) -> Result<RunResult, ScenarioError> {
-    let every = match keep {
-        Keep::Nothing => 0,
-        Keep::Every(n) => n.max(1) as u64,
-    };
+/// Every n-th sample of a run and always the last one: the one
+/// decimation of the traces a run keeps, writes and shows (in memory,
+/// trace.csv, the playground).
+#[derive(Debug, Clone)]
+pub struct Decimate {
+    every: u64,
+    last: Option<Sample>,
+}
+
+impl Decimate {
+    /// Keeps the samples with k divisible by `every` (at least 1).
+    pub fn every(every: u64) -> Self {
+        Self {
+            every: every.max(1),
+            last: None,
+        }
+    }
+
+    /// `Some(sample)` when `sample` is kept now; otherwise it is held as
+    /// the last one, which [`Decimate::finish`] gives back.
+    pub fn offer<'a>(&mut self, sample: &'a Sample) -> Option<&'a Sample> {
+        if sample.k % self.every == 0 {
+            self.last = None;
+            Some(sample)
+        } else {
+            self.last = Some(*sample);
+            None
+        }
+    }
+
+    /// The last sample, if it was not kept: always keep it.
+    pub fn finish(self) -> Option<Sample> {
+        self.last
+    }
+}
+
+/// Runs a loop, its samples carrying the plant's physical states.
+pub fn run(lp: &Loop, keep: Keep) -> RunResult {
     let mut trace = Vec::new();
-    if let Some(n) = s.sim_config().steps.checked_div(every) {
-        trace.reserve((n + 2) as usize);
-    }
-    let mut last: Option<Sample> = None;
-    let (outcome, metrics) = run_observed(s, &mut |smp: &Sample| {
-        if every > 0 {
-            if smp.k % every == 0 {
-                trace.push(*smp);
-            } else {
-                last = Some(*smp);
-            }
+    let mut dec = match keep {
+        Keep::Nothing => None,
+        Keep::Every(n) => {
+            let d = Decimate::every(u64::from(n));
+            trace.reserve((lp.sim().steps / d.every + 2) as usize);
+            Some(d)
         }
-    })?;
-    // Always keep the last sample.
-    if let Some(l) = last {
-        if trace.last().is_none_or(|t| t.k < l.k) {
-            trace.push(l);
+    };
+    let (outcome, metrics) = run_observed(lp, &mut |smp: &Sample| {
+        if let Some(kept) = dec.as_mut().and_then(|d| d.offer(smp)) {
+            trace.push(*kept);
         }
-    }
-    Ok(RunResult {
+    });
+    trace.extend(dec.and_then(Decimate::finish));
+    RunResult {
         outcome,
         metrics,
         trace,
-    })
+    }
 }
 
-/// Runs a scenario, handing every sample to `observe` (which may stream it
-/// to a file) and keeping only the metrics.
-pub fn run_observed(
-    s: &Scenario,
-    observe: &mut dyn FnMut(&Sample),
-) -> Result<(Outcome, Metrics), ScenarioError> {
-    let setup = s.setup()?;
-    Ok(setup.controller.visit(Runner {
-        setup: &setup,
+/// Runs a loop, handing every sample (with the plant's physical states) to
+/// `observe`, which may stream it to a file; keeps only the metrics.
+pub fn run_observed(lp: &Loop, observe: &mut dyn FnMut(&Sample)) -> (Outcome, Metrics) {
+    lp.simulate(Runner {
         observe,
         states: true,
         map: Same,
-    }))
+    })
 }
 
-/// Runs a built scenario, for its metrics: the samples carry no plant
-/// states ([`Sample::states`]), which only traces need.
-pub fn run_setup(setup: &Setup, observe: &mut dyn FnMut(&Sample)) -> (Outcome, Metrics) {
-    setup.controller.visit(Runner {
-        setup,
+/// Runs a loop for its metrics: the samples carry no plant states
+/// ([`Sample::states`]), which only traces need (sweeps, tuning).
+pub fn run_metrics(lp: &Loop, observe: &mut dyn FnMut(&Sample)) -> (Outcome, Metrics) {
+    lp.simulate(Runner {
         observe,
         states: false,
         map: Same,
@@ -110,92 +142,53 @@ impl MapController for Same {
     }
 }
 
-/// [`run_setup`] with the controller replaced by `map`'s, the samples
-/// carrying the plant's states as `ehservo run`'s do.
-pub fn run_setup_mapped<M: MapController>(
-    setup: &Setup,
+/// [`run_observed`] with the controller replaced by `map`'s.
+pub fn run_mapped<M: MapController>(
+    lp: &Loop,
     map: M,
     observe: &mut dyn FnMut(&Sample),
 ) -> (Outcome, Metrics) {
-    setup.controller.visit(Runner {
-        setup,
+    lp.simulate(Runner {
         observe,
         states: true,
         map,
     })
 }
 
-/// Builds the plant and the controller of a [`Setup`] and runs them: the
-/// generic half of [`run_setup`], monomorphised per kind and plant.
-pub struct Runner<'a, 'b, M = Same> {
-    setup: &'a Setup,
+/// Runs the typed loop: the visitor of every run.
+struct Runner<'b, M> {
     observe: &'b mut dyn FnMut(&Sample),
     states: bool,
     map: M,
 }
 
-impl<M: MapController> Visit for Runner<'_, '_, M> {
+impl<M: MapController> LoopVisit for Runner<'_, M> {
     type Out = (Outcome, Metrics);
-    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
-        let ctrl = self.map.map(
-            cfg,
-            cfg.build(&self.setup.design)
-                .expect("Setup::new built this controller once already"),
-        );
-        self.setup.plant.visit(WithPlant {
-            ctrl,
-            setup: self.setup,
-            observe: self.observe,
-            states: self.states,
-        })
+    fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
+        let lp = t.lp;
+        let ctrl = self.map.map(t.config, t.controller);
+        let sim =
+            Simulation::from_settings(t.plant, ctrl, lp.reference().clone(), lp.settings().clone());
+        execute(sim, lp, self.observe, self.states)
     }
 }
 
-/// The second half of [`Runner`]: the controller built, the plant typed.
-struct WithPlant<'a, 'b, C> {
-    ctrl: C,
-    setup: &'a Setup,
-    observe: &'b mut dyn FnMut(&Sample),
-    states: bool,
+/// The metrics' accumulator of a loop whose controller is `ctrl`.
+pub fn accumulator<C: Controller>(lp: &Loop, ctrl: &C) -> MetricsAccumulator {
+    let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
+    MetricsAccumulator::new(lp.horizon(), lp.settle(), lp.period(), network).on(lp.axis())
 }
 
-impl<C: Controller> PlantVisit for WithPlant<'_, '_, C> {
-    type Out = (Outcome, Metrics);
-    fn visit<P: Plant + Clone + std::fmt::Debug + Send + Sync + 'static>(
-        self,
-        plant: &P,
-    ) -> Self::Out {
-        execute(
-            plant.clone(),
-            self.ctrl,
-            self.setup,
-            self.observe,
-            self.states,
-        )
-    }
-}
-
-fn execute<P: Plant, C: Controller>(
-    plant: P,
-    ctrl: C,
-    setup: &Setup,
+fn execute<P: LoopPlant, C: Controller, R: Reference>(
+    mut sim: Simulation<P, C, R>,
+    lp: &Loop,
     observe: &mut dyn FnMut(&Sample),
     states: bool,
 ) -> (Outcome, Metrics) {
-    let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
-    let mut acc =
-        MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network).on(setup.axis);
-    let mut sim = Simulation::new(
-        plant,
-        ctrl,
-        setup.reference.clone(),
-        setup.stages.clone(),
-        setup.sim,
-    )
-    .expect("Setup::new validated the sample period and the policy");
+    let mut acc = accumulator(lp, sim.controller());
     sim.log_states(states);
     // In chunks, so that a host's Ctrl-C can stop it (crate::cancel).
-    let outcome = crate::cancel::run_chunked(&mut sim, setup, &mut |smp: &Sample| {
+    let outcome = crate::cancel::run_chunked(&mut sim, lp, &mut |smp: &Sample| {
         acc.push(smp);
         observe(smp);
     });

@@ -14,12 +14,11 @@
 
 use crate::metrics::{Metrics, MetricsAccumulator};
 use crate::plant::Plant;
-use crate::scenario::{AnyReference, ControllerConfig, PlantVisit, Scenario, ScenarioError};
-use crate::scenario::{Setup, Visit};
+use crate::scenario::{AnyReference, ControllerConfig, KeyError, Loop, ScenarioError};
+use crate::scenario::{LoopPlant, LoopVisit, Typed};
 use crate::simulation::{Mode, Sample, Simulation, Stop};
 use ehservo_core::control::{Controller, Signal, Signals, Truth};
 use ehservo_core::reference::Reference;
-use ehservo_core::rk4::OdeState;
 use ehservo_core::sampled::SampledController;
 
 /// A simulation of any kind and plant, stepped by the caller.
@@ -70,69 +69,29 @@ impl std::fmt::Debug for LoopStepper {
     }
 }
 
-struct BuildLoop<'a>(&'a Setup);
+/// Builds a [`Looped`] of the loop's typed plant and controller.
+struct BuildLoop;
 
-impl Visit for BuildLoop<'_> {
+impl LoopVisit for BuildLoop {
     type Out = Box<dyn LoopStep>;
-    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
-        let setup = self.0;
-        let ctrl = cfg
-            .build(&setup.design)
-            .expect("Setup::new built this controller once already");
-        setup.plant.visit(LoopOn { ctrl, setup })
+    fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
+        let lp = t.lp;
+        let acc = crate::run::accumulator(lp, &t.controller);
+        Box::new(Looped {
+            sim: t.simulation(),
+            acc,
+        })
     }
-}
-
-/// [`BuildLoop`]'s second half: the plant typed.
-struct LoopOn<'a, C> {
-    ctrl: C,
-    setup: &'a Setup,
-}
-
-impl<C: Controller + 'static> PlantVisit for LoopOn<'_, C> {
-    type Out = Box<dyn LoopStep>;
-    fn visit<P: Plant + Clone + std::fmt::Debug + Send + Sync + 'static>(
-        self,
-        plant: &P,
-    ) -> Self::Out {
-        looped(plant.clone(), self.ctrl, self.setup)
-    }
-}
-
-/// As `run::execute` builds its simulation and accumulator.
-fn looped<P, C>(plant: P, ctrl: C, setup: &Setup) -> Box<dyn LoopStep>
-where
-    P: Plant + 'static,
-    C: Controller + 'static,
-{
-    let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
-    let acc =
-        MetricsAccumulator::new(setup.horizon, setup.settle, setup.period, network).on(setup.axis);
-    let sim = Simulation::new(
-        plant,
-        ctrl,
-        setup.reference.clone(),
-        setup.stages.clone(),
-        setup.sim,
-    )
-    .expect("Setup::new validated the sample period and the policy");
-    Box::new(Looped { sim, acc })
 }
 
 impl LoopStepper {
-    /// The loop of a validated scenario, at t = 0.
-    pub fn new(s: &Scenario) -> Result<Self, ScenarioError> {
-        let setup = s.setup()?;
-        Ok(Self::from_setup(&setup))
-    }
-
     /// The loop of a built scenario, at t = 0.
-    pub fn from_setup(setup: &Setup) -> Self {
+    pub fn new(lp: &Loop) -> Self {
         Self {
-            inner: setup.controller.visit(BuildLoop(setup)),
-            step: setup.sim.step,
-            steps: setup.sim.steps,
-            axis: setup.axis,
+            inner: lp.simulate(BuildLoop),
+            step: lp.sim().step,
+            steps: lp.sim().steps,
+            axis: lp.axis(),
         }
     }
 
@@ -247,19 +206,16 @@ where
     }
 }
 
-struct BuildLaw<'a>(&'a Setup);
+/// Puts the loop's typed controller in its sampled loop.
+struct BuildLaw;
 
-impl Visit for BuildLaw<'_> {
+impl LoopVisit for BuildLaw {
     type Out = Box<dyn LawStep>;
-    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
-        let setup = self.0;
-        let ctrl = cfg
-            .build(&setup.design)
-            .expect("Setup::new built this controller once already");
-        Box::new(
-            SampledController::with_policy(ctrl, setup.sim.step, setup.stages.policy)
-                .expect("Setup::new validated the sample period and the policy"),
-        )
+    fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
+        Box::new(SampledController::sampled(
+            t.controller,
+            t.lp.settings().sampling(),
+        ))
     }
 }
 
@@ -298,22 +254,19 @@ impl ControllerStepper {
     /// scenario must be in the sampled mode (a continuous law has no
     /// samples to be stepped at); its sensors, estimator and actuator are
     /// not part of it (they are the caller's hardware).
-    pub fn new(s: &Scenario) -> Result<Self, ScenarioError> {
-        let setup = s.setup()?;
-        if setup.sim.mode != Mode::Sampled {
-            return Err(ScenarioError {
-                file: s.name.clone(),
-                key: "simulation.mode".into(),
-                line_col: None,
-                reason: "a controller stepped sample by sample needs the sampled mode (got \"continuous\")".into(),
-            });
+    pub fn new(lp: &Loop) -> Result<Self, ScenarioError> {
+        if lp.sim().mode != Mode::Sampled {
+            return Err(lp.scenario().error(KeyError::new(
+                "simulation.mode",
+                "a controller stepped sample by sample needs the sampled mode (got \"continuous\")",
+            )));
         }
         Ok(Self {
-            inner: setup.controller.visit(BuildLaw(&setup)),
-            kind: setup.controller.kind(),
-            reference: setup.reference.clone(),
-            step: setup.sim.step,
-            steps: setup.sim.steps,
+            inner: lp.simulate(BuildLaw),
+            kind: lp.controller().kind(),
+            reference: lp.reference().clone(),
+            step: lp.sim().step,
+            steps: lp.sim().steps,
         })
     }
 
@@ -386,15 +339,15 @@ mod tests {
     use super::*;
     use crate::run::{run, Keep};
 
-    fn fig2(extra: &str) -> Scenario {
-        Scenario::parse(&format!("name = \"fig2\"\n{extra}")).unwrap()
+    fn fig2(extra: &str) -> Loop {
+        Loop::parse(&format!("name = \"fig2\"\n{extra}")).unwrap()
     }
 
     #[test]
     fn stepping_the_loop_gives_the_runs_metrics_and_samples() {
         let s = fig2("[simulation]\nhorizon = 3.0\n");
-        let r = run(&s, Keep::Every(1)).unwrap();
-        let mut l = LoopStepper::new(&s).unwrap();
+        let r = run(&s, Keep::Every(1));
+        let mut l = LoopStepper::new(&s);
         assert_eq!(l.steps(), 300);
         let mut n = 0;
         while let Some(smp) = l.step() {
@@ -414,7 +367,7 @@ mod tests {
         // nnvsc (the weights carry state) and pid, exact sensors.
         for extra in ["", "[controller]\nkind = \"pid\"\n"] {
             let s = fig2(&format!("[simulation]\nhorizon = 1.0\n{extra}"));
-            let r = run(&s, Keep::Every(1)).unwrap();
+            let r = run(&s, Keep::Every(1));
             let mut c = ControllerStepper::new(&s).unwrap();
             for smp in &r.trace {
                 assert_eq!(c.reference(smp.t), smp.z);
@@ -434,7 +387,7 @@ mod tests {
     #[test]
     fn parts_are_the_runs_and_peek_does_not_advance() {
         let s = fig2("[simulation]\nhorizon = 0.5\n");
-        let r = run(&s, Keep::Every(1)).unwrap();
+        let r = run(&s, Keep::Every(1));
         let mut c = ControllerStepper::new(&s).unwrap();
         assert_eq!(c.kind(), "nnvsc");
         let n = c.signals().len();
@@ -468,6 +421,6 @@ mod tests {
         let s = fig2("[simulation]\nmode = \"continuous\"\n");
         let e = ControllerStepper::new(&s).unwrap_err();
         assert_eq!(e.key, "simulation.mode");
-        assert!(LoopStepper::new(&s).is_ok());
+        assert_eq!(LoopStepper::new(&s).steps(), 1000);
     }
 }

@@ -73,15 +73,24 @@ impl ActuatorConfig {
     }
 }
 
-/// The spool's dynamics.
+/// The spool's dynamics, as [`Actuator::try_new`] derives them from
+/// `[actuator]` (what the frequency domain linearises: `ehservo::freq`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Dynamics {
+pub enum Dynamics {
     /// The spool is where the (saturated) command puts it.
     None,
     /// v̇ = (u_c − v)/τ.
-    First { tau: f64 },
+    First {
+        /// τ (s).
+        tau: f64,
+    },
     /// v̈ = ωn²(u_c − v) − 2ζωn v̇.
-    Second { wn2: f64, two_zeta_wn: f64 },
+    Second {
+        /// ωn² (1/s²).
+        wn2: f64,
+        /// 2ζωn (1/s).
+        two_zeta_wn: f64,
+    },
 }
 
 /// The validated stage.
@@ -247,6 +256,26 @@ impl Actuator {
     /// The saturation limit (V); infinite when there is none.
     pub fn limit(&self) -> f64 {
         self.limit
+    }
+
+    /// The spool's dynamics.
+    pub fn dynamics(&self) -> Dynamics {
+        self.dynamics
+    }
+
+    /// The spool's rate limit (V/s); infinite when there is none.
+    pub fn rate_limit(&self) -> f64 {
+        self.rate
+    }
+
+    /// The dead band's half-width (V).
+    pub fn dead_band(&self) -> f64 {
+        self.dead_band
+    }
+
+    /// The spool's offset at zero command (V).
+    pub fn null_bias(&self) -> f64 {
+        self.null_bias
     }
 
     /// The saturated command.

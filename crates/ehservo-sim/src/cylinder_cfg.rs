@@ -4,6 +4,7 @@
 //! `cylinder.rs`, whose physics reads only the validated constants.
 
 use super::*;
+use crate::error::{finite, non_negative, positive, KeyError};
 
 /// `[plant.cylinder]`: the geometry, by areas or by diameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
@@ -173,65 +174,37 @@ fn is_default<T: Default + PartialEq>(v: &T) -> bool {
     *v == T::default()
 }
 
-/// A positive finite key or its error.
-fn pos(k: &str, v: f64) -> Result<f64, (String, String)> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err((k.to_string(), format!("must be finite and > 0 (got {v:?})")))
-    }
-}
-
-fn nonneg(k: &str, v: f64) -> Result<f64, (String, String)> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(v)
-    } else {
-        Err((
-            k.to_string(),
-            format!("must be finite and >= 0 (got {v:?})"),
-        ))
-    }
-}
-
-fn fin(k: &str, v: f64) -> Result<f64, (String, String)> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err((k.to_string(), format!("must be finite (got {v:?})")))
-    }
-}
-
-/// Prefixes a key error with its table.
-fn at(prefix: &'static str) -> impl Fn((String, String)) -> (String, String) {
-    move |(k, r)| (format!("plant.{prefix}.{k}"), r)
+/// Puts a key error of a table under `plant.<table>.`.
+fn at(table: &'static str) -> impl Fn(KeyError) -> KeyError {
+    move |e| e.under(&format!("plant.{table}"))
 }
 
 impl CylinderCfg {
     /// Checks every key; the error is the full key path and the reason.
-    pub fn resolve(&self, ctx: &PlantContext) -> Result<Cylinder, (String, String)> {
+    pub fn resolve(&self, ctx: &PlantContext) -> Result<Cylinder, KeyError> {
         let g = &self.cylinder;
         let cyl = at("cylinder");
         let area = match (g.area_a, g.area_b, g.bore, g.rod_diameter) {
             (Some(a), Some(b), None, None) => {
                 if g.rods.is_some() {
-                    return Err(cyl(("rods".into(), "goes with bore and rod_diameter, not areas".into())));
+                    return Err(cyl(KeyError::new("rods", "goes with bore and rod_diameter, not areas")));
                 }
-                let a = pos("area_a", a).map_err(&cyl)?;
-                let b = pos("area_b", b).map_err(&cyl)?;
+                let a = positive("area_a", a).map_err(&cyl)?;
+                let b = positive("area_b", b).map_err(&cyl)?;
                 if b > a {
-                    return Err(cyl((
-                        "area_b".into(),
+                    return Err(cyl(KeyError::new(
+                        "area_b",
                         format!("the rod side ({b} m²) is larger than the piston side ({a} m²): area_a is the piston side"),
                     )));
                 }
                 [a, b]
             }
             (None, None, Some(d), Some(dr)) => {
-                let d = pos("bore", d).map_err(&cyl)?;
-                let dr = pos("rod_diameter", dr).map_err(&cyl)?;
+                let d = positive("bore", d).map_err(&cyl)?;
+                let dr = positive("rod_diameter", dr).map_err(&cyl)?;
                 if dr >= d {
-                    return Err(cyl((
-                        "rod_diameter".into(),
+                    return Err(cyl(KeyError::new(
+                        "rod_diameter",
                         format!("the rod ({dr} m) must be thinner than the bore ({d} m): A_rod ≥ A_A leaves no rod-side area"),
                     )));
                 }
@@ -241,66 +214,68 @@ impl CylinderCfg {
                     1 => [q * d * d, annulus],
                     2 => [annulus, annulus],
                     n => {
-                        return Err(cyl((
-                            "rods".into(),
+                        return Err(cyl(KeyError::new(
+                            "rods",
                             format!("must be 1 (single-rod) or 2 (double-rod), got {n}"),
                         )))
                     }
                 }
             }
             (None, None, None, None) => {
-                return Err(cyl((
-                    "area_a".into(),
-                    "the geometry is required: area_a and area_b (m²), or bore and rod_diameter (m) with rods = 1 or 2".into(),
+                return Err(cyl(KeyError::new(
+                    "area_a",
+                    "the geometry is required: area_a and area_b (m²), or bore and rod_diameter (m) with rods = 1 or 2",
                 )))
             }
             _ => {
-                return Err(cyl((
-                    "area_a".into(),
-                    "give either area_a and area_b, or bore and rod_diameter, not a mix".into(),
+                return Err(cyl(KeyError::new(
+                    "area_a",
+                    "give either area_a and area_b, or bore and rod_diameter, not a mix",
                 )))
             }
         };
-        let stroke = pos("stroke", g.stroke).map_err(&cyl)?;
+        let stroke = positive("stroke", g.stroke).map_err(&cyl)?;
         let v0a = g.dead_volume_a;
         let v0b = g.dead_volume_b;
         if !(v0a.is_finite() && v0a > 0.0) {
-            return Err(cyl((
-                "dead_volume_a".into(),
+            return Err(cyl(KeyError::new(
+                "dead_volume_a",
                 format!("must be finite and > 0 (got {v0a:?}): chamber A's volume V_0A + A_A·y would not be positive at y = 0"),
             )));
         }
         if !(v0b.is_finite() && v0b > 0.0) {
-            return Err(cyl((
-                "dead_volume_b".into(),
+            return Err(cyl(KeyError::new(
+                "dead_volume_b",
                 format!("must be finite and > 0 (got {v0b:?}): chamber B's volume V_0B + A_B·(stroke − y) would not be positive at y = stroke"),
             )));
         }
-        let leakage = nonneg("leakage", g.leakage).map_err(&cyl)?;
-        let bp = nonneg("viscous", g.viscous).map_err(&cyl)?;
+        let leakage = non_negative("leakage", g.leakage).map_err(&cyl)?;
+        let bp = non_negative("viscous", g.viscous).map_err(&cyl)?;
         let fl = at("fluid");
-        let rho = pos("density", self.fluid.density).map_err(&fl)?;
-        let beta = pos("bulk_modulus", self.fluid.bulk_modulus).map_err(&fl)?;
-        let nu = pos("viscosity", self.fluid.viscosity).map_err(&fl)?;
+        let rho = positive("density", self.fluid.density).map_err(&fl)?;
+        let beta = positive("bulk_modulus", self.fluid.bulk_modulus).map_err(&fl)?;
+        let nu = positive("viscosity", self.fluid.viscosity).map_err(&fl)?;
         let valve = SpoolValve::try_new(&self.valve, rho, nu).map_err(at("valve"))?;
         let (supply, pt) = Supply::try_new(&self.supply, beta).map_err(at("supply"))?;
         let l = &self.load;
         let ld = at("load");
-        let mass = pos("mass", l.mass).map_err(&ld)?;
-        let spring = nonneg("spring", l.spring).map_err(&ld)?;
-        let spring_origin = fin("spring_origin", l.spring_origin).map_err(&ld)?;
-        let damping = nonneg("damping", l.damping).map_err(&ld)?;
-        let incline = fin("incline_deg", l.incline_deg).map_err(&ld)?;
+        let mass = positive("mass", l.mass).map_err(&ld)?;
+        let spring = non_negative("spring", l.spring).map_err(&ld)?;
+        let spring_origin = finite("spring_origin", l.spring_origin).map_err(&ld)?;
+        let damping = non_negative("damping", l.damping).map_err(&ld)?;
+        let incline = finite("incline_deg", l.incline_deg).map_err(&ld)?;
         if incline.abs() > 90.0 {
-            return Err(ld((
-                "incline_deg".into(),
+            return Err(ld(KeyError::new(
+                "incline_deg",
                 format!("must be within ±90° (got {incline})"),
             )));
         }
-        let gravity = nonneg("gravity", l.gravity).map_err(&ld)?;
+        let gravity = non_negative("gravity", l.gravity).map_err(&ld)?;
         if let Some(f) = &l.friction {
+            // The value always shown, NaN included (`KeyError::param`
+            // leaves out a NaN, the core's mark of a combination).
             f.validate().map_err(|e| {
-                (
+                KeyError::new(
                     format!("plant.load.friction.{}", e.name),
                     format!("{} (got {:?})", e.reason, e.value),
                 )
@@ -308,8 +283,7 @@ impl CylinderCfg {
         }
         let force = match &l.force {
             None => Force::Zero,
-            Some(f) => Force::try_new(f, ctx.base_dir.as_deref())
-                .map_err(|(k, r)| (format!("plant.load.force.{k}"), r))?,
+            Some(f) => Force::try_new(f, ctx.base_dir.as_deref()).map_err(at("load.force"))?,
         };
         let gravity_force = mass * gravity * incline.to_radians().sin();
         // The oil column's stiffness at mid-stroke, for the stop's default.
@@ -320,33 +294,33 @@ impl CylinderCfg {
         let es = at("end_stop");
         let ks = match self.end_stop.stiffness {
             None => 100.0 * kh,
-            Some(k) => pos("stiffness", k).map_err(&es)?,
+            Some(k) => positive("stiffness", k).map_err(&es)?,
         };
         let cs = match self.end_stop.damping {
             None => 2.0 * (ks * mass).sqrt(),
-            Some(c) => nonneg("damping", c).map_err(&es)?,
+            Some(c) => non_negative("damping", c).map_err(&es)?,
         };
         let radius = match &self.transmission {
             None => None,
-            Some(t) => Some(pos("radius", t.radius).map_err(at("transmission"))?),
+            Some(t) => Some(positive("radius", t.radius).map_err(at("transmission"))?),
         };
         let ini = at("initial");
         let initial = [
             self.initial
                 .pressure_a
-                .map(|p| nonneg("pressure_a", p))
+                .map(|p| non_negative("pressure_a", p))
                 .transpose()
                 .map_err(&ini)?,
             self.initial
                 .pressure_b
-                .map(|p| nonneg("pressure_b", p))
+                .map(|p| non_negative("pressure_b", p))
                 .transpose()
                 .map_err(&ini)?,
         ];
         if initial[0].is_some() != initial[1].is_some() {
-            return Err(ini((
-                "pressure_a".into(),
-                "give both pressure_a and pressure_b, or neither".into(),
+            return Err(ini(KeyError::new(
+                "pressure_a",
+                "give both pressure_a and pressure_b, or neither",
             )));
         }
         let c = Cylinder {
@@ -376,12 +350,11 @@ impl CylinderCfg {
         let hold = c.area[0] * (ps - pt) - (c.area[0] - c.area[1]) * pt;
         let static_load = c.gravity_force + c.force.static_part();
         if static_load > 0.0 && hold <= static_load {
-            return Err((
+            return Err(KeyError::new(
                 match c.supply {
                     Supply::Fixed { .. } => "plant.supply.pressure",
                     Supply::Pump(_) => "plant.supply.relief_pressure",
-                }
-                .into(),
+                },
                 format!(
                     "the supply ({:.4e} Pa) cannot hold the static load of {static_load:.4e} N on the piston side's {:.4e} m²",
                     ps, c.area[0]
@@ -391,8 +364,8 @@ impl CylinderCfg {
         // The operating point and the run's positions inside the stroke.
         let y_nom = self.nominal.position.unwrap_or(half);
         if !(y_nom.is_finite() && (0.0..=stroke).contains(&y_nom)) {
-            return Err((
-                "plant.nominal.position".into(),
+            return Err(KeyError::new(
+                "plant.nominal.position",
                 format!("must be within the stroke [0, {stroke}] m (got {y_nom:?})"),
             ));
         }
@@ -402,16 +375,16 @@ impl CylinderCfg {
         };
         let y0 = to_y(ctx.x0[0]);
         if !(0.0..=stroke).contains(&y0) {
-            return Err((
-                "simulation.x0".into(),
+            return Err(KeyError::new(
+                "simulation.x0",
                 format!("the rod starts at y = {y0} m, outside the stroke [0, {stroke}] m"),
             ));
         }
         if let Some((lo, hi)) = ctx.reference_range {
             let (ylo, yhi) = (to_y(lo), to_y(hi));
             if ylo < 0.0 || yhi > stroke {
-                return Err((
-                    "reference".into(),
+                return Err(KeyError::new(
+                    "reference",
                     format!(
                         "asks for y from {:.6} to {:.6} m: outside the stroke [0, {stroke}] m",
                         ylo.min(yhi),
@@ -441,7 +414,7 @@ impl PlantConfig for CylinderCfg {
         }
     }
 
-    fn build(&self, ctx: &PlantContext) -> Result<CylinderPlant, (String, String)> {
+    fn build(&self, ctx: &PlantContext) -> Result<CylinderPlant, KeyError> {
         let c = self.resolve(ctx)?;
         let y = self.nominal.position.unwrap_or(0.5 * c.stroke);
         let p = CylinderPlant::new(c, y);
@@ -455,8 +428,8 @@ impl PlantConfig for CylinderCfg {
             .into_iter()
             .chain([m.b_at_rest(), m.offset()]);
         if let Err(e) = m.params.validate() {
-            return Err((
-                "plant".into(),
+            return Err(KeyError::new(
+                "plant",
                 format!(
                     "the cylinder's nominal model is not a model: its {} is {:?} ({}); check the sizes of the plant's keys",
                     e.name, e.value, e.reason
@@ -464,8 +437,8 @@ impl PlantConfig for CylinderCfg {
             ));
         }
         if derived.into_iter().any(|v| !v.is_finite()) {
-            return Err((
-                "plant".into(),
+            return Err(KeyError::new(
+                "plant",
                 format!(
                     "the cylinder's nominal model overflows (a1, a2, a3 = {:?}, b at rest = {:e}): check the sizes of the plant's keys",
                     m.coeffs.as_array(),

@@ -555,14 +555,14 @@ fn bad_geometry_is_named() {
     let bad = |f: &dyn Fn(&mut CylinderCfg)| {
         let mut c = single_rod();
         f(&mut c);
-        c.build(&ctx()).unwrap_err().0
+        c.build(&ctx()).unwrap_err()
     };
     assert_eq!(
-        bad(&|c| c.cylinder.rod_diameter = Some(0.063)),
+        bad(&|c| c.cylinder.rod_diameter = Some(0.063)).key,
         "plant.cylinder.rod_diameter"
     );
     assert_eq!(
-        bad(&|c| c.cylinder.dead_volume_a = 0.0),
+        bad(&|c| c.cylinder.dead_volume_a = 0.0).key,
         "plant.cylinder.dead_volume_a"
     );
     assert_eq!(
@@ -571,18 +571,52 @@ fn bad_geometry_is_named() {
             c.cylinder.rod_diameter = None;
             c.cylinder.area_a = Some(1e-3);
             c.cylinder.area_b = Some(2e-3);
-        }),
+        })
+        .key,
         "plant.cylinder.area_b"
     );
     assert_eq!(
-        bad(&|c| c.valve.lap = Some(Edges::All(1e-3))),
+        bad(&|c| c.valve.lap = Some(Edges::All(1e-3))).key,
         "plant.valve.lap"
     );
     assert_eq!(
         bad(&|c| {
             c.load.incline_deg = 90.0;
             c.load.mass = 1e5;
-        }),
+        })
+        .key,
         "plant.supply.pressure"
+    );
+    // The reasons read as before: the key path, then the sentence.
+    assert_eq!(
+        bad(&|c| c.load.mass = -1.0).to_string(),
+        "`plant.load.mass`: must be finite and > 0 (got -1.0)"
+    );
+    assert!(matches!(
+        bad(&|c| c.fluid.viscosity = f64::NAN).reason,
+        crate::error::Reason::NotPositive(v) if v.is_nan()
+    ));
+    assert_eq!(
+        bad(&|c| c.load.friction = Some(Friction {
+            coulomb: f64::NAN,
+            ..Friction::default()
+        }))
+        .to_string(),
+        "`plant.load.friction.coulomb`: must be finite and >= 0 (got NaN)"
+    );
+    assert_eq!(
+        bad(&|c| c.load.force = Some(ForceCfg::Constant {
+            value: f64::INFINITY
+        }))
+        .to_string(),
+        "`plant.load.force.value`: must be finite (got inf)"
+    );
+    assert_eq!(
+        bad(&|c| c.supply = SupplyCfg::Fixed {
+            pressure: 1e7,
+            tank_pressure: 1e7,
+        })
+        .to_string(),
+        "`plant.supply.tank_pressure`: must be below the supply pressure 10000000 Pa (got 10000000)"
     );
 }

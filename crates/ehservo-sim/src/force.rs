@@ -12,6 +12,7 @@
 //! A positive force pushes the rod in the −y direction (it opposes
 //! extension, as a load being lifted does).
 
+use crate::error::{finite, KeyError};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;
@@ -94,24 +95,17 @@ impl Force {
     /// Validates the signal; a CSV file is read from `base_dir` when its
     /// path is relative. The error is the key inside the force's table (or
     /// the file with its row) and the reason.
-    pub fn try_new(c: &ForceCfg, base_dir: Option<&Path>) -> Result<Force, (String, String)> {
-        let fin = |k: &str, v: f64| -> Result<f64, (String, String)> {
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err((k.to_string(), format!("must be finite (got {v:?})")))
-            }
-        };
+    pub fn try_new(c: &ForceCfg, base_dir: Option<&Path>) -> Result<Force, KeyError> {
         Ok(match c {
-            ForceCfg::Constant { value } => Force::Constant(fin("value", *value)?),
+            ForceCfg::Constant { value } => Force::Constant(finite("value", *value)?),
             ForceCfg::Step {
                 value,
                 initial,
                 start,
             } => Force::Step {
-                initial: fin("initial", *initial)?,
-                value: fin("value", *value)?,
-                start: fin("start", *start)?,
+                initial: finite("initial", *initial)?,
+                value: finite("value", *value)?,
+                start: finite("start", *start)?,
             },
             ForceCfg::Sine {
                 amplitude,
@@ -119,15 +113,18 @@ impl Force {
                 phase_deg,
                 offset,
             } => {
-                let f = fin("frequency_hz", *frequency_hz)?;
+                let f = finite("frequency_hz", *frequency_hz)?;
                 if f <= 0.0 {
-                    return Err(("frequency_hz".into(), format!("must be > 0 (got {f})")));
+                    return Err(KeyError::new(
+                        "frequency_hz",
+                        format!("must be > 0 (got {f})"),
+                    ));
                 }
                 Force::Sine {
-                    amplitude: fin("amplitude", *amplitude)?,
+                    amplitude: finite("amplitude", *amplitude)?,
                     omega: 2.0 * core::f64::consts::PI * f,
-                    phase: fin("phase_deg", *phase_deg)?.to_radians(),
-                    offset: fin("offset", *offset)?,
+                    phase: finite("phase_deg", *phase_deg)?.to_radians(),
+                    offset: finite("offset", *offset)?,
                 }
             }
             ForceCfg::Csv { file } => {
@@ -135,9 +132,7 @@ impl Force {
                     Some(d) if Path::new(file).is_relative() => d.join(file),
                     _ => std::path::PathBuf::from(file),
                 };
-                Force::Table(Arc::new(
-                    read_table(&path).map_err(|r| ("file".to_string(), r))?,
-                ))
+                Force::Table(Arc::new(read_table(&path)?))
             }
         })
     }
@@ -199,78 +194,83 @@ impl Force {
 }
 
 /// The rows of a force table (`t_s,force_N`), strictly increasing in time.
-/// The error names the file, the line and the column.
-pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, String> {
+/// The error is the force table's key `file`, with a reason that names the
+/// file, the line and the column.
+pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
+    let file = |r: String| KeyError::new("file", r);
     let name = path.display();
-    let meta = std::fs::metadata(path).map_err(|e| format!("the force file {name}: {e}"))?;
+    let meta = std::fs::metadata(path).map_err(|e| file(format!("the force file {name}: {e}")))?;
     if !meta.is_file() {
-        return Err(format!("the force file {name} is not a regular file"));
+        return Err(file(format!("the force file {name} is not a regular file")));
     }
     if meta.len() > 16 << 20 {
-        return Err(format!("the force file {name} is larger than 16 MiB"));
+        return Err(file(format!("the force file {name} is larger than 16 MiB")));
     }
-    let text = std::fs::read_to_string(path).map_err(|e| format!("the force file {name}: {e}"))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| file(format!("the force file {name}: {e}")))?;
     let mut lines = text
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty());
     let Some((hl, header)) = lines.next() else {
-        return Err(format!(
+        return Err(file(format!(
             "{name}: is empty: expected the header `t_s,force_N` and rows"
-        ));
+        )));
     };
     let cols: Vec<&str> = header.split(',').map(str::trim).collect();
     if cols != ["t_s", "force_N"] {
-        return Err(format!(
+        return Err(file(format!(
             "{name}: line {hl}: expected the header `t_s,force_N`, got `{header}`"
-        ));
+        )));
     }
     let mut rows: Vec<(f64, f64)> = Vec::new();
     for (line, l) in lines {
         if rows.len() >= MAX_ROWS {
-            return Err(format!("{name}: line {line}: more than {MAX_ROWS} rows"));
+            return Err(file(format!(
+                "{name}: line {line}: more than {MAX_ROWS} rows"
+            )));
         }
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         if f.len() != 2 {
-            return Err(format!(
+            return Err(file(format!(
                 "{name}: line {line}: expected 2 columns (t_s, force_N), got {}",
                 f.len()
-            ));
+            )));
         }
         let mut v = [0.0; 2];
         for (j, col) in ["t_s", "force_N"].iter().enumerate() {
             let x: f64 = f[j].parse().map_err(|_| {
-                format!(
+                file(format!(
                     "{name}: line {line}, column {col}: cannot read `{}` as a number",
                     f[j]
-                )
+                ))
             })?;
             if !x.is_finite() {
-                return Err(format!(
+                return Err(file(format!(
                     "{name}: line {line}, column {col}: {x}: values must be finite"
-                ));
+                )));
             }
             v[j] = x;
         }
         if let Some(prev) = rows.last() {
             if v[0] <= prev.0 {
-                return Err(format!(
+                return Err(file(format!(
                     "{name}: line {line}, column t_s: time not increasing: {} after {}",
                     v[0], prev.0
-                ));
+                )));
             }
             let dt = v[0] - prev.0;
             if !(dt.is_finite() && (v[1] / dt - prev.1 / dt).is_finite()) {
-                return Err(format!(
+                return Err(file(format!(
                     "{name}: line {line}: the force changes by more than a double can hold per second from the row before"
-                ));
+                )));
             }
         }
         rows.push((v[0], v[1]));
     }
     if rows.is_empty() {
-        return Err(format!("{name}: no data rows"));
+        return Err(file(format!("{name}: no data rows")));
     }
     Ok(rows)
 }
@@ -315,13 +315,21 @@ mod tests {
         let p = dir.join("f.csv");
         std::fs::write(&p, "t_s,force_N\n0,1\n1,2\n0.5,3\n").unwrap();
         let e = read_table(&p).unwrap_err();
-        assert!(e.contains("line 4") && e.contains("not increasing"), "{e}");
-        std::fs::write(&p, "t,F\n0,1\n").unwrap();
-        assert!(read_table(&p).unwrap_err().contains("header"));
-        std::fs::write(&p, "t_s,force_N\n0,nan\n").unwrap();
-        assert!(read_table(&p).unwrap_err().contains("finite"));
-        std::fs::write(&p, "t_s,force_N\n0,-1e308\n1,1e308\n").unwrap();
-        assert!(read_table(&p).unwrap_err().contains("line 3"));
+        assert_eq!(e.key, "file");
+        assert_eq!(
+            e.reason.to_string(),
+            format!(
+                "{}: line 4, column t_s: time not increasing: 0.5 after 1",
+                p.display()
+            )
+        );
+        let err = |text: &str| {
+            std::fs::write(&p, text).unwrap();
+            read_table(&p).unwrap_err().reason.to_string()
+        };
+        assert!(err("t,F\n0,1\n").contains("header"));
+        assert!(err("t_s,force_N\n0,nan\n").contains("finite"));
+        assert!(err("t_s,force_N\n0,-1e308\n1,1e308\n").contains("line 3"));
         std::fs::write(&p, "t_s,force_N\n0,1\n2,3\n").unwrap();
         assert_eq!(read_table(&p).unwrap(), vec![(0.0, 1.0), (2.0, 3.0)]);
         std::fs::remove_dir_all(&dir).ok();

@@ -24,6 +24,7 @@
 pub mod actuator;
 pub mod axis;
 pub mod cylinder;
+pub mod error;
 pub mod estimator;
 pub mod force;
 pub mod metrics;

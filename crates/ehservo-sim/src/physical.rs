@@ -19,6 +19,7 @@
 //! `Σ (a_i,true + Δa_i − ā_i)·x_i − (b_true − b̄)·u_eq + d_true`.
 
 use crate::axis::Axis;
+use crate::error::KeyError;
 use crate::plant::MAX_STATES;
 use crate::plant::{lumped, Draw, Plant, PlantConfig, PlantContext, UncertaintySpec, Variation};
 use crate::third_order::{paper_family, varied, LOAD_PRESSURE};
@@ -158,9 +159,17 @@ impl PlantConfig for PhysicalCfg {
         Axis::Rotary
     }
 
-    fn build(&self, ctx: &PlantContext) -> Result<PhysicalPlant, (String, String)> {
+    fn build(&self, ctx: &PlantContext) -> Result<PhysicalPlant, KeyError> {
         let load = paper_family(&self.params, ctx, true)?;
         Ok(PhysicalPlant::new(self.params, load))
+    }
+
+    fn paper_params(&self) -> Option<ServoParams> {
+        Some(self.params)
+    }
+
+    fn with_paper_params(&self, params: ServoParams) -> Option<Self> {
+        Some(Self { params })
     }
 }
 

@@ -24,6 +24,7 @@
 //! `Δb = b_ref·b(t)·(b_bias + b_random·r_b)` (crate::uncertainty).
 
 use crate::axis::Axis;
+use crate::error::KeyError;
 use ehservo_core::control::Signal;
 use ehservo_core::rk4::OdeState;
 use ehservo_core::servo::{Load, NominalModel};
@@ -269,5 +270,19 @@ pub trait PlantConfig:
     /// Checks every key and builds the plant. The error is a key path
     /// (from the scenario's root: `plant.…`, `uncertainty.…`) and the
     /// reason.
-    fn build(&self, ctx: &PlantContext) -> Result<Self::Plant, (String, String)>;
+    fn build(&self, ctx: &PlantContext) -> Result<Self::Plant, KeyError>;
+
+    /// The paper's physical parameters when this model is of the
+    /// third-order family (its `[plant.params]`): what the paper's theory
+    /// and identification's grey-box read. `None` (the default) for any
+    /// other plant.
+    fn paper_params(&self) -> Option<ehservo_core::servo::ServoParams> {
+        None
+    }
+    /// This model with the paper's physical parameters `p` in place of its
+    /// own (an identified model of the same family); `None` (the default)
+    /// for a plant outside the third-order family.
+    fn with_paper_params(&self, _p: ehservo_core::servo::ServoParams) -> Option<Self> {
+        None
+    }
 }

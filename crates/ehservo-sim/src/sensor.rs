@@ -17,6 +17,7 @@
 //! measured exactly and at once). The metrics and the trace's θ and e are
 //! always of the true plant.
 
+use crate::error::Reason;
 use ehservo_core::error::ParamError;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -63,25 +64,27 @@ impl Channels {
     }
 }
 
+/// The error is the reason alone: the list's key is the caller's (serde
+/// places it).
 impl TryFrom<Vec<String>> for Channels {
-    type Error = String;
-    fn try_from(v: Vec<String>) -> Result<Self, String> {
+    type Error = Reason;
+    fn try_from(v: Vec<String>) -> Result<Self, Reason> {
         let mut c = [false; 3];
         for name in &v {
             let Some(i) = CHANNELS.iter().position(|n| n == name) else {
-                return Err(format!(
+                return Err(Reason::Other(format!(
                     "unknown channel `{name}`: expected some of {CHANNELS:?}"
-                ));
+                )));
             };
             if c[i] {
-                return Err(format!("channel `{name}` is listed twice"));
+                return Err(Reason::Other(format!("channel `{name}` is listed twice")));
             }
             c[i] = true;
         }
         if !c[0] {
-            return Err(format!(
+            return Err(Reason::Other(format!(
                 "must include \"theta\": every estimator works from the measured angle (got {v:?})"
-            ));
+            )));
         }
         Ok(Channels(c))
     }
@@ -489,11 +492,17 @@ mod tests {
         let ok = Channels::try_from(vec!["theta".to_string()]).unwrap();
         assert_eq!(ok.0, [true, false, false]);
         assert_eq!(ok.missing(), ["theta_dot", "theta_ddot"]);
-        assert!(Channels::try_from(vec![]).unwrap_err().contains("theta"));
+        assert_eq!(
+            Channels::try_from(vec![]).unwrap_err().to_string(),
+            "must include \"theta\": every estimator works from the measured angle (got [])"
+        );
         assert!(Channels::try_from(vec!["theta_dot".into()]).is_err());
         assert!(Channels::try_from(vec!["theta".into(), "theta".into()]).is_err());
-        assert!(Channels::try_from(vec!["theta".into(), "jerk".into()])
-            .unwrap_err()
-            .contains("unknown channel"));
+        assert_eq!(
+            Channels::try_from(vec!["theta".into(), "jerk".into()])
+                .unwrap_err()
+                .to_string(),
+            "unknown channel `jerk`: expected some of [\"theta\", \"theta_dot\", \"theta_ddot\"]"
+        );
     }
 }

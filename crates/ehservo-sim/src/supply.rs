@@ -26,6 +26,7 @@
 //! refused unless 0. The line volume is Hopsan's `HydraulicVolumeMultiPort`
 //! read the same way, `(V/βe)·ṗ = Σ q`.
 
+use crate::error::{non_negative, positive, KeyError};
 use serde::{Deserialize, Serialize};
 
 /// The rated pressure of Hopsan's relief characteristic, `mPnom = 7e6f`
@@ -129,34 +130,17 @@ impl Supply {
     /// Validates `[plant.supply]` (the fluid's bulk modulus as the line's
     /// default). Returns the supply and the tank pressure; the error is the
     /// key inside `[plant.supply]` and the reason.
-    pub fn try_new(c: &SupplyCfg, beta: f64) -> Result<(Supply, f64), (String, String)> {
-        let pos = |k: &str, v: f64| -> Result<f64, (String, String)> {
-            if v.is_finite() && v > 0.0 {
-                Ok(v)
-            } else {
-                Err((k.to_string(), format!("must be finite and > 0 (got {v:?})")))
-            }
-        };
-        let nonneg = |k: &str, v: f64| -> Result<f64, (String, String)> {
-            if v.is_finite() && v >= 0.0 {
-                Ok(v)
-            } else {
-                Err((
-                    k.to_string(),
-                    format!("must be finite and >= 0 (got {v:?})"),
-                ))
-            }
-        };
+    pub fn try_new(c: &SupplyCfg, beta: f64) -> Result<(Supply, f64), KeyError> {
         match *c {
             SupplyCfg::Fixed {
                 pressure,
                 tank_pressure,
             } => {
-                let ps = pos("pressure", pressure)?;
-                let pt = nonneg("tank_pressure", tank_pressure)?;
+                let ps = positive("pressure", pressure)?;
+                let pt = non_negative("tank_pressure", tank_pressure)?;
                 if pt >= ps {
-                    return Err((
-                        "tank_pressure".into(),
+                    return Err(KeyError::new(
+                        "tank_pressure",
                         format!("must be below the supply pressure {ps} Pa (got {pt})"),
                     ));
                 }
@@ -176,26 +160,26 @@ impl Supply {
                 tank_pressure,
                 initial_pressure,
             } => {
-                let d = pos("displacement", displacement)?;
-                let n = pos("speed", speed)?;
-                let cl = nonneg("leakage", leakage)?;
-                let v = pos("volume", volume)?;
-                let b = pos("bulk_modulus", bulk_modulus.unwrap_or(beta))?;
-                let p_max = pos("relief_pressure", relief_pressure)?;
-                let tau = pos("relief_time_constant", relief_time_constant)?;
-                let kcs = pos("relief_k_cs", relief_k_cs)?;
-                let kcf = pos("relief_k_cf", relief_k_cf)?;
-                let qn = pos("relief_q_nom", relief_q_nom)?;
-                let pt = nonneg("tank_pressure", tank_pressure)?;
+                let d = positive("displacement", displacement)?;
+                let n = positive("speed", speed)?;
+                let cl = non_negative("leakage", leakage)?;
+                let v = positive("volume", volume)?;
+                let b = positive("bulk_modulus", bulk_modulus.unwrap_or(beta))?;
+                let p_max = positive("relief_pressure", relief_pressure)?;
+                let tau = positive("relief_time_constant", relief_time_constant)?;
+                let kcs = positive("relief_k_cs", relief_k_cs)?;
+                let kcf = positive("relief_k_cf", relief_k_cf)?;
+                let qn = positive("relief_q_nom", relief_q_nom)?;
+                let pt = non_negative("tank_pressure", tank_pressure)?;
                 if pt >= p_max {
-                    return Err((
-                        "tank_pressure".into(),
+                    return Err(KeyError::new(
+                        "tank_pressure",
                         format!("must be below the relief pressure {p_max} Pa (got {pt})"),
                     ));
                 }
                 let p0 = match initial_pressure {
                     None => pt,
-                    Some(p) => nonneg("initial_pressure", p)?,
+                    Some(p) => non_negative("initial_pressure", p)?,
                 };
                 let sq = RELIEF_P_NOM.sqrt();
                 Ok((
@@ -412,7 +396,11 @@ mod tests {
             1e9,
         )
         .unwrap_err();
-        assert_eq!(e.0, "tank_pressure");
+        assert_eq!(e.key, "tank_pressure");
+        assert_eq!(
+            e.reason.to_string(),
+            "must be below the supply pressure 10000000 Pa (got 20000000)"
+        );
         let e = Supply::try_new(
             &SupplyCfg::Fixed {
                 pressure: -1.0,
@@ -421,6 +409,7 @@ mod tests {
             1e9,
         )
         .unwrap_err();
-        assert_eq!(e.0, "pressure");
+        assert_eq!(e.key, "pressure");
+        assert_eq!(e.reason, crate::error::Reason::NotPositive(-1.0));
     }
 }

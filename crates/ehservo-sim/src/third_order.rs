@@ -12,6 +12,7 @@
 //! (the same servo in (θ, θ̇, Pl), which carries it exactly) as the way.
 
 use crate::axis::Axis;
+use crate::error::KeyError;
 use crate::plant::MAX_STATES;
 use crate::plant::{lumped, Draw, Plant, PlantConfig, PlantContext, UncertaintySpec, Variation};
 use crate::uncertainty::Factors;
@@ -245,9 +246,10 @@ pub(crate) fn paper_family(
     params: &ServoParams,
     ctx: &PlantContext,
     random: bool,
-) -> Result<Load, (String, String)> {
-    let p = |e: ehservo_core::error::ParamError| param_err("plant.params", e);
-    params.validate().map_err(p)?;
+) -> Result<Load, KeyError> {
+    params
+        .validate()
+        .map_err(|e| KeyError::param("plant.params", e))?;
     let load = ctx.load.unwrap_or_else(Load::paper);
     load.validate().map_err(|e| {
         let prefix = if matches!(e.name, "amplitude" | "wavenumber") {
@@ -255,28 +257,18 @@ pub(crate) fn paper_family(
         } else {
             "load.friction"
         };
-        param_err(prefix, e)
+        KeyError::param(prefix, e)
     })?;
     let phys = &ctx.uncertainty.physical;
     phys.validate()
-        .map_err(|(k, r)| (format!("uncertainty.physical.{k}"), r))?;
+        .map_err(|e| e.under("uncertainty.physical"))?;
     if !random && phys.is_random() {
-        return Err((
-            "uncertainty.physical".into(),
-            "the third-order plant takes a physical variation as a bias only (random parts change the model every hold interval): use plant.model = \"physical\", the same servo in (θ, θ̇, Pl), which carries them exactly".into(),
+        return Err(KeyError::new(
+            "uncertainty.physical",
+            "the third-order plant takes a physical variation as a bias only (random parts change the model every hold interval): use plant.model = \"physical\", the same servo in (θ, θ̇, Pl), which carries them exactly",
         ));
     }
     Ok(load)
-}
-
-/// A core parameter error as a key path under `prefix` and a reason.
-pub(crate) fn param_err(prefix: &str, e: ehservo_core::error::ParamError) -> (String, String) {
-    let reason = if e.value.is_nan() {
-        e.reason.to_string()
-    } else {
-        format!("{} (got {:?})", e.reason, e.value)
-    };
-    (format!("{prefix}.{}", e.name), reason)
 }
 
 impl PlantConfig for ThirdOrderCfg {
@@ -290,10 +282,18 @@ impl PlantConfig for ThirdOrderCfg {
         Axis::Rotary
     }
 
-    fn build(&self, ctx: &PlantContext) -> Result<ThirdOrderPlant, (String, String)> {
+    fn build(&self, ctx: &PlantContext) -> Result<ThirdOrderPlant, KeyError> {
         let load = paper_family(&self.params, ctx, false)?;
         let f = ctx.uncertainty.physical.factors(&[0.0; 6]);
         Ok(ThirdOrderPlant::with_bias(self.params, load, &f))
+    }
+
+    fn paper_params(&self) -> Option<ServoParams> {
+        Some(self.params)
+    }
+
+    fn with_paper_params(&self, params: ServoParams) -> Option<Self> {
+        Some(Self { params })
     }
 }
 
@@ -585,5 +585,69 @@ mod tests {
             (a1 - an[0]) * x[0] + (a2 - an[1]) * x[1] + (a3 - an[2]) * x[2] - (b - bb) * u_eq + d;
         let l = plant.lumped_uncertainty(&x, &x, u, u_eq, bb, &Variation::NONE);
         assert!((l - want_l).abs() <= 1e-9 * want_l.abs(), "{l} vs {want_l}");
+    }
+
+    /// The family's errors name their keys from the scenario's root, with
+    /// the core's reason; both models give their `[plant.params]`.
+    #[test]
+    fn build_errors_name_their_keys() {
+        use crate::cylinder::CylinderCfg;
+        use crate::error::Reason;
+        use crate::physical::PhysicalCfg;
+        let ctx = |uncertainty: UncertaintySpec| PlantContext {
+            load: None,
+            load_given: false,
+            uncertainty,
+            x0: [0.0; 3],
+            base_dir: None,
+            reference_range: None,
+        };
+        let bad = ThirdOrderCfg {
+            params: ServoParams {
+                vt: -1.0,
+                ..ServoParams::paper()
+            },
+        };
+        let e = bad.build(&ctx(UncertaintySpec::NONE)).unwrap_err();
+        assert_eq!(e.key, "plant.params.Vt");
+        assert!(matches!(e.reason, Reason::Param(_)));
+        assert_eq!(
+            e.to_string(),
+            "`plant.params.Vt`: must be finite and > 0 (got -1.0)"
+        );
+        let mut spec = UncertaintySpec::NONE;
+        spec.physical = PhysicalSpec {
+            mass: Spread {
+                bias: 0.0,
+                random: 0.1,
+            },
+            ..PhysicalSpec::default()
+        };
+        let paper = ThirdOrderCfg {
+            params: ServoParams::paper(),
+        };
+        assert_eq!(
+            paper.build(&ctx(spec)).unwrap_err().key,
+            "uncertainty.physical"
+        );
+        assert!(PhysicalCfg {
+            params: paper.params
+        }
+        .build(&ctx(spec))
+        .is_ok());
+        spec.physical.load.bias = f64::INFINITY;
+        assert_eq!(
+            paper.build(&ctx(spec)).unwrap_err().to_string(),
+            "`uncertainty.physical.load.bias`: must be finite (got inf)"
+        );
+        assert_eq!(paper.paper_params(), Some(ServoParams::paper()));
+        assert_eq!(
+            PhysicalCfg {
+                params: paper.params
+            }
+            .paper_params(),
+            Some(ServoParams::paper())
+        );
+        assert_eq!(CylinderCfg::default().paper_params(), None);
     }
 }

@@ -23,6 +23,7 @@
 //! physical random part is set, so that the paper's runs draw exactly the
 //! stream they always drew.
 
+use crate::error::{finite, KeyError};
 use crate::plant::Plant;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -143,17 +144,15 @@ impl PhysicalSpec {
     /// below (a mass, a bulk modulus, a supply pressure must stay > 0;
     /// leakage, friction and load may vanish but not change sign). The
     /// error is the key (inside `[uncertainty.physical]`) and the reason.
-    pub fn validate(&self) -> Result<(), (String, String)> {
+    pub fn validate(&self) -> Result<(), KeyError> {
         for (key, s) in Self::KEYS.iter().zip(self.spreads()) {
             for (part, v) in [("bias", s.bias), ("random", s.random)] {
-                if !v.is_finite() {
-                    return Err((format!("{key}.{part}"), format!("must be finite (got {v})")));
-                }
+                finite(&format!("{key}.{part}"), v)?;
             }
             let must_stay_positive = matches!(*key, "mass" | "bulk_modulus" | "supply_pressure");
             let low = s.min_factor();
             if (must_stay_positive && low <= 0.0) || low < 0.0 {
-                return Err((
+                return Err(KeyError::new(
                     format!("{key}.bias"),
                     format!(
                         "the true value nominal·(1 + bias ± random) can reach {low:.3} of the nominal: it must stay {}",
@@ -476,9 +475,12 @@ mod tests {
             bias: -0.5,
             random: 0.5,
         };
-        let (k, r) = p.validate().unwrap_err();
-        assert_eq!(k, "mass.bias");
-        assert!(r.contains("> 0"), "{r}");
+        let e = p.validate().unwrap_err();
+        assert_eq!(e.key, "mass.bias");
+        assert_eq!(
+            e.reason.to_string(),
+            "the true value nominal·(1 + bias ± random) can reach 0.000 of the nominal: it must stay > 0"
+        );
         p.mass = Spread::NONE;
         p.friction = Spread {
             bias: -1.0,
@@ -486,9 +488,11 @@ mod tests {
         };
         assert!(p.validate().is_ok(), "friction may vanish");
         p.friction.bias = -1.5;
-        assert_eq!(p.validate().unwrap_err().0, "friction.bias");
+        assert_eq!(p.validate().unwrap_err().key, "friction.bias");
         p.friction.bias = 0.0;
         p.load.random = f64::NAN;
-        assert_eq!(p.validate().unwrap_err().0, "load.random");
+        let e = p.validate().unwrap_err();
+        assert_eq!(e.key, "load.random");
+        assert_eq!(e.to_string(), "`load.random`: must be finite (got NaN)");
     }
 }

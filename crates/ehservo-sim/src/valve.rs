@@ -40,6 +40,7 @@
 //! rated signal: a land then passes Q_nom at Δp_nom/2 and full opening,
 //! `Cd·w = Q_nom/(x_max·√(Δp_nom/ρ))` (two lands in series share Δp_nom).
 
+use crate::error::{positive, KeyError};
 use ehservo_core::math::sgn;
 use serde::{Deserialize, Serialize};
 
@@ -163,23 +164,16 @@ pub struct Flows {
 impl SpoolValve {
     /// Validates `[plant.valve]` against the fluid (ρ, ν). The error is
     /// the key inside `[plant.valve]` and the reason.
-    pub fn try_new(c: &ValveCfg, rho: f64, nu: f64) -> Result<SpoolValve, (String, String)> {
-        let err = |k: &str, r: String| Err((k.to_string(), r));
-        let pos = |k: &str, v: f64| -> Result<f64, (String, String)> {
-            if v.is_finite() && v > 0.0 {
-                Ok(v)
-            } else {
-                Err((k.to_string(), format!("must be finite and > 0 (got {v:?})")))
-            }
-        };
-        let x_max = pos("spool_limit", c.spool_limit)?;
+    pub fn try_new(c: &ValveCfg, rho: f64, nu: f64) -> Result<SpoolValve, KeyError> {
+        let err = |k: &str, r: String| Err(KeyError::new(k, r));
+        let x_max = positive("spool_limit", c.spool_limit)?;
         let kv =
             match (c.gain, c.rated_signal) {
                 (Some(_), Some(_)) => {
                     return err("gain", "give either gain or rated_signal, not both".into())
                 }
-                (Some(g), None) => pos("gain", g)?,
-                (None, Some(u)) => x_max / pos("rated_signal", u)?,
+                (Some(g), None) => positive("gain", g)?,
+                (None, Some(u)) => x_max / positive("rated_signal", u)?,
                 (None, None) => return err(
                     "gain",
                     "required: the spool travel per volt (m/V), or rated_signal (V at spool_limit)"
@@ -211,7 +205,7 @@ impl SpoolValve {
                 );
             }
         }
-        let re = pos("critical_reynolds", c.critical_reynolds)?;
+        let re = positive("critical_reynolds", c.critical_reynolds)?;
         let geometry = c.spool_diameter.is_some() || c.area_gradient.is_some();
         let (cd, cdw) = match (c.rated_flow, geometry) {
             (Some(_), true) => {
@@ -221,13 +215,13 @@ impl SpoolValve {
                 )
             }
             (Some(q), false) => {
-                let q = pos("rated_flow", q)?;
-                let dp = pos(
+                let q = positive("rated_flow", q)?;
+                let dp = positive(
                     "rated_drop",
                     c.rated_drop.ok_or_else(|| {
-                        (
-                            "rated_drop".to_string(),
-                            "required with rated_flow: the valve drop (Pa) at which it is rated".to_string(),
+                        KeyError::new(
+                            "rated_drop",
+                            "required with rated_flow: the valve drop (Pa) at which it is rated",
                         )
                     })?,
                 )?;
@@ -241,18 +235,18 @@ impl SpoolValve {
                 // Cd·w·x_max·√(2·(Δp_nom/2)/ρ) = Q_nom.
                 let cdw = q / (x_max * (dp / rho).sqrt());
                 let cd = c.discharge_coefficient.unwrap_or(0.61);
-                (pos("discharge_coefficient", cd)?, [cdw; 4])
+                (positive("discharge_coefficient", cd)?, [cdw; 4])
             }
             (None, _) => {
                 if c.rated_drop.is_some() {
                     return err("rated_drop", "needs rated_flow".into());
                 }
-                let cd = pos(
+                let cd = positive(
                     "discharge_coefficient",
                     c.discharge_coefficient.ok_or_else(|| {
-                        (
-                            "discharge_coefficient".to_string(),
-                            "required with a geometry (or give rated_flow and rated_drop)".to_string(),
+                        KeyError::new(
+                            "discharge_coefficient",
+                            "required with a geometry (or give rated_flow and rated_drop)",
                         )
                     })?,
                 )?;
@@ -264,7 +258,7 @@ impl SpoolValve {
                         )
                     }
                     (Some(d), None) => {
-                        let d = pos("spool_diameter", d)?;
+                        let d = positive("spool_diameter", d)?;
                         let f = c.circumference_fraction.map_or([1.0; 4], |f| f.values());
                         let mut w = [0.0; 4];
                         for i in 0..4 {
@@ -491,7 +485,7 @@ mod tests {
         // Through P→A then B→T at full opening, 35 bar each: Q_nom.
         let qa = v.orifice(v.cdw[0] * 5e-4, 35e5);
         assert!((qa - q).abs() <= 1e-4 * q, "{qa} vs {q}");
-        let bad = |c: ValveCfg| SpoolValve::try_new(&c, 850.0, 46e-6).unwrap_err().0;
+        let bad = |c: ValveCfg| SpoolValve::try_new(&c, 850.0, 46e-6).unwrap_err().key;
         let ok = ValveCfg {
             spool_limit: 1e-3,
             gain: Some(1e-4),
@@ -508,6 +502,19 @@ mod tests {
             "lap"
         );
         assert_eq!(bad(ValveCfg { gain: None, ..ok }), "gain");
+        let e = SpoolValve::try_new(
+            &ValveCfg {
+                lap: Some(Edges::All(2e-3)),
+                ..ok
+            },
+            850.0,
+            46e-6,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "`lap`: edge 1 overlaps by 0.002 m, as much as the spool travel (0.001 m): it never opens"
+        );
         assert_eq!(
             bad(ValveCfg {
                 rated_flow: Some(1e-3),

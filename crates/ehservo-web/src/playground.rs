@@ -10,9 +10,10 @@
 
 use ehservo_scenario::core::control::{Config, Controller, Signals, Tunable};
 use ehservo_scenario::metrics::Metrics;
-use ehservo_scenario::run::run_setup;
+use ehservo_scenario::run::{run_metrics, Decimate};
 use ehservo_scenario::scenario::{
-    parse_value, set_path, ControllerCfg, ControllerConfig, Scenario, ScenarioError, Visit,
+    parse_value, set_path, ControllerCfg, ControllerConfig, KeyError, Loop, Scenario,
+    ScenarioError, Visit,
 };
 use ehservo_scenario::simulation::Sample;
 use serde::Serialize;
@@ -165,7 +166,8 @@ pub fn catalog() -> Catalog {
         scenarios: SCENARIOS
             .iter()
             .map(|b| {
-                let s = base(b);
+                let lp = base(b);
+                let s = lp.scenario();
                 ScenarioInfo {
                     id: b.id,
                     path: b.path,
@@ -193,13 +195,13 @@ pub fn kinds() -> Vec<KindInfo> {
         .collect()
 }
 
-fn base(b: &BaseScenario) -> Scenario {
-    let mut s = Scenario::parse_with(b.text, b.path, &[])
+fn base(b: &BaseScenario) -> Loop {
+    let mut s = Scenario::parse_in(b.text, b.path, &[], None)
         .unwrap_or_else(|e| panic!("the embedded {} is valid: {e}", b.path));
     if s.name.is_empty() {
         s.name = b.id.rsplit('/').next().unwrap_or(b.id).to_string();
     }
-    s
+    Loop::new(s).unwrap_or_else(|e| panic!("the embedded {} is valid: {e}", b.path))
 }
 
 /// A base scenario by id.
@@ -227,7 +229,13 @@ impl FieldError {
 
 impl From<ScenarioError> for FieldError {
     fn from(e: ScenarioError) -> Self {
-        Self::new(e.key, e.reason)
+        Self::new(e.key, e.reason.to_string())
+    }
+}
+
+impl From<KeyError> for FieldError {
+    fn from(e: KeyError) -> Self {
+        Self::new(e.key, e.reason.to_string())
     }
 }
 
@@ -250,10 +258,7 @@ fn range_of(kind: &str, key: &str) -> Option<Param> {
 /// key's declared range, and whatever the scenario's own validator says of
 /// the key on its own — then, if each key is fine alone, what it says of
 /// them together.
-pub fn resolve(
-    id: &str,
-    overrides: &[(String, String)],
-) -> Result<(Scenario, ehservo_scenario::scenario::Setup), Vec<FieldError>> {
+pub fn resolve(id: &str, overrides: &[(String, String)]) -> Result<Loop, Vec<FieldError>> {
     let b = find(id).ok_or_else(|| {
         vec![FieldError::new(
             "scenario",
@@ -274,7 +279,7 @@ pub fn resolve(
         .rev()
         .find(|(k, _)| k.trim() == "controller.kind")
         .map(|(_, v)| v.trim().to_string())
-        .unwrap_or_else(|| base.controller.kind().to_string());
+        .unwrap_or_else(|| base.controller().kind().to_string());
     let kind_value = (
         "controller.kind".to_string(),
         toml::Value::String(kind.clone()),
@@ -282,6 +287,7 @@ pub fn resolve(
     let under_kind = base
         .with_values(std::slice::from_ref(&kind_value))
         .map_err(|e| vec![e.into()])?
+        .scenario()
         .resolved_table();
     let mut errors = Vec::new();
     let mut values = vec![kind_value.clone()];
@@ -330,7 +336,7 @@ pub fn resolve(
     if !errors.is_empty() {
         return Err(errors);
     }
-    base.with_values_built(&values).map_err(|e| vec![e.into()])
+    base.with_values(&values).map_err(|e| vec![e.into()])
 }
 
 /// One plotted series of a controller signal.
@@ -390,13 +396,14 @@ pub struct RunOut {
 
 /// Runs the set-up.
 pub fn simulate(id: &str, overrides: &[(String, String)]) -> Result<RunOut, Vec<FieldError>> {
-    let (scenario, setup) = resolve(id, overrides)?;
-    let steps = setup.sim.steps;
-    let axis = setup.axis;
+    let lp = resolve(id, overrides)?;
+    let scenario = lp.scenario();
+    let steps = lp.sim().steps;
+    let axis = lp.axis();
     let every = steps.div_ceil(MAX_POINTS).max(1);
     let mut trace = Trace::default();
     let mut keys: Vec<usize> = Vec::new();
-    let mut last: Option<Sample> = None;
+    let mut dec = Decimate::every(every);
     let mut push = |trace: &mut Trace, smp: &Sample| {
         if trace.t.is_empty() {
             keys = (0..smp.signals.len())
@@ -423,15 +430,12 @@ pub fn simulate(id: &str, overrides: &[(String, String)]) -> Result<RunOut, Vec<
             s.values.push(smp.values[i]);
         }
     };
-    let (outcome, metrics) = run_setup(&setup, &mut |smp: &Sample| {
-        if smp.k % every == 0 {
+    let (outcome, metrics) = run_metrics(&lp, &mut |smp: &Sample| {
+        if let Some(smp) = dec.offer(smp) {
             push(&mut trace, smp);
-            last = None;
-        } else {
-            last = Some(*smp);
         }
     });
-    if let Some(l) = last {
+    if let Some(l) = dec.finish() {
         push(&mut trace, &l);
     }
     Ok(RunOut {
@@ -455,13 +459,14 @@ pub fn simulate(id: &str, overrides: &[(String, String)]) -> Result<RunOut, Vec<
 /// short form were ever not (it always should be), the file is the
 /// scenario with every key written out instead.
 pub fn scenario_toml(id: &str, overrides: &[(String, String)]) -> Result<String, Vec<FieldError>> {
-    let (scenario, _) = resolve(id, overrides)?;
+    let lp = resolve(id, overrides)?;
+    let scenario = lp.scenario();
     let b = find(id).expect("resolve found it");
     let mut table: toml::Table = toml::from_str(b.text).expect("the embedded file parses");
     if !table.contains_key("name") {
         table.insert("name".into(), toml::Value::String(scenario.name.clone()));
     }
-    let base_kind = base(b).controller.kind();
+    let base_kind = base(b).controller().kind();
     let mut flags = Vec::new();
     let keys = |kind: &str| -> Vec<String> {
         ControllerCfg::default_of(kind)
@@ -480,7 +485,7 @@ pub fn scenario_toml(id: &str, overrides: &[(String, String)]) -> Result<String,
             "controller.kind",
             toml::Value::String(scenario.controller.kind().into()),
         )
-        .map_err(|(k, r)| vec![FieldError::new(k, r)])?;
+        .map_err(|e| vec![e.into()])?;
     } else if scenario.controller.kind() != base_kind {
         // Another kind starts from its own defaults, as in a study.
         let mut c = toml::Table::new();
@@ -495,11 +500,11 @@ pub fn scenario_toml(id: &str, overrides: &[(String, String)]) -> Result<String,
         if k == "controller.kind" {
             continue;
         }
-        set_path(&mut table, k, parse_value(raw)).map_err(|(k, r)| vec![FieldError::new(k, r)])?;
+        set_path(&mut table, k, parse_value(raw)).map_err(|e| vec![e.into()])?;
         flags.push(format!("{k}={}", raw.trim()));
     }
     let body = toml::to_string_pretty(&table).unwrap_or_default();
-    let same = Scenario::parse_with(&body, b.path, &[]).is_ok_and(|s| s == scenario);
+    let same = Loop::parse_with(&body, b.path, &[]).is_ok_and(|s| s.scenario() == scenario);
     let body = if same { body } else { scenario.to_toml() };
     let mut head = format!(
         "# {} from the ehservo playground: {}",
@@ -525,8 +530,8 @@ pub fn base_values(
     id: &str,
     kind: &str,
 ) -> Result<std::collections::BTreeMap<String, Option<f64>>, Vec<FieldError>> {
-    let (scenario, _) = resolve(id, &[("controller.kind".into(), kind.into())])?;
-    let table = scenario.resolved_table();
+    let lp = resolve(id, &[("controller.kind".into(), kind.into())])?;
+    let table = lp.scenario().resolved_table();
     let info = kinds()
         .into_iter()
         .find(|k| k.kind == kind)
@@ -584,10 +589,8 @@ mod tests {
     /// `ehservo_scenario::run::run` (what `ehservo run` writes to summary.json).
     fn cli_metrics(path: &str, flags: &[&str]) -> Metrics {
         let flags: Vec<String> = flags.iter().map(|s| s.to_string()).collect();
-        let s = Scenario::load(&repo(path), &flags).unwrap();
-        ehservo_scenario::run::run(&s, ehservo_scenario::run::Keep::Nothing)
-            .unwrap()
-            .metrics
+        let s = Loop::load(&repo(path), &flags).unwrap();
+        ehservo_scenario::run::run(&s, ehservo_scenario::run::Keep::Nothing).metrics
     }
 
     #[test]
@@ -600,7 +603,7 @@ mod tests {
                 // Study files sit beside the scenarios: they do not load as one.
                 if p.extension().is_some_and(|x| x == "toml")
                     && stem != "manifest"
-                    && Scenario::load(&p, &[]).is_ok()
+                    && Loop::load(&p, &[]).is_ok()
                 {
                     on_disk.push(format!("{group}/{stem}"));
                 }
@@ -749,10 +752,10 @@ mod tests {
         ] {
             let o = set(&pairs);
             let text = scenario_toml(id, &o).unwrap();
-            let s = Scenario::parse(&text).unwrap();
-            let (resolved, _) = resolve(id, &o).unwrap();
-            assert_eq!(s, resolved, "{id} {pairs:?}:\n{text}");
-            let cli = ehservo_scenario::run::run(&s, ehservo_scenario::run::Keep::Nothing).unwrap();
+            let s = Loop::parse(&text).unwrap();
+            let resolved = resolve(id, &o).unwrap().scenario().clone();
+            assert_eq!(*s.scenario(), resolved, "{id} {pairs:?}:\n{text}");
+            let cli = ehservo_scenario::run::run(&s, ehservo_scenario::run::Keep::Nothing);
             assert_eq!(cli.metrics, simulate(id, &o).unwrap().metrics);
             for (k, v) in &pairs {
                 assert!(text.contains(&format!("--set {k}={v}")), "{text}");

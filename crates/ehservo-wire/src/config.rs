@@ -3,53 +3,34 @@
 //!
 //! postcard round-trips them through [`crate::noskip`] (their optional keys
 //! are `skip_serializing_if`), so no mirror type has to follow their
-//! fields. A new kind in the registry is one variant here and one arm in
-//! [`crate::law::AnyLaw::build`]; the host's conversion from the registry
-//! (`ehservo::pil::wire_controller`) is an exhaustive match, so a kind
-//! missing here does not compile.
+//! fields. The enum is generated from the one list of kinds
+//! ([`ehservo_core::controller_kinds!`]), as the scenario's registry is: a
+//! new kind needs no line here.
 
-use ehservo_core::control::adrc::AdrcConfig;
-use ehservo_core::control::arc::ArcConfig;
-use ehservo_core::control::backstepping::BacksteppingConfig;
-use ehservo_core::control::nn_robust::NnRobustConfig;
-use ehservo_core::control::open_loop::OpenLoopConfig;
-use ehservo_core::control::pid::PidConfig;
-use ehservo_core::control::sliding::{NnVscConfig, VscConfig, VscSatConfig};
-use ehservo_core::control::sta::StaConfig;
-use ehservo_core::control::Config;
 use serde::{Deserialize, Serialize};
 
-/// A controller kind with its parameters.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)] // each variant is the kind of the same name
-pub enum WireController {
-    Nnvsc(NnVscConfig),
-    Vsc(VscConfig),
-    VscSat(VscSatConfig),
-    Pid(PidConfig),
-    NnRobust(NnRobustConfig),
-    Adrc(AdrcConfig),
-    Sta(StaConfig),
-    Arc(ArcConfig),
-    Backstepping(BacksteppingConfig),
-    /// `open-loop`.
-    OpenLoop(OpenLoopConfig),
+macro_rules! wire_controller {
+    ($($variant:ident $name:literal => $ty:ty),* $(,)?) => {
+        /// A controller kind with its parameters: one variant per line of
+        /// [`ehservo_core::controller_kinds!`], in its order (postcard
+        /// writes the variant's index).
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        pub enum WireController {
+            $(
+                #[doc = concat!("`kind = \"", $name, "\"`.")]
+                $variant($ty),
+            )*
+        }
+
+        impl WireController {
+            /// The kind's name (`controller.kind`).
+            pub fn kind(&self) -> &'static str {
+                match self {
+                    $(Self::$variant(_) => $name,)*
+                }
+            }
+        }
+    };
 }
 
-impl WireController {
-    /// The kind's name (`controller.kind`).
-    pub fn kind(&self) -> &'static str {
-        match self {
-            Self::Nnvsc(_) => NnVscConfig::KIND,
-            Self::Vsc(_) => VscConfig::KIND,
-            Self::VscSat(_) => VscSatConfig::KIND,
-            Self::Pid(_) => PidConfig::KIND,
-            Self::NnRobust(_) => NnRobustConfig::KIND,
-            Self::Adrc(_) => AdrcConfig::KIND,
-            Self::Sta(_) => StaConfig::KIND,
-            Self::Arc(_) => ArcConfig::KIND,
-            Self::Backstepping(_) => BacksteppingConfig::KIND,
-            Self::OpenLoop(_) => OpenLoopConfig::KIND,
-        }
-    }
-}
+ehservo_core::controller_kinds!(wire_controller);

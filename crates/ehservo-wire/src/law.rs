@@ -8,21 +8,11 @@
 
 use crate::config::WireController;
 use crate::msg::{Hello, MAX_PARTS};
-use ehservo_core::control::adrc::Adrc;
-use ehservo_core::control::arc::Arc;
-use ehservo_core::control::backstepping::Backstepping;
-use ehservo_core::control::nn_robust::{NnRobust, RobustParts};
-use ehservo_core::control::nnvsc::NnVsc;
-use ehservo_core::control::open_loop::OpenLoop;
-use ehservo_core::control::pid::Pid;
-use ehservo_core::control::sliding::SlidingParts;
-use ehservo_core::control::sta::Sta;
-use ehservo_core::control::vsc::Vsc;
 use ehservo_core::control::{flags, Config, Controller, Design, Output, Signal, Signals, Truth};
 use ehservo_core::error::ParamError;
 use ehservo_core::math::Real;
 use ehservo_core::rk4::OdeState;
-use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand, SampledController};
+use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand, SampledController, Sampling};
 use ehservo_core::servo::NominalModel;
 use ehservo_core::surface::SwitchingSurface;
 use heapless::Vec;
@@ -71,75 +61,6 @@ impl Truth for Constant {
     }
 }
 
-/// A parts type rebuilt from its signals' values (the inverse of
-/// `Signals::write`), for the host to fill the diagnostics that need the
-/// true plant. Only the kinds whose `annotate` reads the plant need it.
-pub trait Rebuild: Signals {
-    /// The parts whose `write` gives `v`; `None` if this kind's parts are
-    /// not rebuilt (its diagnostics need no plant).
-    fn rebuild<F: Real>(v: &[F]) -> Option<Self>;
-}
-
-macro_rules! no_rebuild {
-    ($($t:ty),*) => {$(
-        impl<T: Real> Rebuild for $t {
-            fn rebuild<F: Real>(_v: &[F]) -> Option<Self> {
-                None
-            }
-        }
-    )*};
-}
-
-no_rebuild!(
-    ehservo_core::control::pid::PidParts<T>,
-    ehservo_core::control::adrc::AdrcParts<T>,
-    ehservo_core::control::sta::StaParts<T>,
-    ehservo_core::control::arc::ArcParts<T>,
-    ehservo_core::control::backstepping::BacksteppingParts<T>,
-    ehservo_core::control::open_loop::OpenLoopParts<T>
-);
-
-impl<T: Real> Rebuild for SlidingParts<T> {
-    fn rebuild<F: Real>(v: &[F]) -> Option<Self> {
-        if v.len() < Self::SIGNALS.len() {
-            return None;
-        }
-        let g = |i: usize| T::of(v[i].to_f64());
-        // The order of SlidingParts::write (held by tests::rebuild_inverts_write).
-        Some(SlidingParts {
-            u_eq: g(0),
-            u_sw: g(1),
-            sigma: g(2),
-            sigma_delta: g(3),
-            wphi: g(4),
-            uncertainty: g(5),
-            w_norm: g(6),
-            w_1: g(7),
-            w_128: g(8),
-            mu: g(9),
-            norm_e: g(10),
-            b_bar: g(11),
-            e: g(12),
-            phi_norm: g(13),
-            xi: g(14),
-            gain: g(15),
-        })
-    }
-}
-
-impl<T: Real> Rebuild for RobustParts<T> {
-    fn rebuild<F: Real>(v: &[F]) -> Option<Self> {
-        let n = SlidingParts::<T>::SIGNALS.len();
-        if v.len() < Self::SIGNALS.len() {
-            return None;
-        }
-        Some(RobustParts {
-            sliding: SlidingParts::rebuild(&v[..n])?,
-            leak: T::of(v[n].to_f64()),
-        })
-    }
-}
-
 /// One step's result.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stepped<F> {
@@ -154,20 +75,23 @@ pub struct Stepped<F> {
     pub parts: Vec<F, MAX_PARTS>,
 }
 
-macro_rules! kinds {
-    ($($variant:ident($ctl:ident)),* $(,)?) => {
-        /// A kind's controller in the sampled loop, in `F`.
+macro_rules! any_law {
+    ($($variant:ident $name:literal => $ty:ty),* $(,)?) => {
+        /// A kind's controller in the sampled loop, in `F`: one variant
+        /// per line of [`ehservo_core::controller_kinds!`].
         #[derive(Clone)]
-        #[allow(missing_docs)] // each variant is the controller of the same name
         pub enum AnyLaw<F: Real> {
-            $($variant(SampledController<$ctl<F>, F>),)*
+            $(
+                #[doc = concat!("`kind = \"", $name, "\"`.")]
+                $variant(SampledController<<$ty as Config>::Law<F>, F>),
+            )*
         }
 
         impl<F: Real> AnyLaw<F> {
             /// The parts' signals.
             pub fn signals(&self) -> &'static [Signal] {
                 match self {
-                    $(Self::$variant(_) => <<$ctl<F> as Controller<F>>::Parts as Signals>::SIGNALS,)*
+                    $(Self::$variant(_) => <<<$ty as Config>::Law<F> as Controller<F>>::Parts as Signals>::SIGNALS,)*
                 }
             }
 
@@ -209,11 +133,11 @@ macro_rules! kinds {
             }
 
             /// Whether this kind's parts can be rebuilt on the host
-            /// ([`Rebuild`]).
+            /// ([`Signals::rebuild`]).
             pub fn rebuilds(&self) -> bool {
                 let zeros = [F::ZERO; MAX_PARTS];
                 match self {
-                    $(Self::$variant(_) => <<$ctl<F> as Controller<F>>::Parts as Rebuild>::rebuild(&zeros).is_some(),)*
+                    $(Self::$variant(_) => <<<$ty as Config>::Law<F> as Controller<F>>::Parts as Signals>::rebuild(&zeros).is_some(),)*
                 }
             }
 
@@ -228,21 +152,25 @@ macro_rules! kinds {
                     $(Self::$variant(c) => fill_truth(c.controller(), u, flags, values, slots, truth),)*
                 }
             }
+
+            /// The kind of `controller` built in `F` on `design`, in its
+            /// sampled loop.
+            fn of(
+                controller: &WireController,
+                design: &Design,
+                sampling: Sampling<F>,
+            ) -> Result<Self, ParamError> {
+                Ok(match controller {
+                    $(WireController::$variant(c) => {
+                        Self::$variant(SampledController::sampled(c.build_in::<F>(design)?, sampling))
+                    })*
+                })
+            }
         }
     };
 }
 
-kinds!(
-    Nnvsc(NnVsc),
-    Vsc(Vsc),
-    Pid(Pid),
-    NnRobust(NnRobust),
-    Adrc(Adrc),
-    Sta(Sta),
-    Arc(Arc),
-    Backstepping(Backstepping),
-    OpenLoop(OpenLoop),
-);
+ehservo_core::controller_kinds!(any_law);
 
 impl<F: Real> AnyLaw<F> {
     /// The controller a [`Hello`] describes, in `F`. The errors are the
@@ -268,34 +196,8 @@ impl<F: Real> AnyLaw<F> {
             }
             .cast(),
         };
-        let dt = F::of(h.dt);
-        fn sampled<C: Controller<F>, F: Real>(
-            c: C,
-            dt: F,
-            p: FaultPolicy<F>,
-        ) -> Result<SampledController<C, F>, ParamError> {
-            SampledController::with_policy(c, dt, p)
-        }
-        Ok(match &h.controller {
-            WireController::Nnvsc(c) => {
-                Self::Nnvsc(sampled(c.build(&design)?.cast()?, dt, policy)?)
-            }
-            WireController::Vsc(c) => Self::Vsc(sampled(c.build(&design)?.cast()?, dt, policy)?),
-            WireController::VscSat(c) => Self::Vsc(sampled(c.build(&design)?.cast()?, dt, policy)?),
-            WireController::Pid(c) => Self::Pid(sampled(c.build(&design)?.cast(), dt, policy)?),
-            WireController::NnRobust(c) => {
-                Self::NnRobust(sampled(c.build(&design)?.cast()?, dt, policy)?)
-            }
-            WireController::Adrc(c) => Self::Adrc(sampled(c.build(&design)?.cast(), dt, policy)?),
-            WireController::Sta(c) => Self::Sta(sampled(c.build(&design)?.cast(), dt, policy)?),
-            WireController::Arc(c) => Self::Arc(sampled(c.build(&design)?.cast(), dt, policy)?),
-            WireController::Backstepping(c) => {
-                Self::Backstepping(sampled(c.build(&design)?.cast(), dt, policy)?)
-            }
-            WireController::OpenLoop(c) => {
-                Self::OpenLoop(sampled(c.build(&design)?.cast(), dt, policy)?)
-            }
-        })
+        let sampling = Sampling::try_new(F::of(h.dt), policy)?;
+        Self::of(&h.controller, &design, sampling)
     }
 }
 
@@ -365,7 +267,6 @@ fn fill_truth<C, F>(
     truth: &dyn Truth,
 ) where
     C: Controller<F>,
-    C::Parts: Rebuild,
     F: Real,
 {
     if !slots.iter().any(|&s| s) {

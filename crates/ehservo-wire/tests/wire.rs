@@ -18,7 +18,7 @@ use ehservo_core::servo::Friction;
 use ehservo_wire::board::{token, Board};
 use ehservo_wire::config::WireController;
 use ehservo_wire::frame::{self, Deframer, FrameError, Pushed, MAX_FRAME};
-use ehservo_wire::law::{NoTicks, Rebuild};
+use ehservo_wire::law::NoTicks;
 use ehservo_wire::msg::*;
 use ehservo_wire::PROTOCOL_VERSION;
 use proptest::prelude::*;

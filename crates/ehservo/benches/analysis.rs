@@ -15,12 +15,12 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use ehservo::analysis::{analyze, cubic_roots, k1, k1_expm, p_matrix};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use std::hint::black_box;
 use std::time::Duration;
 
 fn bench_analysis(c: &mut Criterion) {
-    let s = Scenario::parse("").expect("the default scenario is Fig. 2");
+    let s = Loop::parse("").expect("the default scenario is Fig. 2");
     let a = analyze(&s);
     // Sanity: the paper's K1 and the two paths agree.
     let k = a.surface.k1.value.expect("finite K1");

@@ -2,7 +2,7 @@
 //! third-order plant (issue #35: at most 2×), side by side in one run: the
 //! same controller kind (`pid`; each scenario's own gains), the same sample
 //! period (1 ms) and RK4 sub-steps (10), one second of the loop (1000
-//! samples) with `run_setup` as a sweep runs it.
+//! samples) with `run_metrics` as a sweep runs it.
 //!
 //! - `third_order`: `scenarios/paper/fig2.toml`'s plant (8)–(9) under a PID;
 //! - `physical`: the same servo as the physical model (1)–(6);
@@ -20,12 +20,12 @@
 //! ```
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use ehservo::run::run_setup;
-use ehservo::scenario::Scenario;
+use ehservo::run::run_metrics;
+use ehservo::scenario::Loop;
 use std::path::Path;
 use std::time::Duration;
 
-fn scenario(rel: &str, set: &[&str]) -> ehservo::scenario::Setup {
+fn scenario(rel: &str, set: &[&str]) -> Loop {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../..")
         .join(rel);
@@ -40,9 +40,7 @@ fn scenario(rel: &str, set: &[&str]) -> ehservo::scenario::Setup {
     .map(|s| s.to_string())
     .collect();
     all.extend(set.iter().map(|s| s.to_string()));
-    Scenario::load(&p, &all)
-        .and_then(|s| s.setup())
-        .unwrap_or_else(|e| panic!("{rel}: {e}"))
+    Loop::load(&p, &all).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
 fn bench_cylinder(c: &mut Criterion) {
@@ -79,10 +77,10 @@ fn bench_cylinder(c: &mut Criterion) {
     for (name, setup) in &cases {
         // Each run is whole (bounded over its 1000 steps): a diverged run
         // would measure fewer samples.
-        let (outcome, m) = run_setup(setup, &mut |_| {});
+        let (outcome, m) = run_metrics(setup, &mut |_| {});
         assert!(outcome.diverged.is_none(), "{name} diverged");
         assert_eq!(m.samples, 1001, "{name}");
-        g.bench_function(*name, |b| b.iter(|| run_setup(setup, &mut |_| {})));
+        g.bench_function(*name, |b| b.iter(|| run_metrics(setup, &mut |_| {})));
     }
     g.finish();
 }

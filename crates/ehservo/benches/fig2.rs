@@ -17,32 +17,30 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use ehservo::plant::ThirdOrderPlant;
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use ehservo::simulation::{Sample, Simulation};
 use ehservo_core::prelude::*;
 use std::hint::black_box;
 use std::time::Duration;
 
 /// A `Simulation` of the scenario's plant and NNBVSC, observer summing u.
-fn simulate_direct(s: &Scenario) -> (u64, f64) {
-    let setup = s.setup().expect("valid");
-    let plant = ThirdOrderPlant::new(setup.model.params, setup.model.load);
-    let nn = setup
-        .controller
+fn simulate_direct(s: &Loop) -> (u64, f64) {
+    let plant = ThirdOrderPlant::new(s.model().params, s.model().load);
+    let nn = s
+        .controller()
         .get::<NnVscConfig>()
         .expect("nnvsc")
-        .build(&setup.design)
+        .build(s.design())
         .expect("gains");
-    let mut sim = Simulation::new(plant, nn, setup.reference.clone(), setup.stages, setup.sim)
-        .expect("valid");
+    let mut sim = Simulation::from_settings(plant, nn, s.reference().clone(), s.settings().clone());
     let mut sum = 0.0;
     let out = sim.run(&mut |smp: &Sample| sum += smp.u);
     (out.samples, sum)
 }
 
 fn bench_fig2(c: &mut Criterion) {
-    let sampled = Scenario::parse("").expect("the default scenario is Fig. 2");
-    let continuous = Scenario::parse_with(
+    let sampled = Loop::parse("").expect("the default scenario is Fig. 2");
+    let continuous = Loop::parse_with(
         "",
         "<bench>",
         &[
@@ -52,7 +50,7 @@ fn bench_fig2(c: &mut Criterion) {
     )
     .expect("valid overrides");
     // Sanity: the runs are whole and bounded.
-    let r = run(&sampled, Keep::Nothing).expect("run");
+    let r = run(&sampled, Keep::Nothing);
     assert!(!r.metrics.diverged);
     assert_eq!(simulate_direct(&sampled).0, 1001);
     assert_eq!(simulate_direct(&continuous).0, 100_001);
@@ -61,14 +59,14 @@ fn bench_fig2(c: &mut Criterion) {
     g.warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
     g.bench_function("sampled_0.01_run", |b| {
-        b.iter(|| run(black_box(&sampled), Keep::Nothing).expect("run"))
+        b.iter(|| run(black_box(&sampled), Keep::Nothing))
     });
     g.bench_function("sampled_0.01_simulate", |b| {
         b.iter(|| simulate_direct(black_box(&sampled)))
     });
     g.sample_size(10).measurement_time(Duration::from_secs(6));
     g.bench_function("continuous_1e-4_run", |b| {
-        b.iter(|| run(black_box(&continuous), Keep::Nothing).expect("run"))
+        b.iter(|| run(black_box(&continuous), Keep::Nothing))
     });
     g.bench_function("continuous_1e-4_simulate", |b| {
         b.iter(|| simulate_direct(black_box(&continuous)))

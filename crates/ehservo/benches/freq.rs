@@ -9,20 +9,18 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use ehservo::freq::measure::{sinestream, Input};
 use ehservo::freq::report::FreqOptions;
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
 
 fn bench_sinestream(c: &mut Criterion) {
     let fig2 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper/fig2.toml");
-    let setup = Scenario::load(&fig2, &[])
-        .and_then(|s| s.setup())
-        .expect("scenarios/paper/fig2.toml");
+    let setup = Loop::load(&fig2, &[]).expect("scenarios/paper/fig2.toml");
     let o = FreqOptions::defaults();
     let (lo, hi, n) = (
         o.measure_f_min,
-        0.9 * 0.5 / setup.sim.step,
+        0.9 * 0.5 / setup.sim().step,
         o.measure_points,
     );
     let freqs: Vec<f64> = (0..n)

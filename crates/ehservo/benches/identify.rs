@@ -11,7 +11,6 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use ehservo::identify::excite::{excite_to_dir, Loop, Phases, Signal, Spec};
 use ehservo::identify::{identify, Options};
-use ehservo::scenario::Scenario;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -45,7 +44,7 @@ fn data() -> PathBuf {
     .collect();
     let ex = dir.join("excite");
     excite_to_dir(&spec, None, &set, &ex).expect("excite");
-    let s = Scenario::load(&ex.join("scenario.toml"), &[]).expect("scenario");
+    let s = ehservo::scenario::Loop::load(&ex.join("scenario.toml"), &[]).expect("scenario");
     let run = dir.join("run");
     ehservo::output::run_to_dir(&run, &s, false).expect("run");
     run.join("trace.csv")

@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use ehservo::analysis::step::{difference, read_columns, step_metrics, StepMetrics};
 use ehservo::plot::{Dash, Figure, Panel, Series};
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use std::path::{Path, PathBuf};
 
 /// A trace: time (s), position (m), reference (m), spool (m), supply (Pa).
@@ -49,14 +49,13 @@ fn hopsan(name: &'static str, file: &str, pressure: bool) -> Result<Trace> {
 fn ours(name: &'static str, set: &[&str]) -> Result<Trace> {
     let path = repo().join("scenarios/hopsan/position-servo.toml");
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let s = Scenario::load(&path, &set)?;
+    let s = Loop::load(&path, &set)?;
     // The valve's gain: the spool in metres is Kv times the spool in volts.
     let kv = 0.01 / 10.0;
-    let every = ((1e-4 / s.simulation.step).round() as u32).max(1);
-    let r = run(&s, Keep::Every(every))?;
+    let every = ((1e-4 / s.sim().step).round() as u32).max(1);
+    let r = run(&s, Keep::Every(every));
     let sup = s
-        .setup()?
-        .plant
+        .plant()
         .states()
         .iter()
         .position(|g| g.key == "p_supply")

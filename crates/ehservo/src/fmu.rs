@@ -17,7 +17,7 @@
 //! position is `y` in m and the error's display `e_mm` and metric `e_max`
 //! are in mm, at the same value references.
 
-use crate::scenario::{ReferenceKind, Scenario};
+use crate::scenario::{Loop, ReferenceKind};
 use crate::simulation::Mode;
 use anyhow::{Context, Result};
 use std::io::Write;
@@ -28,7 +28,8 @@ pub use ehservo_scenario::fmi::*;
 /// The scenario as the FMU's `resources/scenario.toml`: every default
 /// filled in, the overrides applied. Refuses what the FMU could not
 /// rebuild from that file alone.
-pub fn resource_toml(s: &Scenario, kind: FmuKind) -> Result<String> {
+pub fn resource_toml(lp: &Loop, kind: FmuKind) -> Result<String> {
+    let s = lp.scenario();
     if s.reference.kind == ReferenceKind::Csv {
         crate::bad_input!(
             "`reference.kind` = \"csv\": an FMU carries only its scenario.toml, not the reference's table; use another kind of reference"
@@ -42,19 +43,20 @@ pub fn resource_toml(s: &Scenario, kind: FmuKind) -> Result<String> {
     let text = s.to_toml();
     // The FMU rebuilds its controller from this text: check that it does,
     // to the same scenario, before shipping it.
-    let back = Scenario::parse(&text)
+    let back = Loop::parse(&text)
         .map_err(|e| anyhow::anyhow!("the filled-in scenario does not parse back: {e}"))?;
     let mut expected = s.clone();
     expected.base_dir = None;
-    if back.resolved_table() != expected.resolved_table() {
+    if back.scenario().resolved_table() != expected.resolved_table() {
         anyhow::bail!("the filled-in scenario does not read back as the same scenario");
     }
     Ok(text)
 }
 
 /// `modelDescription.xml`.
-pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> String {
-    let cfg = s.sim_config();
+pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> String {
+    let s = lp.scenario();
+    let cfg = lp.sim();
     let horizon = cfg.steps as f64 * cfg.step;
     let what = match kind {
         FmuKind::Controller => format!(
@@ -62,7 +64,7 @@ pub fn model_description(kind: FmuKind, s: &Scenario, scenario_toml: &str) -> St
             s.controller.kind(),
             s.name,
             cfg.step,
-            match s.plant.axis() {
+            match lp.axis() {
                 crate::axis::Axis::Rotary => "theta, theta_dot, theta_ddot in rad, rad/s, rad/s2",
                 crate::axis::Axis::Linear => "y, y_dot, y_ddot in m, m/s, m/s2",
             }
@@ -179,13 +181,13 @@ pub fn default_binary() -> Option<std::path::PathBuf> {
 }
 
 /// Writes the FMU of `s` to `out` (a temporary sibling renamed into place).
-pub fn write_fmu(out: &Path, kind: FmuKind, s: &Scenario, binary: &Path) -> Result<()> {
+pub fn write_fmu(out: &Path, kind: FmuKind, lp: &Loop, binary: &Path) -> Result<()> {
     // The destination and the binary first: no work is done for an FMU
     // that could not be written.
     let dir = check_out(out)?;
     let so = read_binary(binary)?;
-    let toml_text = resource_toml(s, kind)?;
-    let xml = model_description(kind, s, &toml_text);
+    let toml_text = resource_toml(lp, kind)?;
+    let xml = model_description(kind, lp, &toml_text);
     let tmp = tempfile_in(&dir, out)?;
     // On SIGINT/SIGTERM the handler removes it (crate::interrupt).
     let _listed = crate::interrupt::TempFile::register(tmp.clone());
@@ -320,7 +322,7 @@ mod tests {
 
     #[test]
     fn the_model_description_lists_every_variable_once_with_its_unit() {
-        let s = Scenario::parse("name = \"fig2\"").unwrap();
+        let s = Loop::parse("name = \"fig2\"").unwrap();
         let toml_text = resource_toml(&s, FmuKind::Controller).unwrap();
         let x = model_description(FmuKind::Controller, &s, &toml_text);
         for v in variables(FmuKind::Controller) {
@@ -334,7 +336,7 @@ mod tests {
 
     #[test]
     fn what_an_fmu_cannot_carry_is_refused() {
-        let s = Scenario::parse("[simulation]\nmode = \"continuous\"\n").unwrap();
+        let s = Loop::parse("[simulation]\nmode = \"continuous\"\n").unwrap();
         let e = resource_toml(&s, FmuKind::Controller).unwrap_err();
         assert!(e.to_string().contains("`simulation.mode`"), "{e}");
         assert!(resource_toml(&s, FmuKind::ClosedLoop).is_ok());

@@ -32,6 +32,7 @@ pub mod bisection;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod fmu;
+pub mod formats;
 pub mod freq;
 pub mod identify;
 pub mod interrupt;

@@ -123,9 +123,9 @@ fn control_and_simulation_steps_do_not_allocate() {
 /// and `peek` (which steps a copy) allocate nothing once it is built.
 #[test]
 fn a_stepped_controller_does_not_allocate() {
-    use ehservo::scenario::Scenario;
+    use ehservo::scenario::Loop;
     use ehservo::stepper::ControllerStepper;
-    let s = Scenario::parse("name = \"fig2\"\n").unwrap();
+    let s = Loop::parse("name = \"fig2\"\n").unwrap();
     let mut c = ControllerStepper::new(&s).unwrap();
     let mut parts = vec![0.0; c.signals().len()];
     let before = allocs();

@@ -69,7 +69,9 @@
 //! `model_assisted = true` the observer only sees the model error and the
 //! default bandwidths track at 0.01 s (`scenarios/league/adrc-fig2.toml`).
 
-use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
+use super::{
+    flags, Config, Controller, Design, LinearForm, Measurement, Output, Signal, Signals, Tunable,
+};
 use crate::error::{positive, ParamError};
 use crate::math::Real;
 
@@ -229,6 +231,26 @@ impl Config for AdrcConfig {
         Tunable::log("omega_o", 5.0, 2000.0),
     ];
     type Controller = Adrc;
+    type Law<F: Real> = Adrc<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<Adrc<F>, ParamError> {
+        Ok(self.build(d)?.cast())
+    }
+
+    /// The observer and the static law, with the nominal a_i when
+    /// `model_assisted`.
+    fn linear(&self, d: &Design) -> Option<Result<LinearForm, ParamError>> {
+        Some(self.build(d).map(|c| LinearForm::Eso {
+            k: c.feedback_gains(),
+            beta: c.observer_gains(),
+            b0: c.b0(),
+            a: if self.model_assisted {
+                d.model.coeffs.as_array()
+            } else {
+                [0.0; 3]
+            },
+            u_limit: self.u_limit.unwrap_or(f64::INFINITY),
+        }))
+    }
 
     fn build(&self, d: &Design) -> Result<Adrc, ParamError> {
         let a = d.model.coeffs.as_array();

@@ -267,6 +267,10 @@ impl Config for ArcConfig {
         Tunable::log("adapt_time", 0.01, 100.0),
     ];
     type Controller = Arc;
+    type Law<F: Real> = Arc<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<Arc<F>, ParamError> {
+        Ok(self.build(d)?.cast())
+    }
 
     fn build(&self, d: &Design) -> Result<Arc, ParamError> {
         non_negative("bound_a", self.bound_a)?;

@@ -255,6 +255,10 @@ impl Config for BacksteppingConfig {
         Tunable::log("adapt_time", 0.01, 100.0),
     ];
     type Controller = Backstepping;
+    type Law<F: Real> = Backstepping<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<Backstepping<F>, ParamError> {
+        Ok(self.build(d)?.cast())
+    }
 
     fn build(&self, d: &Design) -> Result<Backstepping, ParamError> {
         let c1 = positive("c1", self.c1)?;

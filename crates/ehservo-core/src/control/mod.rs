@@ -242,6 +242,14 @@ pub trait Signals: Copy + Default {
     /// Writes the values in the order of [`Signals::SIGNALS`];
     /// `out.len() >= SIGNALS.len()`.
     fn write(&self, out: &mut [f64]);
+    /// The parts whose [`Signals::write`] gives `v` (its inverse), for a
+    /// host that fills, from a board's values, the diagnostics that need
+    /// the true plant (`ehservo-wire`). `None` (the default): this kind's
+    /// parts are not rebuilt, because none of its diagnostics needs the
+    /// plant.
+    fn rebuild<F: Real>(_v: &[F]) -> Option<Self> {
+        None
+    }
 }
 
 /// No parts at all.
@@ -390,7 +398,125 @@ pub trait Config {
     /// The controller built: plain data, so it can be moved to (and shared
     /// with) another thread (a Python `Controller` stepped from a thread).
     type Controller: Controller<State: Send + Sync> + Clone + Send + Sync;
+    /// The same controller computing in the float type `F` (a board's
+    /// `f32`): what [`Config::build_in`] gives.
+    type Law<F: Real>: Controller<F> + Clone;
     /// Checks every parameter (all of them, whether or not this law reads
     /// them) and builds the controller; the error names the parameter.
     fn build(&self, design: &Design) -> Result<Self::Controller, ParamError>;
+    /// The controller designed in f64 ([`Config::build`], as the simulator
+    /// designs it), then cast to `F` with its constants recomputed in `F`:
+    /// what a board runs (`ehservo-wire`'s `AnyLaw`).
+    fn build_in<F: Real>(&self, design: &Design) -> Result<Self::Law<F>, ParamError>;
+    /// The law as a linear system while its output limit does not act
+    /// ([`LinearForm`]), for the frequency domain; `None` (the default):
+    /// the law is nonlinear, and `ehservo linearize` refuses it by its kind.
+    fn linear(&self, _design: &Design) -> Option<Result<LinearForm, ParamError>> {
+        None
+    }
 }
+
+/// A linear law's gains, in the form the frequency domain builds its
+/// state-space model from (`ehservo::freq::controllers`, whose module doc
+/// gives the equations). Each variant is one family of linear laws;
+/// another linear kind returns the form it belongs to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LinearForm {
+    /// `u = ff + kp·(θd − θm) + I + kd·(θ̇d − (θm − θf)/tf)`,
+    /// `İ = ki·(θd − θm)`, `θ̇f = (θm − θf)/tf`, with the reference
+    /// feed-forward `ff = Σ feedforward[i]·z[i]` (z = θd, θ̇d, θ̈d, θ⃛d).
+    Pid {
+        /// Proportional gain (V/rad).
+        kp: f64,
+        /// Integral gain (V/(rad·s)).
+        ki: f64,
+        /// Derivative gain (V·s/rad).
+        kd: f64,
+        /// Derivative filter's time constant (s).
+        tf: f64,
+        /// The feed-forward's weights of θd, θ̇d, θ̈d, θ⃛d.
+        feedforward: [f64; 4],
+        /// The output limit under which the law is linear (V; infinite: none).
+        u_limit: f64,
+    },
+    /// A linear extended-state observer with inputs (θm, u) and the static
+    /// law `u = (k·(z_d − ẑ) + θ⃛d − z4 + a·ẑ)/b0` (the ADRC).
+    Eso {
+        /// Feedback gains k1, k2, k3.
+        k: [f64; 3],
+        /// Observer gains β1..β4.
+        beta: [f64; 4],
+        /// The input gain b0 the observer assumes.
+        b0: f64,
+        /// The nominal a1, a2, a3 the observer and law use (0 without a model).
+        a: [f64; 3],
+        /// The output limit under which the law is linear (V; infinite: none).
+        u_limit: f64,
+    },
+}
+
+/// `a == b`, for strings, in a `const` context: the check that a kind's
+/// line in [`controller_kinds!`] names the kind as its `Config::KIND` does.
+pub const fn str_eq(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// The one list of controller kinds, in registry order: each kind's
+/// variant name, the name a scenario gives it (`controller.kind`), and its
+/// parameter type. Every table that must know the kinds is generated from
+/// it by a macro given as `$callback`, which receives
+/// `Variant "name" => Type, ...`: the scenario's registry and its JSON
+/// Schema (`ehservo-scenario`), the wire's `WireController` and the board's
+/// `AnyLaw` (`ehservo-wire`). Adding a controller is its file in
+/// `control/` (the law and its [`Config`]) and one line here.
+///
+/// ```
+/// macro_rules! names {
+///     ($($variant:ident $name:literal => $ty:ty),* $(,)?) => {
+///         [$($name),*]
+///     };
+/// }
+/// let kinds = ehservo_core::controller_kinds!(names);
+/// assert_eq!(kinds[0], "nnvsc");
+/// assert!(kinds.contains(&"vsc-sat") && kinds.contains(&"pid"));
+/// ```
+#[macro_export]
+macro_rules! controller_kinds {
+    ($callback:ident) => {
+        $callback! {
+            Nnvsc "nnvsc" => $crate::control::sliding::NnVscConfig,
+            Vsc "vsc" => $crate::control::sliding::VscConfig,
+            VscSat "vsc-sat" => $crate::control::sliding::VscSatConfig,
+            Pid "pid" => $crate::control::pid::PidConfig,
+            NnRobust "nn-robust" => $crate::control::nn_robust::NnRobustConfig,
+            Adrc "adrc" => $crate::control::adrc::AdrcConfig,
+            Sta "sta" => $crate::control::sta::StaConfig,
+            Arc "arc" => $crate::control::arc::ArcConfig,
+            Backstepping "backstepping" => $crate::control::backstepping::BacksteppingConfig,
+            OpenLoop "open-loop" => $crate::control::open_loop::OpenLoopConfig,
+        }
+    };
+}
+
+/// Each line of [`controller_kinds!`] names its kind as the kind's
+/// `Config::KIND` does: a line that does not, does not compile.
+macro_rules! check_kind_names {
+    ($($variant:ident $name:literal => $ty:ty),* $(,)?) => {
+        $(const _: () = assert!(
+            str_eq(<$ty as Config>::KIND, $name),
+            concat!("controller_kinds!: the line of `", $name, "` is not its Config::KIND")
+        );)*
+    };
+}
+controller_kinds!(check_kind_names);

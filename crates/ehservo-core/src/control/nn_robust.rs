@@ -209,6 +209,17 @@ impl<T: Real> Signals for RobustParts<T> {
         self.sliding.write(&mut out[..N_SLIDING]);
         out[N_SLIDING] = self.leak.to_f64();
     }
+
+    /// The inverse of [`RobustParts::write`].
+    fn rebuild<F: Real>(v: &[F]) -> Option<Self> {
+        if v.len() < Self::SIGNALS.len() {
+            return None;
+        }
+        Some(RobustParts {
+            sliding: SlidingParts::rebuild(&v[..N_SLIDING])?,
+            leak: T::of(v[N_SLIDING].to_f64()),
+        })
+    }
 }
 
 /// Theorem 3's controller with a classical robust weight law.
@@ -471,6 +482,10 @@ impl Config for NnRobustConfig {
         Tunable::log("nu", 1e-3, 10.0),
     ];
     type Controller = NnRobust;
+    type Law<F: Real> = NnRobust<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<NnRobust<F>, ParamError> {
+        self.build(d)?.cast()
+    }
     fn build(&self, d: &Design) -> Result<NnRobust, ParamError> {
         self.nnvsc().validate()?;
         self.weight_law().validate()?;

@@ -77,6 +77,10 @@ impl Config for OpenLoopConfig {
     const KIND: &'static str = "open-loop";
     const USES_SURFACE: bool = false;
     type Controller = OpenLoop;
+    type Law<F: Real> = OpenLoop<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<OpenLoop<F>, ParamError> {
+        Ok(self.build(d)?.cast())
+    }
 
     fn build(&self, _d: &Design) -> Result<OpenLoop, ParamError> {
         if !self.volts_per_deg.is_finite() {

@@ -48,7 +48,9 @@
 //! H. E. Merritt, *Hydraulic Control Systems*, Wiley 1967 (feedforward of
 //! the valve-controlled motor's nominal model).
 
-use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
+use super::{
+    flags, Config, Controller, Design, LinearForm, Measurement, Output, Signal, Signals, Tunable,
+};
 use crate::error::{positive, ParamError};
 use crate::math::{sqrt, Real};
 
@@ -230,6 +232,34 @@ impl Config for PidConfig {
         Tunable::log("kd", 1e-4, 10.0),
     ];
     type Controller = Pid;
+    type Law<F: Real> = Pid<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<Pid<F>, ParamError> {
+        Ok(self.build(d)?.cast())
+    }
+
+    /// The PID with its reference feed-forward
+    /// `(θ⃛d + ā1·θd + ā2·θ̇d + ā3·θ̈d)/b̄0` when `feedforward` is on.
+    fn linear(&self, d: &Design) -> Option<Result<LinearForm, ParamError>> {
+        Some(self.build(d).map(|pid| {
+            let (kp, ki, kd) = pid.gains();
+            let (tf, _) = pid.times();
+            let a = d.model.coeffs.as_array();
+            let b0 = d.model.b_at_rest();
+            let feedforward = if self.feedforward {
+                [a[0] / b0, a[1] / b0, a[2] / b0, 1.0 / b0]
+            } else {
+                [0.0; 4]
+            };
+            LinearForm::Pid {
+                kp,
+                ki,
+                kd,
+                tf,
+                feedforward,
+                u_limit: self.u_limit.unwrap_or(f64::INFINITY),
+            }
+        }))
+    }
 
     fn build(&self, d: &Design) -> Result<Pid, ParamError> {
         let a = d.model.coeffs.as_array();

@@ -122,6 +122,34 @@ impl<T: Real> Signals for SlidingParts<T> {
             *o = v.to_f64();
         }
     }
+
+    /// The inverse of [`SlidingParts::write`] (the lumped uncertainty
+    /// needs the true plant: a PIL host fills it from a board's parts).
+    fn rebuild<F: Real>(v: &[F]) -> Option<Self> {
+        if v.len() < Self::SIGNALS.len() {
+            return None;
+        }
+        let g = |i: usize| T::of(v[i].to_f64());
+        // The order of `write` (held by ehservo-wire's rebuild_inverts_write).
+        Some(SlidingParts {
+            u_eq: g(0),
+            u_sw: g(1),
+            sigma: g(2),
+            sigma_delta: g(3),
+            wphi: g(4),
+            uncertainty: g(5),
+            w_norm: g(6),
+            w_1: g(7),
+            w_128: g(8),
+            mu: g(9),
+            norm_e: g(10),
+            b_bar: g(11),
+            e: g(12),
+            phi_norm: g(13),
+            xi: g(14),
+            gain: g(15),
+        })
+    }
 }
 
 impl<T: Real> SlidingParts<T> {
@@ -332,6 +360,10 @@ impl Config for NnVscConfig {
         Tunable::log("alpha", 10.0, 1e4),
     ];
     type Controller = NnVsc;
+    type Law<F: Real> = NnVsc<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<NnVsc<F>, ParamError> {
+        self.build(d)?.cast()
+    }
     fn build(&self, d: &Design) -> Result<NnVsc, ParamError> {
         let rbf = self.0.validate()?;
         NnVsc::try_new(d.model, d.surface, self.0.nnvsc(), rbf)
@@ -347,6 +379,10 @@ impl Config for VscConfig {
         Tunable::linear("bound_b", 0.0, 0.9),
     ];
     type Controller = Vsc;
+    type Law<F: Real> = Vsc<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<Vsc<F>, ParamError> {
+        self.build(d)?.cast()
+    }
     fn build(&self, d: &Design) -> Result<Vsc, ParamError> {
         self.0.validate()?;
         Vsc::try_new(d.model, d.surface, self.0.vsc(false))
@@ -364,6 +400,10 @@ impl Config for VscSatConfig {
         Tunable::log("mu", 1e-2, 1e3),
     ];
     type Controller = Vsc;
+    type Law<F: Real> = Vsc<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<Vsc<F>, ParamError> {
+        self.build(d)?.cast()
+    }
     fn build(&self, d: &Design) -> Result<Vsc, ParamError> {
         self.0.validate()?;
         Vsc::try_new(d.model, d.surface, self.0.vsc(true))

@@ -196,6 +196,10 @@ impl Config for StaConfig {
     const TUNABLE: &'static [Tunable] =
         &[Tunable::log("k1", 1.0, 1e4), Tunable::log("k2", 1.0, 1e7)];
     type Controller = Sta;
+    type Law<F: Real> = Sta<F>;
+    fn build_in<F: Real>(&self, d: &Design) -> Result<Sta<F>, ParamError> {
+        Ok(self.build(d)?.cast())
+    }
 
     fn build(&self, d: &Design) -> Result<Sta, ParamError> {
         let k1 = self.k1.map(|k| positive("k1", k)).transpose()?;

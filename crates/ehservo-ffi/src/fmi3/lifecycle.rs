@@ -4,7 +4,7 @@
 
 use super::{build, log_to, text, with, Body, Instance, LogFn, Phase, Status, ERROR, FATAL, OK};
 use ehservo_scenario::fmi::check_token;
-use ehservo_scenario::scenario::Scenario;
+use ehservo_scenario::scenario::Loop;
 use std::ffi::{c_char, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -50,7 +50,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
         let toml_text = ehservo_scenario::input::read_text(&path)
             .map_err(|e| fail(format!("reading {}: {e}", path.display())))?;
         let kind = check_token(&token, &toml_text).map_err(fail)?;
-        let scenario = Scenario::load(&path, &[]).map_err(|e| fail(e.to_string()))?;
+        let scenario = Loop::load(&path, &[]).map_err(|e| fail(e.to_string()))?;
         let (body, h) = build(kind, &scenario).map_err(fail)?;
         Ok(Box::new(Instance {
             name,

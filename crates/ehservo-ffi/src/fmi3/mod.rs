@@ -39,7 +39,7 @@ pub use unsupported::*;
 pub use variables::*;
 
 use ehservo_scenario::fmi::FmuKind;
-use ehservo_scenario::scenario::Scenario;
+use ehservo_scenario::scenario::Loop;
 use ehservo_scenario::simulation::Sample;
 use ehservo_scenario::stepper::{ControllerStepper, LawOutput, LoopStepper};
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
@@ -86,7 +86,7 @@ struct Instance {
     log: LogFn,
     logging_on: bool,
     kind: FmuKind,
-    scenario: Scenario,
+    scenario: Loop,
     phase: Phase,
     t0: f64,
     h: f64,
@@ -94,7 +94,7 @@ struct Instance {
     body: Body,
 }
 
-fn build(kind: FmuKind, s: &Scenario) -> Result<(Body, f64), String> {
+fn build(kind: FmuKind, s: &Loop) -> Result<(Body, f64), String> {
     match kind {
         FmuKind::Controller => {
             let ctl = ControllerStepper::new(s).map_err(|e| e.to_string())?;
@@ -110,7 +110,7 @@ fn build(kind: FmuKind, s: &Scenario) -> Result<(Body, f64), String> {
             ))
         }
         FmuKind::ClosedLoop => {
-            let mut sim = LoopStepper::new(s).map_err(|e| e.to_string())?;
+            let mut sim = LoopStepper::new(s);
             let h = sim.period();
             // The sample at t = 0 depends on nothing the importer sets.
             let last = sim

@@ -13,14 +13,18 @@
 //! full list of keys; [`Scenario::default`] is the paper's Fig. 2 case.
 
 mod build;
+mod closed_loop;
 pub mod json_schema;
 mod overrides;
 mod plants;
 mod reference;
 mod registry;
 mod sections;
+pub(crate) mod tagged;
 
-pub use build::Setup;
+pub use build::MAX_DRAWS;
+pub use closed_loop::{Loop, LoopPlant, LoopVisit, Typed};
+pub use ehservo_sim::error::{KeyError, Reason};
 pub use overrides::{apply_override, line_col, parse_value, set_path};
 pub use plants::{AnyPlant, PlantCfg, PlantVisit, DEFAULT_MODEL};
 pub use reference::{
@@ -38,8 +42,10 @@ use overrides::{clean_path, first_line, locate};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
+use tagged::{section_error, table_error};
 
-/// A bad scenario: which file, which key, where, and why.
+/// A bad scenario: which file, which key, where, and why. Every one is
+/// bad input (exit code 2); [`Reason`] says which kind.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScenarioError {
     /// The file (or `<--set>` / `<string>`).
@@ -49,7 +55,7 @@ pub struct ScenarioError {
     /// 1-based line and column, when known.
     pub line_col: Option<(usize, usize)>,
     /// Why.
-    pub reason: String,
+    pub reason: Reason,
 }
 
 impl fmt::Display for ScenarioError {
@@ -67,6 +73,18 @@ impl fmt::Display for ScenarioError {
 }
 
 impl std::error::Error for ScenarioError {}
+
+impl ScenarioError {
+    /// The key error `e`, in `file`, without a position.
+    pub fn in_file(file: impl Into<String>, e: KeyError) -> Self {
+        Self {
+            file: file.into(),
+            key: e.key,
+            line_col: None,
+            reason: e.reason,
+        }
+    }
+}
 
 /// A whole scenario. Every field has the paper's Fig. 2 value by default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
@@ -120,14 +138,16 @@ pub struct Scenario {
 pub const MAX_STEPS: u64 = 20_000_000;
 
 impl Scenario {
-    /// Reads, parses, overrides and validates a scenario file.
-    pub fn load(path: &Path, overrides: &[String]) -> Result<Scenario, ScenarioError> {
+    /// Reads and parses a scenario file and applies the `key.path=value`
+    /// overrides; returns it with the file's text. Not checked beyond
+    /// the keys' types: [`Loop::load`] reads and builds.
+    pub fn read(path: &Path, overrides: &[String]) -> Result<(Scenario, String), ScenarioError> {
         let file = path.display().to_string();
         let text = crate::input::read_text(path).map_err(|reason| ScenarioError {
             file: file.clone(),
             key: String::new(),
             line_col: None,
-            reason: format!("the scenario file {reason}"),
+            reason: Reason::Other(format!("the scenario file {reason}")),
         })?;
         let dir = path.parent().map(Path::to_path_buf);
         let mut s = Self::parse_in(&text, &file, overrides, dir)?;
@@ -137,32 +157,20 @@ impl Scenario {
                 .map(|x| x.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "scenario".into());
         }
-        Ok(s)
+        Ok((s, text))
     }
 
-    /// Parses and validates TOML text (no overrides).
-    pub fn parse(text: &str) -> Result<Scenario, ScenarioError> {
-        Self::parse_with(text, "<string>", &[])
-    }
-
-    /// Parses TOML text, applies `key.path=value` overrides, validates. A
-    /// relative `reference.file` is read from the working directory.
-    pub fn parse_with(
-        text: &str,
-        file: &str,
-        overrides: &[String],
-    ) -> Result<Scenario, ScenarioError> {
-        Self::parse_in(text, file, overrides, None)
-    }
-
-    /// As [`Scenario::parse_with`], for a file in `base_dir`.
+    /// Parses TOML text of `file` in `base_dir` (a relative
+    /// `reference.file` is read from it) and applies `key.path=value`
+    /// overrides. Not checked beyond the keys' types: [`Loop::parse_in`]
+    /// parses and builds.
     pub fn parse_in(
         text: &str,
         file: &str,
         overrides: &[String],
         base_dir: Option<std::path::PathBuf>,
     ) -> Result<Scenario, ScenarioError> {
-        let err = |key: String, line_col, reason: String| ScenarioError {
+        let err = |key: String, line_col, reason: Reason| ScenarioError {
             file: file.to_string(),
             key,
             line_col,
@@ -171,26 +179,19 @@ impl Scenario {
         // Pass 1, from the text: errors carry a key path and a position.
         let de = toml::Deserializer::parse(text).map_err(|e| {
             let lc = e.span().map(|s| line_col(text, s.start));
-            err(
-                String::new(),
-                lc,
-                format!("TOML syntax error: {}", first_line(e.message())),
-            )
+            err(String::new(), lc, Reason::Syntax(first_line(e.message())))
         })?;
         let scenario: Scenario = serde_path_to_error::deserialize(de).map_err(|e| {
-            if let Some(other) = other_format(text, file) {
-                return err(String::new(), None, other);
-            }
             let key = clean_path(&e.path().to_string());
             let inner = e.into_inner();
             if key == "controller" {
-                return controller_error(text, file);
+                return section_error::<ControllerCfg>(text, file);
             }
             if key == "plant" {
-                return plant_error(text, file);
+                return section_error::<PlantCfg>(text, file);
             }
             let lc = inner.span().map(|s| line_col(text, s.start));
-            err(key, lc, first_line(inner.message()))
+            err(key, lc, Reason::Serde(first_line(inner.message())))
         })?;
         // serde reads a fixed-size array from the first elements of a longer
         // one: compare every array of the file with what was read.
@@ -198,103 +199,66 @@ impl Scenario {
             toml::from_str::<toml::Table>(text),
             toml::Table::try_from(&scenario),
         ) {
-            if let Some((key, reason)) = array_lengths(&raw, &typed, "") {
-                let lc = locate(text, &key);
-                return Err(err(key, lc, reason));
+            if let Some(e) = array_lengths(&raw, &typed, "") {
+                let lc = locate(text, &e.key);
+                return Err(err(e.key, lc, e.reason));
             }
         }
         let mut scenario = if overrides.is_empty() {
             scenario
         } else {
-            // Pass 2: apply the overrides to the document and read it again.
-            let mut table: toml::Table = toml::from_str(text).map_err(|e| {
-                err(
-                    String::new(),
-                    None,
-                    format!("TOML syntax error: {}", first_line(e.message())),
-                )
-            })?;
-            for o in overrides {
-                apply_override(&mut table, o).map_err(|(k, r)| ScenarioError {
-                    file: "--set".into(),
-                    key: k,
-                    line_col: None,
-                    reason: r,
-                })?;
-            }
-            let after = format!("{file} (after --set)");
-            let controller = table.get("controller").cloned();
-            let plant = table.get("plant").cloned();
-            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-                let key = clean_path(&e.path().to_string());
-                match (key.as_str(), controller, plant) {
-                    ("controller", Some(toml::Value::Table(t)), _) => {
-                        controller_table_error(t, &after, None)
-                    }
-                    ("plant", _, Some(toml::Value::Table(t))) => plant_table_error(t, &after, None),
-                    _ => ScenarioError {
-                        file: after.clone(),
-                        key,
-                        line_col: None,
-                        reason: first_line(&e.into_inner().to_string()),
-                    },
-                }
-            })?
+            Self::overridden(text, file, overrides)?
         };
         scenario.base_dir = base_dir;
-        scenario.validate().map_err(|(key, reason)| {
-            // A key set by --set is blamed on the flag, not on the file's
-            // line; any other key, when flags were given, on the file as
-            // changed by them, without a line (the flag may be the cause:
-            // `--set simulation.step=0.003` breaks the file's horizon).
-            let flagged = overrides.iter().any(|o| {
-                let path = o.split_once('=').map_or(o.as_str(), |(p, _)| p).trim();
-                path == key
-                    || key.starts_with(&format!("{path}."))
-                    || path.starts_with(&format!("{key}."))
-            });
-            if flagged {
-                ScenarioError {
-                    file: "--set".into(),
-                    key,
-                    line_col: None,
-                    reason,
-                }
-            } else if overrides.is_empty() {
-                let lc = locate(text, &key);
-                err(key, lc, reason)
-            } else {
-                ScenarioError {
-                    file: format!("{file} (after --set)"),
-                    key,
-                    line_col: None,
-                    reason,
-                }
-            }
-        })?;
         Ok(scenario)
     }
 
-    /// An error in this scenario (no file position: it was already parsed).
-    fn error(&self, key: String, reason: String) -> ScenarioError {
-        ScenarioError {
-            file: self.name.clone(),
-            key,
+    /// Pass 2 of [`Scenario::parse_in`]: the overrides applied to the
+    /// document, which is read again.
+    fn overridden(text: &str, file: &str, overrides: &[String]) -> Result<Scenario, ScenarioError> {
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| ScenarioError {
+            file: file.to_string(),
+            key: String::new(),
             line_col: None,
-            reason,
+            reason: Reason::Syntax(first_line(e.message())),
+        })?;
+        for o in overrides {
+            apply_override(&mut table, o).map_err(|e| ScenarioError::in_file("--set", e))?;
         }
+        let after = format!("{file} (after --set)");
+        Self::from_table(table, &after)
     }
 
-    /// The scenario's sections built and checked together: the one place
-    /// that turns a scenario into what a simulation is made of.
-    pub fn setup(&self) -> Result<Setup, ScenarioError> {
-        Setup::new(self).map_err(|(key, reason)| self.error(key, reason))
+    /// The scenario of a TOML table (named `file` in errors).
+    fn from_table(table: toml::Table, file: &str) -> Result<Scenario, ScenarioError> {
+        let controller = table.get("controller").cloned();
+        let plant = table.get("plant").cloned();
+        serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+            let key = clean_path(&e.path().to_string());
+            match (key.as_str(), controller, plant) {
+                ("controller", Some(toml::Value::Table(t)), _) => {
+                    table_error::<ControllerCfg>(t, file, None)
+                }
+                ("plant", _, Some(toml::Value::Table(t))) => table_error::<PlantCfg>(t, file, None),
+                _ => ScenarioError {
+                    file: file.to_string(),
+                    key,
+                    line_col: None,
+                    reason: Reason::Serde(first_line(&e.into_inner().to_string())),
+                },
+            }
+        })
     }
 
-    /// Every check that serde's types cannot express. Returns the key path
-    /// and the reason of the first failure.
-    pub fn validate(&self) -> Result<(), (String, String)> {
-        Setup::new(self).map(|_| ())
+    /// An error of this scenario's key (no file position: it was already
+    /// parsed; its name stands for the file).
+    pub(crate) fn error(&self, e: KeyError) -> ScenarioError {
+        ScenarioError::in_file(self.name.clone(), e)
+    }
+
+    /// This scenario checked and built ([`Loop::new`]).
+    pub fn validate(self) -> Result<Loop, ScenarioError> {
+        Loop::new(self)
     }
 
     /// This scenario as TOML, with the plant family's defaults written
@@ -348,48 +312,20 @@ impl Scenario {
 }
 
 impl Scenario {
-    /// This scenario with some keys set to new values (each a dotted path
-    /// and a TOML value), validated. Cheaper than re-parsing text: used by
-    /// sweeps for every run.
-    pub fn with_values(&self, values: &[(String, toml::Value)]) -> Result<Scenario, ScenarioError> {
-        self.with_values_built(values).map(|(s, _)| s)
-    }
-
-    /// As [`Scenario::with_values`], also returning the [`Setup`] its
-    /// validation built, so that a sweep runs it without building it again.
-    pub fn with_values_built(
-        &self,
-        values: &[(String, toml::Value)],
-    ) -> Result<(Scenario, Setup), ScenarioError> {
-        self.with_values_built_on(self.table()?, values)
-    }
-
-    /// This scenario with `uncertainty.seed = seed`, and its set-up: what
-    /// [`Scenario::with_values_built`] gives for that one value when this
-    /// scenario survives its TOML round trip (a study checks that once),
-    /// without the round trip (a Monte Carlo run over the seed alone).
-    pub fn with_seed_built(&self, seed: u64) -> Result<(Scenario, Setup), ScenarioError> {
-        let mut s = self.clone();
-        s.uncertainty.seed = seed;
-        let setup = s.setup()?; // s.name is self.name
-        Ok((s, setup))
-    }
-
-    /// This scenario as a TOML table: what [`Scenario::with_values_built_on`]
+    /// This scenario as a TOML table: what [`Scenario::with_values_on`]
     /// starts from.
     pub fn table(&self) -> Result<toml::Table, ScenarioError> {
-        toml::Table::try_from(self).map_err(|e| self.error(String::new(), e.to_string()))
+        toml::Table::try_from(self).map_err(|e| self.error(KeyError::new("", e.to_string())))
     }
 
-    /// As [`Scenario::with_values_built`], from `table`, which must be this
-    /// scenario's own [`Scenario::table`]: a sweep makes it once, not once
-    /// for every run.
-    pub fn with_values_built_on(
+    /// This scenario with some keys set to new values (each a dotted path
+    /// and a TOML value), from `table`, which must be this scenario's own
+    /// [`Scenario::table`]. Not built: [`Loop::with_values_on`] builds it.
+    pub fn with_values_on(
         &self,
         mut table: toml::Table,
         values: &[(String, toml::Value)],
-    ) -> Result<(Scenario, Setup), ScenarioError> {
-        let fail = |key: String, reason: String| self.error(key, reason);
+    ) -> Result<Scenario, ScenarioError> {
         // A study may switch `controller.kind`. Between kinds with the same
         // keys (nnvsc, vsc, vsc-sat) the base's values carry over; to a kind
         // with other keys the table starts from that kind's defaults (the
@@ -419,169 +355,55 @@ impl Scenario {
             table.insert("reference".into(), toml::Value::Table(toml::Table::new()));
         }
         for (k, v) in values {
-            set_path(&mut table, k, v.clone()).map_err(|(k, r)| fail(k, r))?;
+            set_path(&mut table, k, v.clone()).map_err(|e| self.error(e))?;
         }
-        let controller = table.get("controller").cloned();
-        let plant = table.get("plant").cloned();
-        let mut s: Scenario =
-            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
-                let key = clean_path(&e.path().to_string());
-                match (key.as_str(), controller, plant) {
-                    ("controller", Some(toml::Value::Table(t)), _) => {
-                        controller_table_error(t, &self.name, None)
-                    }
-                    ("plant", _, Some(toml::Value::Table(t))) => {
-                        plant_table_error(t, &self.name, None)
-                    }
-                    _ => fail(key, first_line(&e.into_inner().to_string())),
-                }
-            })?;
+        let mut s = Self::from_table(table, &self.name)?;
         s.base_dir.clone_from(&self.base_dir);
-        let setup = Setup::new(&s).map_err(|(k, r)| fail(k, r))?;
-        Ok((s, setup))
+        Ok(s)
+    }
+}
+
+/// The key error `e` of a scenario read from `text` of `file` with
+/// `overrides`, placed: a key set by `--set` is blamed on the flag, not on
+/// the file's line; any other key, when flags were given, on the file as
+/// changed by them, without a line (the flag may be the cause:
+/// `--set simulation.step=0.003` breaks the file's horizon).
+pub(crate) fn placed(e: KeyError, text: &str, file: &str, overrides: &[String]) -> ScenarioError {
+    let key = &e.key;
+    let flagged = overrides.iter().any(|o| {
+        let path = o.split_once('=').map_or(o.as_str(), |(p, _)| p).trim();
+        path == key || key.starts_with(&format!("{path}.")) || path.starts_with(&format!("{key}."))
+    });
+    if flagged {
+        ScenarioError::in_file("--set", e)
+    } else if overrides.is_empty() {
+        let lc = locate(text, key);
+        ScenarioError {
+            file: file.to_string(),
+            key: e.key,
+            line_col: lc,
+            reason: e.reason,
+        }
+    } else {
+        ScenarioError::in_file(format!("{file} (after --set)"), e)
     }
 }
 
 /// The first array of `raw` whose length differs from the same key's in
 /// `typed`: its key path and the reason.
-fn array_lengths(raw: &toml::Table, typed: &toml::Table, prefix: &str) -> Option<(String, String)> {
+fn array_lengths(raw: &toml::Table, typed: &toml::Table, prefix: &str) -> Option<KeyError> {
     raw.iter().find_map(|(k, v)| {
         let key = format!("{prefix}{k}");
         match (v, typed.get(k)?) {
-            (toml::Value::Array(a), toml::Value::Array(b)) if a.len() != b.len() => {
-                Some((key, format!("expected {} values, got {}", b.len(), a.len())))
-            }
+            (toml::Value::Array(a), toml::Value::Array(b)) if a.len() != b.len() => Some(
+                KeyError::new(key, format!("expected {} values, got {}", b.len(), a.len())),
+            ),
             (toml::Value::Table(a), toml::Value::Table(b)) => {
                 array_lengths(a, b, &format!("{key}."))
             }
             _ => None,
         }
     })
-}
-
-/// The precise error of a `[controller]` table that did not deserialise:
-/// the key inside it, with its position in `text` when there is one.
-fn controller_table_error(table: toml::Table, file: &str, text: Option<&str>) -> ScenarioError {
-    let (k, reason) = match ControllerCfg::from_toml(table) {
-        Err(e) => e,
-        Ok(_) => (String::new(), "invalid controller table".into()),
-    };
-    let key = if k.is_empty() {
-        "controller".to_string()
-    } else {
-        format!("controller.{k}")
-    };
-    let line_col = text.and_then(|t| locate(t, &key).or_else(|| locate(t, "controller")));
-    ScenarioError {
-        file: file.to_string(),
-        key,
-        line_col,
-        reason,
-    }
-}
-
-/// The precise error of a `[plant]` table that did not deserialise: the
-/// key inside it, with its position in `text` when there is one.
-fn plant_table_error(table: toml::Table, file: &str, text: Option<&str>) -> ScenarioError {
-    let (k, reason) = match PlantCfg::from_toml(table) {
-        Err(e) => e,
-        Ok(_) => (String::new(), "invalid plant table".into()),
-    };
-    let key = if k.is_empty() {
-        "plant".to_string()
-    } else {
-        format!("plant.{k}")
-    };
-    let line_col = text.and_then(|t| locate(t, &key).or_else(|| locate(t, "plant")));
-    ScenarioError {
-        file: file.to_string(),
-        key,
-        line_col,
-        reason,
-    }
-}
-
-/// What a TOML file that does not read as a scenario is instead, from its
-/// top-level keys (which a scenario never has), and the command that takes
-/// it: the reason `ehservo run` gives for a study, tune, league file or the
-/// reproduction's manifest, instead of "unknown field `axis`".
-pub fn other_format(text: &str, file: &str) -> Option<String> {
-    let t: toml::Table = toml::from_str(text).ok()?;
-    let has = |k: &str| t.contains_key(k);
-    let (what, key, command) =
-        if let Some(k) = ["axis", "monte_carlo", "base"].into_iter().find(|k| has(k)) {
-            ("a study", k, "ehservo sweep FILE --out DIR")
-        } else if let Some(k) = ["tuning", "margin", "scenario"]
-            .into_iter()
-            .find(|k| has(k))
-            .or_else(|| {
-                t.get("controller")
-                    .filter(|c| c.is_array())
-                    .map(|_| "controller")
-            })
-        {
-            ("a league suite", k, "ehservo league FILE --out DIR")
-        } else if let Some(k) = ["scenarios", "budget", "particles", "penalty", "param"]
-            .into_iter()
-            .find(|k| has(k))
-            .or_else(|| {
-                t.get("controller")
-                    .filter(|c| c.is_str())
-                    .map(|_| "controller")
-            })
-        {
-            ("a tune file", k, "ehservo tune FILE --out DIR")
-        } else if let Some(k) = ["reading", "case", "claim", "convergence"]
-            .into_iter()
-            .find(|k| has(k))
-        {
-            (
-                "the reproduction's manifest",
-                k,
-                "ehservo reproduce --paper-dir ITS-FOLDER",
-            )
-        } else {
-            return None;
-        };
-    let shown = match t.get(key) {
-        Some(toml::Value::Array(a)) if a.iter().all(toml::Value::is_table) => format!("[[{key}]]"),
-        Some(toml::Value::Table(_)) => format!("[{key}]"),
-        _ => format!("`{key}`"),
-    };
-    Some(format!(
-        "this is {what} (it has {shown}), not a scenario: run it with `{}`",
-        command.replace("FILE", file)
-    ))
-}
-
-fn plant_error(text: &str, file: &str) -> ScenarioError {
-    let table = toml::from_str::<toml::Table>(text)
-        .ok()
-        .and_then(|mut t| t.remove("plant"));
-    match table {
-        Some(toml::Value::Table(t)) => plant_table_error(t, file, Some(text)),
-        _ => ScenarioError {
-            file: file.to_string(),
-            key: "plant".into(),
-            line_col: locate(text, "plant"),
-            reason: "must be a table".into(),
-        },
-    }
-}
-
-fn controller_error(text: &str, file: &str) -> ScenarioError {
-    let table = toml::from_str::<toml::Table>(text)
-        .ok()
-        .and_then(|mut t| t.remove("controller"));
-    match table {
-        Some(toml::Value::Table(t)) => controller_table_error(t, file, Some(text)),
-        _ => ScenarioError {
-            file: file.to_string(),
-            key: "controller".into(),
-            line_col: locate(text, "controller"),
-            reason: "must be a table".into(),
-        },
-    }
 }
 
 #[cfg(test)]
@@ -591,18 +413,19 @@ mod tests {
 
     #[test]
     fn empty_file_is_the_paper_fig2_case() {
-        let s = Scenario::parse("").unwrap();
+        let lp = Loop::parse("").unwrap();
+        let s = lp.scenario();
         assert_eq!(s.controller.kind(), "nnvsc");
         assert_eq!(s.simulation.step, 0.01);
-        assert_eq!(s.uncertainty_spec().a_bias, 1.0);
-        assert_eq!(s.uncertainty_spec().b_bias, 0.5);
-        assert_eq!(s.surface().unwrap().p(), [90.0, 2600.0, 24000.0]);
-        assert_eq!(s.sim_config().steps, 1000);
+        assert_eq!(lp.stages().uncertainty.a_bias, 1.0);
+        assert_eq!(lp.stages().uncertainty.b_bias, 0.5);
+        assert_eq!(lp.design().surface.p(), [90.0, 2600.0, 24000.0]);
+        assert_eq!(lp.sim().steps, 1000);
     }
 
     #[test]
     fn overrides_apply_and_are_typed() {
-        let s = Scenario::parse_with(
+        let lp = Loop::parse_with(
             "name = \"x\"",
             "t.toml",
             &[
@@ -614,18 +437,20 @@ mod tests {
             ],
         )
         .unwrap();
+        let s = lp.scenario();
         let c = s
             .controller
             .get::<ehservo_core::control::sliding::VscConfig>();
         assert_eq!(c.map(|c| c.0.gamma1), Some(200.0));
         assert_eq!(s.controller.kind(), "vsc");
         assert_eq!(s.simulation.mode, ehservo_sim::simulation::Mode::Continuous);
-        assert_eq!(s.sim_config().steps, 10_000);
-        assert_eq!(s.surface().unwrap().p(), [60.0, 1100.0, 6000.0]);
+        assert_eq!(lp.sim().steps, 10_000);
+        // (s + 10)(s + 20)(s + 30) = s³ + 60 s² + 1100 s + 6000.
+        assert_eq!(lp.design().surface.p(), [60.0, 1100.0, 6000.0]);
     }
 
     fn err(text: &str) -> ScenarioError {
-        Scenario::parse_with(text, "bad.toml", &[]).unwrap_err()
+        Loop::parse_with(text, "bad.toml", &[]).unwrap_err()
     }
 
     #[test]
@@ -633,20 +458,20 @@ mod tests {
         let e = err("[plant.params]\nJt = -1.0\n");
         assert_eq!(e.key, "plant.params.Jt");
         assert_eq!(e.line_col, Some((2, 6)));
-        assert!(e.reason.contains("> 0"), "{e}");
+        assert!(e.reason.to_string().contains("> 0"), "{e}");
 
         let e = err("[controller]\ngama1 = 3\n");
         assert_eq!(e.key, "controller.gama1");
-        assert!(e.reason.contains("unknown field"), "{e}");
+        assert!(e.reason.to_string().contains("unknown field"), "{e}");
         assert_eq!(e.line_col.map(|l| l.0), Some(2));
 
         let e = err("[simulation]\nstep = \"fast\"\n");
         assert_eq!(e.key, "simulation.step");
-        assert!(e.reason.contains("invalid type"), "{e}");
+        assert!(e.reason.to_string().contains("invalid type"), "{e}");
 
         let e = err("[simulation]\nhorizon = 10.005\n");
         assert_eq!(e.key, "simulation.horizon");
-        assert!(e.reason.contains("whole number"), "{e}");
+        assert!(e.reason.to_string().contains("whole number"), "{e}");
 
         let e = err("[surface]\npoles = [-20, 30, -40]\n");
         assert_eq!(e.key, "surface.poles");
@@ -655,10 +480,11 @@ mod tests {
         assert_eq!(e.key, "plant.model");
 
         let e = err("[simulation\nstep = 1\n");
-        assert!(e.reason.contains("syntax"), "{e}");
+        assert!(matches!(e.reason, Reason::Syntax(_)), "{e}");
+        assert!(e.to_string().contains("syntax"), "{e}");
         assert_eq!(e.line_col.map(|l| l.0), Some(1));
 
-        let e = Scenario::parse_with("", "t.toml", &["controller.nope=1".into()]).unwrap_err();
+        let e = Loop::parse_with("", "t.toml", &["controller.nope=1".into()]).unwrap_err();
         assert_eq!(e.key, "controller.nope");
     }
 
@@ -666,7 +492,7 @@ mod tests {
     /// starts from no keys, so the sine's defaults do not leak into it.
     #[test]
     fn reference_kind_can_be_overridden() {
-        let s = Scenario::parse_with(
+        let lp = Loop::parse_with(
             "",
             "t.toml",
             &[
@@ -675,21 +501,22 @@ mod tests {
             ],
         )
         .unwrap();
-        assert_eq!(s.reference.kind, ReferenceKind::Step);
-        assert_eq!(s.reference.frequency_hz, None);
-        let base = Scenario::parse("").unwrap();
-        let (s, setup) = base
-            .with_values_built(&[
+        assert_eq!(lp.scenario().reference.kind, ReferenceKind::Step);
+        assert_eq!(lp.scenario().reference.frequency_hz, None);
+        let base_loop = Loop::parse("").unwrap();
+        let lp = base_loop
+            .with_values(&[
                 ("reference.kind".into(), toml::Value::String("ramp".into())),
                 ("reference.slope_deg_per_s".into(), toml::Value::Float(1.0)),
                 ("reference.prefilter_tau".into(), toml::Value::Float(0.1)),
             ])
             .unwrap();
-        assert_eq!(s.reference.kind, ReferenceKind::Ramp);
-        assert!(setup.reference.as_sine().is_none());
-        assert_eq!(setup.period, 1.0);
+        assert_eq!(lp.scenario().reference.kind, ReferenceKind::Ramp);
+        assert!(lp.reference().as_sine().is_none());
+        assert_eq!(lp.period(), 1.0);
+        let base = base_loop.scenario();
         // The paper's scenario reads, writes and builds as before.
-        assert_eq!(base, Scenario::default());
+        assert_eq!(*base, Scenario::default());
         assert!(base
             .to_toml()
             .contains("[reference]\namplitude_deg = 5.0\nfrequency_hz = 1.0\n"));

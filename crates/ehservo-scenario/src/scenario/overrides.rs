@@ -1,6 +1,8 @@
 //! Keys, positions and overrides: `--set key.path=value` on a TOML
 //! document, and the line and column of a key in the text it came from.
 
+use ehservo_sim::error::KeyError;
+
 /// 1-based line and column of a byte offset in `text`.
 pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let before = &text[..offset.min(text.len())];
@@ -67,20 +69,16 @@ pub const MAX_KEY_DEPTH: usize = 8;
 
 /// Sets `path` (dotted) to `value` in a TOML document, creating tables on
 /// the way. Errors name the path and the reason.
-pub fn set_path(
-    table: &mut toml::Table,
-    path: &str,
-    value: toml::Value,
-) -> Result<(), (String, String)> {
+pub fn set_path(table: &mut toml::Table, path: &str, value: toml::Value) -> Result<(), KeyError> {
     let path = path.trim();
     if path.is_empty() || path.split('.').any(|p| p.trim().is_empty()) {
-        return Err((path.to_string(), "empty key in key.path=value".into()));
+        return Err(KeyError::new(path, "empty key in key.path=value"));
     }
     let parts: Vec<&str> = path.split('.').map(str::trim).collect();
     // No scenario or study key is deeper than four levels; a deep path
     // would only build deeply nested tables (and recursion) for nothing.
     if parts.len() > MAX_KEY_DEPTH {
-        return Err((
+        return Err(KeyError::new(
             format!("{}…", parts[..MAX_KEY_DEPTH].join(".")),
             format!(
                 "a key path of {} levels: no key is deeper than {MAX_KEY_DEPTH}",
@@ -100,9 +98,9 @@ pub fn set_path(
         cur = match entry {
             toml::Value::Table(t) => t,
             _ => {
-                return Err((
+                return Err(KeyError::new(
                     parts[..=i].join("."),
-                    "is a value, not a table: cannot set a key below it".into(),
+                    "is a value, not a table: cannot set a key below it",
                 ))
             }
         };
@@ -111,9 +109,9 @@ pub fn set_path(
 }
 
 /// Applies one `key.path=value` to a TOML document.
-pub fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), (String, String)> {
+pub fn apply_override(table: &mut toml::Table, spec: &str) -> Result<(), KeyError> {
     let (path, raw) = spec
         .split_once('=')
-        .ok_or_else(|| (spec.to_string(), "expected key.path=value".to_string()))?;
+        .ok_or_else(|| KeyError::new(spec, "expected key.path=value"))?;
     set_path(table, path, parse_value(raw))
 }

@@ -5,18 +5,20 @@
 //! axis, how to check its keys and build its plant) with serde's derive
 //! (its `[plant]` keys, `deny_unknown_fields`). Adding a plant is one
 //! file in `crates/ehservo-sim/src/` (the plant and its configuration) and
-//! one line in the [`plants!`] call below; runs, traces, metrics, plots,
+//! one line in the [`plants!`] call below (the line names the model as
+//! its `PlantConfig::MODEL` does, or it does not compile); runs, traces, metrics, plots,
 //! studies, tuning, the league and the bindings then know it, with its
 //! axis's units. Code that is generic over the plant implements
 //! [`PlantVisit`] and calls [`AnyPlant::visit`].
 
+use super::tagged::{tagged_serde, Tagged};
 use ehservo_core::control::Signal;
-use ehservo_core::servo::NominalModel;
+use ehservo_core::servo::{NominalModel, ServoParams};
 use ehservo_sim::axis::Axis;
+use ehservo_sim::error::KeyError;
 use ehservo_sim::physical::PhysicalCfg;
 use ehservo_sim::plant::{Plant, PlantConfig, PlantContext};
 use ehservo_sim::third_order::ThirdOrderCfg;
-use serde::{Deserialize, Serialize};
 use std::any::Any;
 
 /// Code generic over the (built) plant.
@@ -34,14 +36,14 @@ pub trait PlantVisit {
 pub const DEFAULT_MODEL: &str = "third-order";
 
 macro_rules! plants {
-    ($($variant:ident => $ty:ty),* $(,)?) => {
+    ($($variant:ident $name:literal => $ty:ty),* $(,)?) => {
         /// A scenario's `[plant]` table: one of the registered models with
         /// its keys (built once per run: the variants' sizes do not matter).
         #[derive(Debug, Clone, PartialEq)]
         #[allow(clippy::large_enum_variant)]
         pub enum PlantCfg {
             $(
-                #[doc = concat!("`model = \"…\"` (", stringify!($ty), ").")]
+                #[doc = concat!("`model = \"", $name, "\"`.")]
                 $variant($ty),
             )*
         }
@@ -51,23 +53,29 @@ macro_rules! plants {
         #[allow(clippy::large_enum_variant)]
         pub enum AnyPlant {
             $(
-                #[doc = concat!("The plant of ", stringify!($ty), ".")]
+                #[doc = concat!("The plant of `model = \"", $name, "\"`.")]
                 $variant(<$ty as PlantConfig>::Plant),
             )*
         }
 
+        // Each line names its model as its `PlantConfig::MODEL` does.
+        $(const _: () = assert!(
+            ehservo_core::control::str_eq(<$ty as PlantConfig>::MODEL, $name),
+            concat!("plants!: the line of `", $name, "` is not its PlantConfig::MODEL")
+        );)*
+
         impl PlantCfg {
             /// Every registered model, in registry order.
-            pub const MODELS: &'static [&'static str] = &[$(<$ty as PlantConfig>::MODEL),*];
+            pub const MODELS: &'static [&'static str] = &[$($name),*];
 
             /// Every registered model with its one-line description.
             pub const DOCS: &'static [(&'static str, &'static str)] =
-                &[$((<$ty as PlantConfig>::MODEL, <$ty as PlantConfig>::DOC)),*];
+                &[$(($name, <$ty as PlantConfig>::DOC)),*];
 
             /// The model's name.
             pub fn model(&self) -> &'static str {
                 match self {
-                    $(Self::$variant(_) => <$ty as PlantConfig>::MODEL,)*
+                    $(Self::$variant(_) => $name,)*
                 }
             }
 
@@ -106,8 +114,25 @@ macro_rules! plants {
                 }
             }
 
+            /// The paper's physical parameters, for a model of the
+            /// third-order family ([`PlantConfig::paper_params`]).
+            pub fn paper_params(&self) -> Option<ServoParams> {
+                match self {
+                    $(Self::$variant(c) => c.paper_params(),)*
+                }
+            }
+
+            /// This model with the paper's parameters `p` in place of its
+            /// own ([`PlantConfig::with_paper_params`]); `None` outside the
+            /// third-order family.
+            pub fn with_paper_params(&self, p: ServoParams) -> Option<PlantCfg> {
+                match self {
+                    $(Self::$variant(c) => c.with_paper_params(p).map(Self::$variant),)*
+                }
+            }
+
             /// Checks the keys and builds the plant.
-            pub fn build(&self, ctx: &PlantContext) -> Result<AnyPlant, (String, String)> {
+            pub fn build(&self, ctx: &PlantContext) -> Result<AnyPlant, KeyError> {
                 match self {
                     $(Self::$variant(c) => c.build(ctx).map(AnyPlant::$variant),)*
                 }
@@ -120,45 +145,41 @@ macro_rules! plants {
                 }
             }
 
-            /// Model `model` with the keys of `table`. The error is the key
-            /// path inside `[plant]` and the reason.
-            pub fn from_table(model: &str, table: toml::Table) -> Result<Self, (String, String)> {
-                let value = toml::Value::Table(table);
-                let fail = |e: serde_path_to_error::Error<toml::de::Error>| {
-                    let key = super::overrides::clean_path(&e.path().to_string());
-                    (key, super::overrides::first_line(&e.into_inner().to_string()))
-                };
-                $(
-                    if model == <$ty as PlantConfig>::MODEL {
-                        return serde_path_to_error::deserialize(value)
-                            .map(Self::$variant)
-                            .map_err(fail);
-                    }
-                )*
-                Err((
-                    "model".into(),
-                    format!(
-                        "unknown plant model `{model}` (known: {})",
-                        Self::MODELS.join(", ")
-                    ),
-                ))
-            }
-
             /// The model's defaults.
             pub fn default_of(model: &str) -> Option<Self> {
-                $(
-                    if model == <$ty as PlantConfig>::MODEL {
-                        return Some(Self::$variant(<$ty>::default()));
-                    }
-                )*
-                None
+                match model {
+                    $($name => Some(Self::$variant(<$ty>::default())),)*
+                    _ => None,
+                }
             }
 
             /// Every model with the JSON Schema of its keys (`ehservo schema`).
             pub fn model_schemas(
                 g: &mut schemars::SchemaGenerator,
             ) -> Vec<(&'static str, schemars::Schema)> {
-                vec![$((<$ty as PlantConfig>::MODEL, g.subschema_for::<$ty>())),*]
+                vec![$(($name, g.subschema_for::<$ty>())),*]
+            }
+        }
+
+        impl Tagged for PlantCfg {
+            const SECTION: &'static str = "plant";
+            const TAG: &'static str = "model";
+            const WHAT: &'static str = "plant model";
+            const DEFAULT: &'static str = DEFAULT_MODEL;
+            const NAMES: &'static [&'static str] = Self::MODELS;
+
+            fn name(&self) -> &'static str {
+                self.model()
+            }
+
+            fn from_named(
+                name: &str,
+                value: toml::Value,
+            ) -> Option<Result<Self, serde_path_to_error::Error<toml::de::Error>>> {
+                match name {
+                    $($name => Some(serde_path_to_error::deserialize(value).map(Self::$variant)),)*
+                    _ => None,
+                }
             }
 
             fn params_table(&self) -> Result<toml::Table, toml::ser::Error> {
@@ -172,7 +193,7 @@ macro_rules! plants {
             /// The model's name (`plant.model`).
             pub fn model(&self) -> &'static str {
                 match self {
-                    $(Self::$variant(_) => <$ty as PlantConfig>::MODEL,)*
+                    $(Self::$variant(_) => $name,)*
                 }
             }
 
@@ -215,9 +236,9 @@ macro_rules! plants {
 }
 
 plants! {
-    ThirdOrder => ThirdOrderCfg,
-    Physical => PhysicalCfg,
-    Cylinder => ehservo_sim::cylinder::CylinderCfg,
+    ThirdOrder "third-order" => ThirdOrderCfg,
+    Physical "physical" => PhysicalCfg,
+    Cylinder "cylinder" => ehservo_sim::cylinder::CylinderCfg,
 }
 
 impl Default for PlantCfg {
@@ -229,41 +250,17 @@ impl Default for PlantCfg {
 impl PlantCfg {
     /// The `[plant]` table: `model` and every key.
     pub fn to_table(&self) -> toml::Table {
-        let mut t = toml::Table::new();
-        t.insert("model".into(), toml::Value::String(self.model().into()));
-        // A configuration type that serde can derive serialises to a table.
-        t.extend(self.params_table().unwrap_or_default());
-        t
+        Tagged::to_table(self)
     }
 
     /// Reads a `[plant]` table (its `model` defaults to [`DEFAULT_MODEL`]).
-    pub fn from_toml(mut table: toml::Table) -> Result<Self, (String, String)> {
-        let model = match table.remove("model") {
-            None => DEFAULT_MODEL.to_string(),
-            Some(toml::Value::String(k)) => k,
-            Some(other) => {
-                return Err((
-                    "model".into(),
-                    format!("expected a string naming the plant model, found {other}"),
-                ))
-            }
-        };
-        Self::from_table(&model, table)
+    /// The error's key is the key inside `[plant]`.
+    pub fn from_toml(table: toml::Table) -> Result<Self, KeyError> {
+        <Self as Tagged>::from_toml(table)
     }
 }
 
-impl Serialize for PlantCfg {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        self.to_table().serialize(s)
-    }
-}
-
-impl<'de> Deserialize<'de> for PlantCfg {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let table = toml::Table::deserialize(d)?;
-        Self::from_toml(table).map_err(|(k, r)| serde::de::Error::custom(format!("`{k}`: {r}")))
-    }
-}
+tagged_serde!(PlantCfg);
 
 #[cfg(test)]
 mod tests {
@@ -282,16 +279,17 @@ mod tests {
     fn unknown_models_and_keys_are_named() {
         let mut t = toml::Table::new();
         t.insert("model".into(), toml::Value::String("fourth-order".into()));
-        let (k, r) = PlantCfg::from_toml(t).unwrap_err();
-        assert_eq!(k, "model");
+        let e = PlantCfg::from_toml(t).unwrap_err();
+        assert_eq!(e.key, "model");
+        let r = e.reason.to_string();
         assert!(
             r.contains("fourth-order") && r.contains("third-order"),
             "{r}"
         );
         let mut t = toml::Table::new();
         t.insert("mass".into(), toml::Value::Float(3.0));
-        let (k, r) = PlantCfg::from_toml(t).unwrap_err();
-        assert_eq!(k, "mass");
-        assert!(r.contains("unknown field"), "{r}");
+        let e = PlantCfg::from_toml(t).unwrap_err();
+        assert_eq!(e.key, "mass");
+        assert!(e.reason.to_string().contains("unknown field"), "{e}");
     }
 }

@@ -3,16 +3,21 @@
 //!
 //! A kind is a type implementing [`ehservo_core::control::Config`] (its
 //! kind name, whether it uses the surface, how to build the controller) with
-//! serde's derive (its `[controller]` keys, `deny_unknown_fields`). Adding a
-//! controller kind is one line in the [`registry!`] call below; every
-//! command, study and output then knows it. Code that is generic over the
+//! serde's derive (its `[controller]` keys, `deny_unknown_fields`). The kinds
+//! are the one list [`ehservo_core::controller_kinds!`]: the registry below,
+//! its JSON Schema, the wire's enum and the board's `AnyLaw` are all
+//! generated from it, so adding a controller kind is its file in the core
+//! and one line there; every command, study and output then knows it. Code that is generic over the
 //! kind implements [`Visit`] and calls [`ControllerCfg::visit`]; code that
 //! needs one kind's parameters asks [`ControllerCfg::get`].
 
-use ehservo_core::control::sliding::{NnVscConfig, VscConfig, VscSatConfig};
-use ehservo_core::control::Config;
+use super::tagged::{tagged_serde, Tagged};
+use ehservo_core::control::{Config, Design};
+use ehservo_core::error::ParamError;
+use ehservo_sim::error::KeyError;
+use ehservo_wire::config::WireController;
 use serde::de::DeserializeOwned;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::any::Any;
 use std::fmt::Debug;
 
@@ -48,25 +53,44 @@ pub trait Visit {
 pub const DEFAULT_KIND: &str = "nnvsc";
 
 macro_rules! registry {
-    ($($variant:ident => $ty:ty),* $(,)?) => {
+    ($($variant:ident $name:literal => $ty:ty),* $(,)?) => {
         /// A scenario's `[controller]` table: one of the registered kinds
         /// with its parameters.
         #[derive(Debug, Clone, PartialEq)]
         pub enum ControllerCfg {
             $(
-                #[doc = concat!("`kind = \"", stringify!($variant), "\"` (", stringify!($ty), ").")]
+                #[doc = concat!("`kind = \"", $name, "\"`.")]
                 $variant($ty),
             )*
         }
 
+        /// A built controller of one of the registered kinds, with the
+        /// parameters it was built from: what a [`crate::Loop`] holds.
+        #[derive(Debug, Clone)]
+        pub(crate) enum Built {
+            $(
+                #[doc = concat!("`kind = \"", $name, "\"`, built.")]
+                $variant($ty, <$ty as Config>::Controller),
+            )*
+        }
+
+        impl Built {
+            /// Calls `v` with the parameters and the controller, typed.
+            pub(crate) fn visit<V: BuiltVisit>(&self, v: V) -> V::Out {
+                match self {
+                    $(Self::$variant(cfg, ctrl) => v.visit(cfg, ctrl),)*
+                }
+            }
+        }
+
         impl ControllerCfg {
             /// Every registered kind, in registry order.
-            pub const KINDS: &'static [&'static str] = &[$(<$ty as Config>::KIND),*];
+            pub const KINDS: &'static [&'static str] = &[$($name),*];
 
             /// The kind's name.
             pub fn kind(&self) -> &'static str {
                 match self {
-                    $(Self::$variant(_) => <$ty as Config>::KIND,)*
+                    $(Self::$variant(_) => $name,)*
                 }
             }
 
@@ -91,45 +115,57 @@ macro_rules! registry {
                 }
             }
 
-            /// Kind `kind` with the keys of `table`. The error is the key
-            /// path inside `[controller]` and the reason.
-            pub fn from_table(kind: &str, table: toml::Table) -> Result<Self, (String, String)> {
-                let value = toml::Value::Table(table);
-                let fail = |e: serde_path_to_error::Error<toml::de::Error>| {
-                    let key = super::overrides::clean_path(&e.path().to_string());
-                    (key, super::overrides::first_line(&e.into_inner().to_string()))
-                };
-                $(
-                    if kind == <$ty as Config>::KIND {
-                        return serde_path_to_error::deserialize(value)
-                            .map(Self::$variant)
-                            .map_err(fail);
-                    }
-                )*
-                Err((
-                    "kind".into(),
-                    format!(
-                        "unknown controller kind `{kind}` (known: {})",
-                        Self::KINDS.join(", ")
-                    ),
-                ))
-            }
-
             /// The kind's defaults.
             pub fn default_of(kind: &str) -> Option<Self> {
-                $(
-                    if kind == <$ty as Config>::KIND {
-                        return Some(Self::$variant(<$ty>::default()));
-                    }
-                )*
-                None
+                match kind {
+                    $($name => Some(Self::$variant(<$ty>::default())),)*
+                    _ => None,
+                }
             }
 
             /// Every kind with the JSON Schema of its keys (`ehservo schema`).
             pub fn kind_schemas(
                 g: &mut schemars::SchemaGenerator,
             ) -> Vec<(&'static str, schemars::Schema)> {
-                vec![$((<$ty as Config>::KIND, g.subschema_for::<$ty>())),*]
+                vec![$(($name, g.subschema_for::<$ty>())),*]
+            }
+
+            /// The controller built on `design`: the parameters checked,
+            /// and the law made once. The error names the parameter.
+            pub(crate) fn build(&self, design: &Design) -> Result<Built, ParamError> {
+                Ok(match self {
+                    $(Self::$variant(c) => Built::$variant(c.clone(), c.build(design)?),)*
+                })
+            }
+
+            /// The parameters as the processor-in-the-loop wire carries
+            /// them (the same type, kind for kind).
+            pub fn wire(&self) -> WireController {
+                match self {
+                    $(Self::$variant(c) => WireController::$variant(c.clone()),)*
+                }
+            }
+        }
+
+        impl Tagged for ControllerCfg {
+            const SECTION: &'static str = "controller";
+            const TAG: &'static str = "kind";
+            const WHAT: &'static str = "controller kind";
+            const DEFAULT: &'static str = DEFAULT_KIND;
+            const NAMES: &'static [&'static str] = Self::KINDS;
+
+            fn name(&self) -> &'static str {
+                self.kind()
+            }
+
+            fn from_named(
+                name: &str,
+                value: toml::Value,
+            ) -> Option<Result<Self, serde_path_to_error::Error<toml::de::Error>>> {
+                match name {
+                    $($name => Some(serde_path_to_error::deserialize(value).map(Self::$variant)),)*
+                    _ => None,
+                }
             }
 
             fn params_table(&self) -> Result<toml::Table, toml::ser::Error> {
@@ -141,17 +177,15 @@ macro_rules! registry {
     };
 }
 
-registry! {
-    Nnvsc => NnVscConfig,
-    Vsc => VscConfig,
-    VscSat => VscSatConfig,
-    Pid => ehservo_core::control::pid::PidConfig,
-    NnRobust => ehservo_core::control::nn_robust::NnRobustConfig,
-    Adrc => ehservo_core::control::adrc::AdrcConfig,
-    Sta => ehservo_core::control::sta::StaConfig,
-    Arc => ehservo_core::control::arc::ArcConfig,
-    Backstepping => ehservo_core::control::backstepping::BacksteppingConfig,
-    OpenLoop => ehservo_core::control::open_loop::OpenLoopConfig,
+ehservo_core::controller_kinds!(registry);
+
+/// Code generic over a built controller's kind: its parameters and the
+/// controller they built.
+pub(crate) trait BuiltVisit {
+    /// What the visit returns.
+    type Out;
+    /// Called with the parameters and the built controller, typed.
+    fn visit<K: ControllerConfig>(self, cfg: &K, ctrl: &K::Controller) -> Self::Out;
 }
 
 impl Default for ControllerCfg {
@@ -163,47 +197,22 @@ impl Default for ControllerCfg {
 impl ControllerCfg {
     /// The `[controller]` table: `kind` and every parameter.
     pub fn to_table(&self) -> toml::Table {
-        let mut t = toml::Table::new();
-        t.insert("kind".into(), toml::Value::String(self.kind().into()));
-        // A parameter type that serde can derive always serialises to a table.
-        t.extend(self.params_table().unwrap_or_default());
-        t
+        Tagged::to_table(self)
     }
 
     /// Reads a `[controller]` table (its `kind` defaults to
-    /// [`DEFAULT_KIND`]).
-    pub fn from_toml(mut table: toml::Table) -> Result<Self, (String, String)> {
-        let kind = match table.remove("kind") {
-            None => DEFAULT_KIND.to_string(),
-            Some(toml::Value::String(k)) => k,
-            Some(other) => {
-                return Err((
-                    "kind".into(),
-                    format!("expected a string naming the controller kind, found {other}"),
-                ))
-            }
-        };
-        Self::from_table(&kind, table)
+    /// [`DEFAULT_KIND`]). The error's key is the key inside `[controller]`.
+    pub fn from_toml(table: toml::Table) -> Result<Self, KeyError> {
+        <Self as Tagged>::from_toml(table)
     }
 }
 
-impl Serialize for ControllerCfg {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        self.to_table().serialize(s)
-    }
-}
-
-impl<'de> Deserialize<'de> for ControllerCfg {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let table = toml::Table::deserialize(d)?;
-        Self::from_toml(table).map_err(|(k, r)| serde::de::Error::custom(format!("`{k}`: {r}")))
-    }
-}
+tagged_serde!(ControllerCfg);
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ehservo_core::control::sliding::SlidingConfig;
+    use ehservo_core::control::sliding::{NnVscConfig, SlidingConfig, VscConfig};
 
     #[test]
     fn kinds_round_trip_through_their_tables() {
@@ -218,14 +227,15 @@ mod tests {
     fn unknown_kinds_and_keys_are_named() {
         let mut t = toml::Table::new();
         t.insert("kind".into(), toml::Value::String("lqr".into()));
-        let (k, r) = ControllerCfg::from_toml(t).unwrap_err();
-        assert_eq!(k, "kind");
+        let e = ControllerCfg::from_toml(t).unwrap_err();
+        assert_eq!(e.key, "kind");
+        let r = e.reason.to_string();
         assert!(r.contains("lqr") && r.contains("nnvsc"), "{r}");
         let mut t = toml::Table::new();
         t.insert("gama1".into(), toml::Value::Float(3.0));
-        let (k, r) = ControllerCfg::from_toml(t).unwrap_err();
-        assert_eq!(k, "gama1");
-        assert!(r.contains("unknown field"), "{r}");
+        let e = ControllerCfg::from_toml(t).unwrap_err();
+        assert_eq!(e.key, "gama1");
+        assert!(e.reason.to_string().contains("unknown field"), "{e}");
     }
 
     #[test]

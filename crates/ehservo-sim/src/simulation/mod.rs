@@ -45,7 +45,7 @@ use ehservo_core::control::{flags, Controller, Output, Signals, Truth};
 use ehservo_core::error::ParamError;
 use ehservo_core::reference::Reference;
 use ehservo_core::rk4::OdeState;
-use ehservo_core::sampled::{FaultPolicy, SampledController};
+use ehservo_core::sampled::{FaultPolicy, SampledController, Sampling};
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 
@@ -230,21 +230,22 @@ pub struct Simulation<P: Plant, C: Controller, R: Reference> {
     outcome: Outcome,
 }
 
-impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
-    /// A simulation at t = 0 with x(0) = `cfg.x0` and the controller's
-    /// initial state. Fails when the sample period or the policy is invalid.
-    pub fn new(
-        plant: P,
-        ctrl: C,
-        reference: R,
-        stages: Stages,
-        cfg: SimConfig,
-    ) -> Result<Self, ParamError> {
-        assert!(
-            C::Parts::SIGNALS.len() <= MAX_PARTS,
-            "a controller logs at most {MAX_PARTS} parts"
-        );
-        let xi = ctrl.initial_state();
+/// A loop's stages and settings, checked together: a [`Simulation`] made
+/// from them cannot fail ([`Simulation::from_settings`]). What a scenario's
+/// loop holds once it is built.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    stages: Stages,
+    cfg: SimConfig,
+    sampling: Sampling,
+}
+
+impl Settings {
+    /// Checks `stages` against `cfg`: the sampled-only stages (sensor noise
+    /// and delay, an estimator, a computation delay) need the sampled mode,
+    /// unmeasured channels an estimator, and the sample period and the
+    /// fault policy must be valid.
+    pub fn try_new(stages: Stages, cfg: SimConfig) -> Result<Self, ParamError> {
         if cfg.mode == Mode::Continuous {
             if stages.sensor.is_sampled() {
                 return Err(ParamError::new(
@@ -275,11 +276,83 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 f64::NAN,
             ));
         }
-        let ctrl = SampledController::with_policy(ctrl, cfg.step, stages.policy)?;
+        let sampling = Sampling::try_new(cfg.step, stages.policy)?;
+        Ok(Self {
+            stages,
+            cfg,
+            sampling,
+        })
+    }
+
+    /// The stages.
+    pub fn stages(&self) -> &Stages {
+        &self.stages
+    }
+
+    /// The loop's settings.
+    pub fn config(&self) -> &SimConfig {
+        &self.cfg
+    }
+
+    /// The sample period and the fault policy, checked: what the sampled
+    /// controller is made with.
+    pub fn sampling(&self) -> Sampling {
+        self.sampling
+    }
+
+    /// The same loop with the fault policy's limits replaced by `limits`
+    /// (an off-board controller applies its own).
+    pub fn with_limits(self, limits: ehservo_core::sampled::Limits) -> Result<Self, ParamError> {
+        let mut stages = self.stages;
+        stages.policy.limits = limits;
+        Self::try_new(stages, self.cfg)
+    }
+
+    /// The same loop run for `steps` steps (the other checks do not depend
+    /// on the horizon).
+    pub fn with_steps(mut self, steps: u64) -> Self {
+        self.cfg.steps = steps;
+        self
+    }
+
+    /// The same loop started from x(0) = `x0`.
+    pub fn with_x0(mut self, x0: [f64; 3]) -> Self {
+        self.cfg.x0 = x0;
+        self
+    }
+}
+
+impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
+    /// A simulation at t = 0 with x(0) = `cfg.x0` and the controller's
+    /// initial state. Fails when the stages do not suit the mode, or the
+    /// sample period or the policy is invalid ([`Settings::try_new`]).
+    pub fn new(
+        plant: P,
+        ctrl: C,
+        reference: R,
+        stages: Stages,
+        cfg: SimConfig,
+    ) -> Result<Self, ParamError> {
+        Settings::try_new(stages, cfg).map(|s| Self::from_settings(plant, ctrl, reference, s))
+    }
+
+    /// A simulation at t = 0 of checked settings: infallible.
+    pub fn from_settings(plant: P, ctrl: C, reference: R, settings: Settings) -> Self {
+        assert!(
+            C::Parts::SIGNALS.len() <= MAX_PARTS,
+            "a controller logs at most {MAX_PARTS} parts"
+        );
+        let Settings {
+            stages,
+            cfg,
+            sampling,
+        } = settings;
+        let xi = ctrl.initial_state();
+        let ctrl = SampledController::sampled(ctrl, sampling);
         let mut unc = Varying::new(&plant, stages.uncertainty);
         let per_hold = unc.signal().steps_per_hold(Self::hs(&cfg));
         let var0 = unc.at_step(&plant, 0, Self::hs(&cfg), per_hold);
-        Ok(Self {
+        Self {
             y: Augmented {
                 pa: PlantAct {
                     x: plant.initial_state(cfg.x0, &var0),
@@ -302,7 +375,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             k: 0,
             stop: None,
             outcome: Outcome::default(),
-        })
+        }
     }
 
     /// Whether each sample carries the plant's physical states

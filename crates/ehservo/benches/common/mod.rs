@@ -1,7 +1,7 @@
 //! Shared by the benches: the Fig. 2 case and its recorded measurements.
 
 use ehservo::plant::{Plant, ThirdOrderPlant, Variation, Varying};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use ehservo_core::prelude::*;
 
 /// The Fig. 2 case: plant, the two controllers, reference, uncertainty.
@@ -20,10 +20,10 @@ pub struct Fig2 {
 
 /// The default scenario (the paper's Fig. 2 case), built as `run::run` does.
 pub fn fig2() -> Fig2 {
-    let s = Scenario::parse("").expect("the default scenario is Fig. 2");
-    let plant = ThirdOrderPlant::new(s.servo(), s.load_model());
+    let s = Loop::parse("").expect("the default scenario is Fig. 2");
+    let plant = ThirdOrderPlant::new(s.model().params, s.model().load);
     let model = *plant.nominal();
-    let surface = s.surface().expect("paper surface");
+    let surface = s.design().surface;
     let gains = SlidingConfig::default();
     let nn = NnVsc::try_new(
         model,
@@ -33,16 +33,12 @@ pub fn fig2() -> Fig2 {
     )
     .expect("paper gains");
     let vsc = Vsc::try_new(model, surface, gains.vsc(false)).expect("paper bounds");
-    let unc = Varying::new(&plant, s.uncertainty_spec());
+    let unc = Varying::new(&plant, s.stages().uncertainty);
     Fig2 {
         plant,
         nn,
         vsc,
-        reference: *s
-            .reference()
-            .expect("paper reference")
-            .as_sine()
-            .expect("a sine"),
+        reference: *s.reference().as_sine().expect("a sine"),
         unc,
     }
 }

@@ -5,7 +5,7 @@
 use super::fmt_sig;
 use super::poles::{sort_poles, Pole};
 use super::{paper_law, PaperLaw};
-use crate::scenario::Scenario;
+use crate::scenario::{Loop, Scenario};
 use crate::simulation::Mode;
 use ehservo_core::control::sliding::SlidingConfig;
 use ehservo_core::reference::Reference;
@@ -67,16 +67,16 @@ pub struct LoopAnalysis {
 
 /// The σ-loop of a controller that is not one of the paper's laws: not
 /// computed.
-fn not_applicable(s: &Scenario) -> LoopAnalysis {
+fn not_applicable(lp: &Loop) -> LoopAnalysis {
+    let s = lp.scenario();
+    let u = &lp.stages().uncertainty;
     LoopAnalysis {
         controller: s.controller.kind().into(),
         mode: s.simulation.mode.as_str().into(),
         step: s.simulation.step,
         substeps: s.simulation.substeps,
-        b_ratio: 1.0 + s.uncertainty_spec().b_reference * s.uncertainty_spec().b_bias,
-        b_ratio_worst: 1.0
-            + s.uncertainty_spec().b_reference
-                * (s.uncertainty_spec().b_bias + s.uncertainty_spec().b_random.abs()),
+        b_ratio: 1.0 + u.b_reference * u.b_bias,
+        b_ratio_worst: 1.0 + u.b_reference * (u.b_bias + u.b_random.abs()),
         switching_slope: None,
         vsc_sat_kb: None,
         sigma_gain: None,
@@ -132,19 +132,15 @@ fn loop_matrix(abar: &[f64; 3], v: &Truth, dd: &[f64; 3], gs: f64, p: [f64; 3]) 
 
 /// kb = b̄·k of (14) along the reference with the state on it: least and
 /// largest over one period (of a sine; the whole horizon for another kind).
-fn vsc_kb_range(s: &Scenario, c: &SlidingConfig, model: &NominalModel) -> [f64; 2] {
+fn vsc_kb_range(lp: &Loop, c: &SlidingConfig, model: &NominalModel) -> [f64; 2] {
     let abar = model.coeffs.as_array();
     let bb = c.bound_b;
     let ba = c.bound_a;
-    let Ok(surf) = s.surface() else {
-        return [f64::NAN; 2];
-    };
-    let Ok(r) = s.reference() else {
-        return [f64::NAN; 2];
-    };
+    let surf = lp.design().surface;
+    let r = lp.reference();
     // One period of a sine (as it always was), else the whole horizon,
     // finer.
-    let period = s.reference_span();
+    let period = lp.reference_span();
     let n = if r.as_sine().is_some() { 2000 } else { 20_000 };
     (0..n).fold([f64::INFINITY, 0.0], |[lo, hi], i| {
         let z = r.z(period * i as f64 / n as f64);
@@ -161,13 +157,14 @@ fn vsc_kb_range(s: &Scenario, c: &SlidingConfig, model: &NominalModel) -> [f64; 
     })
 }
 
-pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> LoopAnalysis {
+pub(super) fn loop_analysis(lp: &Loop, model: &NominalModel, p: [f64; 3]) -> LoopAnalysis {
+    let s = lp.scenario();
     let sim = &s.simulation;
     let Some((law, c)) = paper_law(s) else {
-        return not_applicable(s);
+        return not_applicable(lp);
     };
     let abar = model.coeffs.as_array();
-    let u = &s.uncertainty_spec();
+    let u = &lp.stages().uncertainty;
     let h = sim.step;
     let r_of = |fb: f64| 1.0 + u.b_reference * fb;
     let a_of = |fa: f64| -> [f64; 3] { std::array::from_fn(|i| abar[i] + abar[i].abs() * fa) };
@@ -186,7 +183,7 @@ pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> 
     }
     let r_worst = r_of(u.b_bias + u.b_random.abs());
     // Load slopes at θ = 0 (module doc): sine load and the viscous friction.
-    let load = s.load_model();
+    let load = model.load;
     let amp_k = load.amplitude * load.wavenumber;
     let bv = load.friction.map(|f| f.viscous).unwrap_or(0.0);
     let kd = model.params.d_per_torque();
@@ -196,7 +193,7 @@ pub(super) fn loop_analysis(s: &Scenario, model: &NominalModel, p: [f64; 3]) -> 
     let (slope, kb_range) = match law {
         PaperLaw::Nnvsc => (Some(c.gamma1 / (1.0 - bb)), None),
         PaperLaw::VscSat => {
-            let kb = vsc_kb_range(s, c, model);
+            let kb = vsc_kb_range(lp, c, model);
             (Some(kb[1] / c.mu), Some(kb))
         }
         PaperLaw::Vsc => (None, None),
@@ -410,9 +407,9 @@ mod tests {
         assert!(rk4_amplification(Complex::new(-2.9, 0.0)).norm() > 1.0);
     }
 
-    fn paper_scenario(set: &[&str]) -> Scenario {
+    fn paper_scenario(set: &[&str]) -> Loop {
         let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-        Scenario::parse_with("", "<unit>", &set).unwrap()
+        Loop::parse_with("", "<unit>", &set).unwrap()
     }
 
     /// The matrix of the linearised loop has the characteristic polynomial

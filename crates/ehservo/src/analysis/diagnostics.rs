@@ -359,7 +359,10 @@ mod tests {
 
     fn paper_scenario(set: &[&str]) -> Scenario {
         let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-        Scenario::parse_with("", "<unit>", &set).unwrap()
+        crate::scenario::Loop::parse_with("", "<unit>", &set)
+            .unwrap()
+            .scenario()
+            .clone()
     }
 
     /// f of (31) is the positive root of F(s) = s² + 2f1·s − f2 (A5), and

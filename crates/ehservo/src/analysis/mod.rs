@@ -1,6 +1,6 @@
 //! What the theory says about a scenario before it runs (`ehservo analyze`).
 //!
-//! [`analyze`] computes, for a validated [`Scenario`]:
+//! [`analyze`] computes, for a built scenario ([`Loop`]):
 //!
 //! - **Plant**: the nominal coefficients ā_i of (9), b̄ at Pl = 0
 //!   ([`NominalModel::b_at_rest`]), the two coefficients of
@@ -102,9 +102,8 @@
 //! advanced by `substeps` RK4 steps, ∫e by forward Euler — whose spectral
 //! radius must be < 1.
 
-use crate::scenario::Scenario;
+use crate::scenario::{Loop, Scenario};
 use ehservo_core::control::sliding::{NnVscConfig, SlidingConfig, VscConfig, VscSatConfig};
-use ehservo_core::servo::NominalModel;
 use nalgebra::Matrix3;
 use serde::Serialize;
 
@@ -283,15 +282,14 @@ pub fn paper_law(s: &Scenario) -> Option<(PaperLaw, &SlidingConfig)> {
         .or_else(|| c.get::<VscSatConfig>().map(|k| (PaperLaw::VscSat, &k.0)))
 }
 
-/// Analyses a validated scenario (see the module doc).
-pub fn analyze(s: &Scenario) -> Analysis {
-    let servo = s.servo();
-    let model = NominalModel::new(servo, s.load_model());
+/// Analyses a built scenario (see the module doc), on the nominal model
+/// and the surface its controller was designed with.
+pub fn analyze(lp: &Loop) -> Analysis {
+    let s = lp.scenario();
+    let model = *lp.model();
+    let servo = model.params;
     let a = model.coeffs.as_array();
-    let surface = s
-        .surface()
-        .map(|x| x.p())
-        .unwrap_or([90.0, 2600.0, 24000.0]);
+    let surface = lp.design().surface.p();
     let pm = p_matrix(surface);
     // Poles the user gave are exact; the computed roots of p stand in only
     // when p was given (and agree with given poles to round-off otherwise).
@@ -310,10 +308,10 @@ pub fn analyze(s: &Scenario) -> Analysis {
         open_loop_poles: open_loop_poles(a),
         surface: theorem2(s, &pm, sp, surface),
         weights: match paper_law(s) {
-            Some((PaperLaw::Nnvsc, c)) => Some(weight_analysis(s, c)),
+            Some((PaperLaw::Nnvsc, c)) => Some(weight_analysis(lp, c)),
             _ => None,
         },
-        closed_loop: loop_analysis(s, &model, surface),
+        closed_loop: loop_analysis(lp, &model, surface),
     }
 }
 

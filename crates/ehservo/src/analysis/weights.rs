@@ -4,7 +4,7 @@
 
 use super::fmt_sig;
 use super::k1::golden_max;
-use crate::scenario::Scenario;
+use crate::scenario::{Loop, Scenario};
 use ehservo_core::control::sliding::SlidingConfig;
 use ehservo_core::rbf::Rbf;
 use ehservo_core::reference::Reference;
@@ -165,16 +165,14 @@ pub fn kernel_sq_max(rbf: &Rbf, bound: [f64; 3]) -> (f64, [f64; 3]) {
 /// Largest ‖Φ‖ and ‖z‖ along the reference over one period (of a sine; the
 /// whole horizon for another kind), with the state
 /// on the reference (perfect tracking).
-pub fn phi_norm_reference(s: &Scenario) -> (f64, f64) {
-    let Ok(rbf) = sliding(s).rbf.build() else {
+pub fn phi_norm_reference(lp: &Loop) -> (f64, f64) {
+    let Ok(rbf) = sliding(lp.scenario()).rbf.build() else {
         return (f64::NAN, f64::NAN);
     };
-    let Ok(r) = s.reference() else {
-        return (f64::NAN, f64::NAN);
-    };
+    let r = lp.reference();
     // One period of a sine (as it always was), else the whole horizon,
     // finer.
-    let period = s.reference_span();
+    let period = lp.reference_span();
     let n = if r.as_sine().is_some() { 2000 } else { 20_000 };
     (0..n).fold((1.0, 0.0), |(pm, zm), i| {
         let z = r.z(period * i as f64 / n as f64);
@@ -204,9 +202,9 @@ pub fn invariant_radius(eta: f64, w_max: f64, eps0: f64, eps1: f64, phi_norm: f6
     (eta > 0.0).then(|| w_max / 2.0 + (w_max * w_max / 4.0 + (eps0 * phi_norm + eps1) / eta).sqrt())
 }
 
-pub(super) fn weight_analysis(s: &Scenario, c: &SlidingConfig) -> WeightAnalysis {
-    let (pref, zref) = phi_norm_reference(s);
-    let pom = phi_norm_omega(s);
+pub(super) fn weight_analysis(lp: &Loop, c: &SlidingConfig) -> WeightAnalysis {
+    let (pref, zref) = phi_norm_reference(lp);
+    let pom = phi_norm_omega(lp.scenario());
     let (pmax, from) = if pref > pom {
         (pref, "the reference (it leaves Ω of Section IV)")
     } else {

@@ -47,7 +47,8 @@ pub(super) fn fmu(a: FmuArgs) -> Result<()> {
         set,
     } = a;
     use crate::fmu::{write_fmu, FmuKind};
-    let s = load(&scenario, &set)?;
+    let lp = load(&scenario, &set)?;
+    let s = lp.scenario();
     let kind = if closed_loop {
         FmuKind::ClosedLoop
     } else {
@@ -64,7 +65,7 @@ pub(super) fn fmu(a: FmuArgs) -> Result<()> {
             "the FMU's binary libehservo_ffi.so is not beside this ehservo: build it (cargo build -p ehservo-ffi, same profile) or pass --binary PATH"
         );
     };
-    write_fmu(&out, kind, &s, &binary)?;
+    write_fmu(&out, kind, &lp, &binary)?;
     note!(
         "{}: the {} FMU of {} (FMI 3.0 co-simulation, step {} s)",
         out.display(),

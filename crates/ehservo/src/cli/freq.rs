@@ -154,7 +154,8 @@ pub(super) fn freq(a: FreqArgs, w: &mut impl Write) -> Result<()> {
     } = a;
     use crate::freq::cli;
     check_threads(threads)?;
-    let s = load(&scenario, &set)?;
+    let lp = load(&scenario, &set)?;
+    let s = lp.scenario();
     let dir = match out {
         Some(d) => d,
         None => default_out(&format!("{}-freq", s.name))?,
@@ -174,7 +175,7 @@ pub(super) fn freq(a: FreqArgs, w: &mut impl Write) -> Result<()> {
     o.periods = periods;
     o.plots = !no_plot;
     let start = Instant::now();
-    let r = cli::freq_cmd(&s, &scenario, &o, &dir, threads)?;
+    let r = cli::freq_cmd(&lp, &scenario, &o, &dir, threads)?;
     if !quiet {
         put!(
             w,

@@ -2,7 +2,7 @@
 //! [`Cli`]), and each command's body, one file per family of commands.
 //! `src/main.rs` parses, calls [`dispatch`] and maps errors to exit codes.
 
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -188,9 +188,9 @@ fn default_out(name: &str) -> Result<PathBuf> {
     Ok(PathBuf::from("out").join(name))
 }
 
-/// A scenario file, read with its `--set` overrides.
-fn load(path: &std::path::Path, set: &[String]) -> Result<Scenario> {
-    Ok(Scenario::load(path, set)?)
+/// A scenario file, read with its `--set` overrides and built.
+fn load(path: &std::path::Path, set: &[String]) -> Result<Loop> {
+    Ok(crate::formats::load(path, set)?)
 }
 
 /// Runs the parsed command, writing its output to `w`.

@@ -5,7 +5,7 @@
 use super::{default_out, load, StdoutError};
 use crate::output;
 use crate::run::Keep;
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use anyhow::Result;
 use std::io::Write;
 use std::path::PathBuf;
@@ -120,13 +120,14 @@ pub(super) fn run(a: RunArgs, w: &mut impl Write) -> Result<()> {
         quiet,
         float,
     } = a;
-    let s = load(&scenario, &set)?;
+    let lp = load(&scenario, &set)?;
+    let s = lp.scenario();
     let dir = match out {
         Some(d) => d,
         None => default_out(&s.name)?,
     };
     let start = Instant::now();
-    let rows = s.sim_config().steps / s.output.decimate.max(1) as u64 + 1;
+    let rows = lp.sim().steps / s.output.decimate.max(1) as u64 + 1;
     if rows > 2_000_000 && !quiet {
         note!(
             "note: trace.csv will have {rows} rows (about {} MB); set output.decimate to thin it",
@@ -136,14 +137,14 @@ pub(super) fn run(a: RunArgs, w: &mut impl Write) -> Result<()> {
     let plot = s.output.plot && !no_plot;
     let (r, files) = if float == "f32" {
         let opts = crate::pil::Options::in_process(ehservo_wire_float(&float));
-        let (r, files, _) = crate::pil::run_to_dir(&dir, &s, plot, opts)?;
+        let (r, files, _) = crate::pil::run_to_dir(&dir, &lp, plot, opts)?;
         (r, files)
     } else {
-        output::run_to_dir(&dir, &s, plot)?
+        output::run_to_dir(&dir, &lp, plot)?
     };
     let elapsed = start.elapsed();
     if !quiet {
-        print_summary(w, &s, &r, elapsed.as_secs_f64())?;
+        print_summary(w, &lp, &r, elapsed.as_secs_f64())?;
         if float == "f32" {
             out!(
                 w,
@@ -179,7 +180,8 @@ pub(super) fn pil(a: PilArgs, w: &mut impl Write) -> Result<()> {
         quiet,
     } = a;
     use crate::pil::{Options, Target};
-    let s = load(&scenario, &set)?;
+    let lp = load(&scenario, &set)?;
+    let s = lp.scenario();
     let dir = match out {
         Some(d) => d,
         None => default_out(&format!("{}-pil", s.name))?,
@@ -223,11 +225,11 @@ pub(super) fn pil(a: PilArgs, w: &mut impl Write) -> Result<()> {
         inject: plan,
     };
     let start = Instant::now();
-    let (r, files, rep) = crate::pil::run_to_dir(&dir, &s, s.output.plot && !no_plot, opts)?;
+    let (r, files, rep) = crate::pil::run_to_dir(&dir, &lp, s.output.plot && !no_plot, opts)?;
     let elapsed = start.elapsed();
     let o = &rep.offboard;
     if !quiet {
-        print_summary(w, &s, &r, elapsed.as_secs_f64())?;
+        print_summary(w, &lp, &r, elapsed.as_secs_f64())?;
         out!(
             w,
             "  PIL over {}: {} ({} samples in {:.2} s: {:.0} samples/s; round trip mean {:.0} µs, max {:.0} µs)",
@@ -285,14 +287,15 @@ pub(super) fn analyze(a: AnalyzeArgs, w: &mut impl Write) -> Result<()> {
         json,
         run: with_run,
     } = a;
-    let s = load(&scenario, &set)?;
-    let a = crate::analysis::analyze(&s);
+    let lp = load(&scenario, &set)?;
+    let s = lp.scenario();
+    let a = crate::analysis::analyze(&lp);
     let diag = if with_run {
         // Diagnostics over at most MAX_KEPT samples (every one for runs up to that).
-        let stride = (s.sim_config().steps + 1).div_ceil(output::MAX_KEPT).max(1);
-        let r = crate::run::run(&s, Keep::Every(stride as u32))?;
+        let stride = (lp.sim().steps + 1).div_ceil(output::MAX_KEPT).max(1);
+        let r = crate::run::run(&lp, Keep::Every(stride as u32));
         Some((
-            crate::analysis::diagnostics(&s, &r.trace),
+            crate::analysis::diagnostics(s, &r.trace),
             r.outcome.diverged,
         ))
     } else {
@@ -327,13 +330,9 @@ pub(super) fn analyze(a: AnalyzeArgs, w: &mut impl Write) -> Result<()> {
 /// `ehservo check`.
 pub(super) fn check(a: CheckArgs, w: &mut impl Write) -> Result<()> {
     let CheckArgs { scenario, set } = a;
-    let s = load(&scenario, &set)?;
-    put!(w, "{}", s.to_toml());
-    note!(
-        "{}: ok ({} steps)",
-        scenario.display(),
-        s.sim_config().steps
-    );
+    let lp = load(&scenario, &set)?;
+    put!(w, "{}", lp.scenario().to_toml());
+    note!("{}: ok ({} steps)", scenario.display(), lp.sim().steps);
     Ok(())
 }
 
@@ -351,10 +350,11 @@ fn fmt_opt(v: Option<f64>, digits: usize, unit: &str) -> String {
 
 fn print_summary(
     w: &mut impl Write,
-    s: &Scenario,
+    lp: &Loop,
     r: &crate::run::RunResult,
     secs: f64,
 ) -> Result<()> {
+    let s = lp.scenario();
     let m = &r.metrics;
     let unit = m.axis.suffix();
     let sim = &s.simulation;
@@ -382,7 +382,7 @@ fn print_summary(
                 d.reason.describe()
             );
             // The hint `ehservo analyze` gives: is the scheme itself unstable?
-            if let Some(warning) = crate::analysis::analyze(s).closed_loop.warning {
+            if let Some(warning) = crate::analysis::analyze(lp).closed_loop.warning {
                 out!(w, "  hint: {warning}");
             }
         }

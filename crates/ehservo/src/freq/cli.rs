@@ -6,7 +6,7 @@ use super::report::{freq_to_dir, FreqOptions, FreqSummary, Method};
 use super::response::Discretisation;
 use super::{all_finite, linearisation_json, linearise};
 use crate::output::Staging;
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use anyhow::{Context, Result};
 use ehservo_core::math::DR;
 use std::path::Path;
@@ -49,13 +49,13 @@ pub fn linearize_cmd(
     d: Discretisation,
     out: Option<&Path>,
 ) -> Result<String> {
-    let s = Scenario::load(scenario, set)?;
+    let lp = crate::formats::load(scenario, set)?;
     let file = scenario.display().to_string();
-    let l = linearise(&s, &file, at, side, d)?;
+    let l = linearise(&lp, &file, at, side, d)?;
     if !all_finite(&l) {
         anyhow::bail!("{file}: the linearised models are not finite");
     }
-    let text = serde_json::to_string_pretty(&linearisation_json(&s, &l))? + "\n";
+    let text = serde_json::to_string_pretty(&linearisation_json(&l))? + "\n";
     if let Some(dir) = out {
         let stage = Staging::new(dir)?;
         let p = stage.path().join("linearization.json");
@@ -68,7 +68,7 @@ pub fn linearize_cmd(
 /// `ehservo freq` into `dir`, on `threads` worker threads (None: every
 /// core).
 pub fn freq_cmd(
-    s: &Scenario,
+    s: &Loop,
     scenario: &Path,
     o: &FreqOptions,
     dir: &Path,
@@ -98,14 +98,11 @@ pub fn methods(v: &[String], file: &str) -> Result<Vec<Method>, crate::scenario:
             Some(m) if !out.contains(&m) => out.push(m),
             Some(_) => {}
             None => {
-                return Err(crate::scenario::ScenarioError {
-                    file: file.to_string(),
-                    key: "--measure".into(),
-                    line_col: None,
-                    reason: format!(
-                        "{item}: unknown method (expected sine, multisine, chirp or none)"
-                    ),
-                })
+                return Err(super::bad(
+                    file,
+                    "--measure",
+                    format!("{item}: unknown method (expected sine, multisine, chirp or none)"),
+                ))
             }
         }
     }

@@ -30,10 +30,8 @@
 //!   `x̂_k = M·Φ·ξ_k + M·Γ·u_{k−1} + K·θ_k`, `M = I − K·C`, `ξ_{k+1} = x̂_k`.
 
 use super::ss::{Quantity, StateSpace};
-use crate::scenario::ControllerCfg;
-use ehservo_core::control::adrc::AdrcConfig;
-use ehservo_core::control::pid::PidConfig;
-use ehservo_core::control::{Config, Design};
+use crate::scenario::{ControllerCfg, ControllerConfig, Visit};
+use ehservo_core::control::{Design, LinearForm};
 use ehservo_core::error::ParamError;
 use ehservo_core::estimate::LinearObserver;
 use nalgebra::DMatrix;
@@ -90,33 +88,57 @@ impl ControllerModel {
     }
 }
 
-/// The model of the scenario's controller when its kind is linear (PID,
-/// ADRC); None for the nonlinear kinds.
+/// The model of the scenario's controller when its kind is linear (its
+/// `Config::linear` gives its [`LinearForm`]: PID, ADRC); None for a
+/// nonlinear kind.
 pub fn controller_model(
     cfg: &ControllerCfg,
     design: &Design,
 ) -> Option<Result<ControllerModel, ParamError>> {
-    if let Some(c) = cfg.get::<PidConfig>() {
-        return Some(pid_model(c, design));
-    }
-    if let Some(c) = cfg.get::<AdrcConfig>() {
-        return Some(adrc_model(c, design));
-    }
-    None
+    let form = cfg.visit(Linear(design))?;
+    Some(form.map(|f| model_of(cfg.kind(), f)))
 }
 
-/// The PID's model (module doc).
-pub fn pid_model(cfg: &PidConfig, design: &Design) -> Result<ControllerModel, ParamError> {
-    let pid = cfg.build(design)?;
-    let (kp, ki, kd) = pid.gains();
-    let (tf, _) = pid.times();
-    let a = design.model.coeffs.as_array();
-    let b0 = design.model.b_at_rest();
-    let ff = if cfg.feedforward {
-        [a[0] / b0, a[1] / b0, a[2] / b0, 1.0 / b0]
-    } else {
-        [0.0; 4]
-    };
+/// A kind's linear form ([`Config::linear`]).
+struct Linear<'a>(&'a Design);
+
+impl Visit for Linear<'_> {
+    type Out = Option<Result<LinearForm, ParamError>>;
+    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
+        cfg.linear(self.0)
+    }
+}
+
+/// The models of a linear form (module doc).
+pub fn model_of(kind: &'static str, form: LinearForm) -> ControllerModel {
+    match form {
+        LinearForm::Pid {
+            kp,
+            ki,
+            kd,
+            tf,
+            feedforward,
+            u_limit,
+        } => pid_model(kind, [kp, ki, kd], tf, feedforward, u_limit),
+        LinearForm::Eso {
+            k,
+            beta,
+            b0,
+            a,
+            u_limit,
+        } => eso_model(kind, k, beta, b0, a, u_limit),
+    }
+}
+
+/// The PID's model (module doc): gains (kp, ki, kd), the derivative
+/// filter's `tf` and the reference feed-forward's weights.
+fn pid_model(
+    kind: &'static str,
+    [kp, ki, kd]: [f64; 3],
+    tf: f64,
+    ff: [f64; 4],
+    u_limit: f64,
+) -> ControllerModel {
     let am = DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 0.0, -1.0 / tf]);
     let bm = DMatrix::from_row_slice(
         2,
@@ -140,12 +162,12 @@ pub fn pid_model(cfg: &PidConfig, design: &Design) -> Result<ControllerModel, Pa
             u_out(),
         ),
     );
-    Ok(ControllerModel {
-        kind: "pid",
+    ControllerModel {
+        kind,
         law,
         parts: Vec::new(),
-        u_limit: cfg.u_limit.unwrap_or(f64::INFINITY),
-    })
+        u_limit,
+    }
 }
 
 fn adrc_states() -> Vec<Quantity> {
@@ -159,16 +181,14 @@ fn adrc_states() -> Vec<Quantity> {
 
 /// The ADRC's models (module doc): the observer, the static law, and the
 /// two together.
-pub fn adrc_model(cfg: &AdrcConfig, design: &Design) -> Result<ControllerModel, ParamError> {
-    let c = cfg.build(design)?;
-    let [k1, k2, k3] = c.feedback_gains();
-    let [b1, b2, b3, b4] = c.observer_gains();
-    let b0 = c.b0();
-    let a = if cfg.model_assisted {
-        design.model.coeffs.as_array()
-    } else {
-        [0.0; 3]
-    };
+fn eso_model(
+    kind: &'static str,
+    [k1, k2, k3]: [f64; 3],
+    [b1, b2, b3, b4]: [f64; 4],
+    b0: f64,
+    a: [f64; 3],
+    u_limit: f64,
+) -> ControllerModel {
     // The observer: inputs (θm, u), outputs z.
     let ao = DMatrix::from_row_slice(
         4,
@@ -249,12 +269,12 @@ pub fn adrc_model(cfg: &AdrcConfig, design: &Design) -> Result<ControllerModel, 
         None,
         (adrc_states(), controller_inputs(), u_out()),
     );
-    Ok(ControllerModel {
-        kind: "adrc",
+    ControllerModel {
+        kind,
         law,
         parts: vec![("observer", observer), ("law", static_law)],
-        u_limit: cfg.u_limit.unwrap_or(f64::INFINITY),
-    })
+        u_limit,
+    }
 }
 
 /// A linear observer of `[estimator]` as a discrete-time model of period
@@ -315,7 +335,9 @@ pub fn simulate(s: &StateSpace, inputs: &[Vec<f64>]) -> Vec<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ehservo_core::control::Controller;
+    use ehservo_core::control::adrc::AdrcConfig;
+    use ehservo_core::control::pid::PidConfig;
+    use ehservo_core::control::{Config, Controller};
     use ehservo_core::estimate::Estimator;
     use ehservo_core::sampled::SampledController;
     use ehservo_core::servo::{Load, NominalModel, ServoParams};
@@ -371,6 +393,19 @@ mod tests {
         }
     }
 
+    /// The kinds with a linear form are the PID and the ADRC; every other
+    /// registered kind has none (and `linearize` names it as nonlinear).
+    #[test]
+    fn the_linear_kinds_are_the_pid_and_the_adrc() {
+        let d = design(0.01);
+        let linear: Vec<&str> = ControllerCfg::KINDS
+            .iter()
+            .copied()
+            .filter(|k| controller_model(&ControllerCfg::default_of(k).unwrap(), &d).is_some())
+            .collect();
+        assert_eq!(linear, ["pid", "adrc"]);
+    }
+
     #[test]
     fn pid_model_is_the_sampled_law() {
         for (dt, cfg) in [
@@ -394,7 +429,7 @@ mod tests {
             ),
         ] {
             let d = design(dt);
-            let m = pid_model(&cfg, &d).unwrap();
+            let m = model_of("pid", cfg.linear(&d).unwrap().unwrap());
             against_law(cfg.build(&d).unwrap(), &m.for_mode(Some(dt)), dt, "pid");
         }
     }
@@ -407,7 +442,7 @@ mod tests {
                 ..AdrcConfig::default()
             };
             let d = design(dt);
-            let m = adrc_model(&cfg, &d).unwrap();
+            let m = model_of("adrc", cfg.linear(&d).unwrap().unwrap());
             against_law(cfg.build(&d).unwrap(), &m.for_mode(Some(dt)), dt, "adrc");
             // The observer and the static law, closed through u, are the
             // combined model: compare their composition sample by sample.
@@ -437,7 +472,7 @@ mod tests {
             filter_time: Some(0.1),
             ..PidConfig::default()
         };
-        let m = pid_model(&cfg, &design(0.01)).unwrap();
+        let m = model_of("pid", cfg.linear(&design(0.01)).unwrap().unwrap());
         let c = m.law.siso(0, 0);
         let w = 4.0;
         let j = super::super::ss::C64::new(0.0, w);

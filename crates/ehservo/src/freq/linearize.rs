@@ -620,7 +620,7 @@ mod tests {
     fn actuator_jacobians_match_finite_differences() {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         for (cfg, what) in stages() {
-            let st = ActuatorStage::new(&cfg).unwrap();
+            let st = ActuatorStage::of_config(&cfg).unwrap();
             for _ in 0..30 {
                 let u = rng.random_range(-1.5..1.5);
                 let x: Vec<f64> = match st.n() {
@@ -645,7 +645,7 @@ mod tests {
     /// one-sided slopes are 1 (inside) and 0 (beyond).
     #[test]
     fn saturation_kink_and_one_sided_slopes() {
-        let st = ActuatorStage::new(&ActuatorConfig {
+        let st = ActuatorStage::of_config(&ActuatorConfig {
             limit: Some(2.0),
             ..Default::default()
         })
@@ -669,7 +669,7 @@ mod tests {
     /// central differences of the two `eval`s in series.
     #[test]
     fn chain_jacobian_matches_finite_differences() {
-        let st = ActuatorStage::new(&stages()[2].0).unwrap();
+        let st = ActuatorStage::of_config(&stages()[2].0).unwrap();
         let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
         let chain = Chain {
             first: &st,
@@ -690,7 +690,7 @@ mod tests {
     /// 1 ms, is that to about 1e-6).
     #[test]
     fn spool_replay_by_hand() {
-        let st = ActuatorStage::new(&ActuatorConfig {
+        let st = ActuatorStage::of_config(&ActuatorConfig {
             time_constant: Some(0.005),
             ..Default::default()
         })
@@ -704,7 +704,7 @@ mod tests {
     /// needs 0.24 V, beyond the 0.2 V saturation.
     #[test]
     fn actuator_inversion_by_hand() {
-        let st = ActuatorStage::new(&ActuatorConfig {
+        let st = ActuatorStage::of_config(&ActuatorConfig {
             limit: Some(0.2),
             dead_band: Some(0.05),
             null_bias: Some(0.01),

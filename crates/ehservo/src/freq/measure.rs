@@ -39,8 +39,8 @@
 
 use super::ss::C64;
 use crate::plant::Plant;
-use crate::scenario::{ControllerConfig, PlantVisit, Setup, Visit};
-use crate::simulation::{SimConfig, Simulation, Stop};
+use crate::scenario::{ControllerConfig, Loop, LoopPlant, LoopVisit, Typed};
+use crate::simulation::{Simulation, Stop};
 use ehservo_core::control::{Controller, Measurement, Output, Truth};
 use ehservo_core::reference::{Chirp, Reference};
 use rayon::prelude::*;
@@ -198,14 +198,14 @@ pub struct Record {
 /// The loop of `setup` run for `steps` samples under the excitation,
 /// recording the samples `skip..steps`.
 pub fn run(
-    setup: &Setup,
+    setup: &Loop,
     input: Input,
     e: Arc<Excitation>,
     s: &Settings,
     skip: u64,
     steps: u64,
 ) -> Record {
-    setup.controller.visit(Runner {
+    setup.simulate(Runner {
         setup,
         input,
         e,
@@ -216,7 +216,7 @@ pub fn run(
 }
 
 struct Runner<'a> {
-    setup: &'a Setup,
+    setup: &'a Loop,
     input: Input,
     e: Arc<Excitation>,
     theta0: f64,
@@ -224,39 +224,12 @@ struct Runner<'a> {
     steps: u64,
 }
 
-impl Visit for Runner<'_> {
+/// The scenario's own plant and controller, typed (θ is the plant's
+/// position on its axis).
+impl LoopVisit for Runner<'_> {
     type Out = Record;
-    fn visit<K: ControllerConfig>(self, cfg: &K) -> Record {
-        let s = self.setup;
-        let ctrl = cfg
-            .build(&s.design)
-            .expect("Setup::new built this controller once already");
-        s.plant.visit(WithPlant {
-            runner: &self,
-            ctrl,
-        })
-    }
-}
-
-/// The second half of [`Runner`]: the controller built, the plant typed
-/// (the scenario's own plant, with its axis: θ is its position).
-struct WithPlant<'r, 'a, C> {
-    runner: &'r Runner<'a>,
-    ctrl: C,
-}
-
-impl<C: Controller> PlantVisit for WithPlant<'_, '_, C> {
-    type Out = Record;
-    fn visit<P: Plant + Clone + std::fmt::Debug + Send + Sync + 'static>(
-        self,
-        plant: &P,
-    ) -> Record {
-        self.runner.with_plant(plant.clone(), self.ctrl)
-    }
-}
-
-impl Runner<'_> {
-    fn with_plant<P: Plant, C: Controller>(&self, plant: P, ctrl: C) -> Record {
+    fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Record {
+        let (plant, ctrl) = (t.plant, t.controller);
         match self.input {
             Input::Tracking => self.go(
                 plant,
@@ -279,16 +252,17 @@ impl Runner<'_> {
             ),
         }
     }
+}
 
+impl Runner<'_> {
     fn go<P: Plant, C: Controller>(&self, plant: P, ctrl: C, reference: Excited) -> Record {
         let s = self.setup;
-        let cfg = SimConfig {
-            steps: self.steps,
-            x0: [self.theta0, 0.0, 0.0],
-            ..s.sim
-        };
-        let mut sim = Simulation::new(plant, ctrl, reference, s.stages.clone(), cfg)
-            .expect("Setup::new validated the sample period and the policy");
+        let settings = s
+            .settings()
+            .clone()
+            .with_steps(self.steps)
+            .with_x0([self.theta0, 0.0, 0.0]);
+        let mut sim = Simulation::from_settings(plant, ctrl, reference, settings);
         let n = (self.steps - self.skip) as usize;
         let mut r = Record {
             theta: Vec::with_capacity(n),
@@ -296,7 +270,7 @@ impl Runner<'_> {
             input: Vec::with_capacity(n),
             diverged_at_s: None,
         };
-        let h = s.sim.step;
+        let h = s.sim().step;
         while let Some(smp) = sim.step() {
             if smp.k >= self.skip && smp.k < self.steps {
                 r.theta.push(smp.x[0] - self.theta0);
@@ -401,9 +375,9 @@ impl Measured {
 }
 
 /// The work of a plan of `samples` samples, in law and RK4 evaluations.
-pub fn work(setup: &Setup, samples: u64) -> f64 {
-    let per = match setup.sim.mode {
-        crate::simulation::Mode::Sampled => 1.0 + f64::from(setup.sim.substeps),
+pub fn work(setup: &Loop, samples: u64) -> f64 {
+    let per = match setup.sim().mode {
+        crate::simulation::Mode::Sampled => 1.0 + f64::from(setup.sim().substeps),
         crate::simulation::Mode::Continuous => 4.0,
     };
     samples as f64 * per
@@ -411,8 +385,8 @@ pub fn work(setup: &Setup, samples: u64) -> f64 {
 
 /// A sinestream at `freqs` (Hz) of one input: one run per frequency, in
 /// parallel, in order.
-pub fn sinestream(setup: &Setup, input: Input, freqs: &[f64], s: &Settings) -> Vec<Measured> {
-    let h = setup.sim.step;
+pub fn sinestream(setup: &Loop, input: Input, freqs: &[f64], s: &Settings) -> Vec<Measured> {
+    let h = setup.sim().step;
     freqs
         .par_iter()
         .map(|&f| {
@@ -626,8 +600,8 @@ pub fn welch(plan: &WelchPlan, x: &[f64], y: &[f64]) -> Vec<(C64, f64)> {
 }
 
 /// A Welch measurement of one input.
-pub fn welch_measure(setup: &Setup, input: Input, plan: &WelchPlan, s: &Settings) -> Vec<Measured> {
-    let h = setup.sim.step;
+pub fn welch_measure(setup: &Loop, input: Input, plan: &WelchPlan, s: &Settings) -> Vec<Measured> {
+    let h = setup.sim().step;
     let amp = match input {
         Input::Tracking => s.amplitude,
         Input::Disturbance => s.disturbance,
@@ -675,7 +649,7 @@ pub fn welch_measure(setup: &Setup, input: Input, plan: &WelchPlan, s: &Settings
 }
 
 /// The two inputs of a Welch measurement, in parallel.
-pub fn welch_both(setup: &Setup, plan: &WelchPlan, s: &Settings) -> (Vec<Measured>, Vec<Measured>) {
+pub fn welch_both(setup: &Loop, plan: &WelchPlan, s: &Settings) -> (Vec<Measured>, Vec<Measured>) {
     rayon::join(
         || welch_measure(setup, Input::Tracking, plan, s),
         || welch_measure(setup, Input::Disturbance, plan, s),

@@ -24,23 +24,22 @@ pub mod report;
 pub mod response;
 pub mod ss;
 
-use crate::scenario::{Scenario, ScenarioError, Setup};
+use crate::scenario::{Loop, Reason, ScenarioError};
 use ehservo_core::math::DR;
 use ehservo_core::reference::Reference;
 use linearize::{ActuatorStage, Chain, Linearize, Point, Side};
 use oppoint::{At, LinPlant, OperatingPoint};
-use response::{Discretisation, Loop};
+use response::{Discretisation, LoopModel};
 use serde_json::{json, Value};
 use ss::{pair, StateSpace};
 
 /// A bad request about a scenario: its file, the key (or flag) and why.
-pub fn bad(s: &Scenario, file: &str, key: &str, reason: impl Into<String>) -> ScenarioError {
-    let _ = s;
+pub fn bad(file: &str, key: &str, reason: impl Into<String>) -> ScenarioError {
     ScenarioError {
         file: file.to_string(),
         key: key.to_string(),
         line_col: None,
-        reason: reason.into(),
+        reason: Reason::Other(reason.into()),
     }
 }
 
@@ -48,59 +47,51 @@ pub fn bad(s: &Scenario, file: &str, key: &str, reason: impl Into<String>) -> Sc
 #[derive(Debug, Clone)]
 pub struct Linearised {
     /// The scenario built.
-    pub setup: Setup,
+    pub setup: Loop,
     /// The operating point.
     pub point: OperatingPoint,
     /// The loop's models.
-    pub lp: Loop,
+    pub lp: LoopModel,
     /// The side of a one-sided model (None: differentiable there).
     pub side: Option<Side>,
 }
 
 /// The default operating point: a trim at the reference's θd(0).
-pub fn default_at(setup: &Setup) -> At {
-    At::Trim(setup.reference.z(0.0)[0])
+pub fn default_at(setup: &Loop) -> At {
+    At::Trim(setup.reference().z(0.0)[0])
 }
 
 /// Linearises the scenario's loop at `at`. At a kink without `side`, the
 /// error names the kink and gives the one-sided derivatives; with `side`
 /// the one-sided model is built.
 pub fn linearise(
-    s: &Scenario,
+    setup: &Loop,
     file: &str,
     at: Option<At>,
     side: Option<Side>,
     discretisation: Discretisation,
 ) -> Result<Linearised, ScenarioError> {
-    let setup = s.setup()?;
     let key = match at {
         Some(At::Time(_)) => "--at",
         _ => "--trim",
     };
-    let plant = LinPlant::of(&setup).map_err(|(k, r)| bad(s, file, &k, r))?;
-    let act = ActuatorStage::new(&s.actuator).map_err(|e| {
-        bad(
-            s,
-            file,
-            &format!("actuator.{}", e.name),
-            e.reason.to_string(),
-        )
-    })?;
-    let at = at.unwrap_or_else(|| default_at(&setup));
+    let plant = LinPlant::of(setup).map_err(|(k, r)| bad(file, &k, r))?;
+    let act = ActuatorStage::new(&setup.stages().actuator);
+    let at = at.unwrap_or_else(|| default_at(setup));
     let point = match at {
-        At::Trim(theta0) => oppoint::trim(&setup, &plant, &act, theta0),
-        At::Time(t) => oppoint::at_time(&setup, &plant, &act, t),
+        At::Trim(theta0) => oppoint::trim(setup, &plant, &act, theta0),
+        At::Time(t) => oppoint::at_time(setup, &plant, &act, t),
     }
-    .map_err(|(k, r)| bad(s, file, &k, r))?;
-    let lp = Loop::new(
-        &setup,
+    .map_err(|(k, r)| bad(file, &k, r))?;
+    let lp = LoopModel::new(
+        setup,
         &plant,
         &act,
         &point,
         side.unwrap_or(Side::Plus),
         discretisation,
     )
-    .map_err(|(k, r)| bad(s, file, &k, r))?;
+    .map_err(|(k, r)| bad(file, &k, r))?;
     if !lp.kinks.is_empty() && side.is_none() {
         let chain = Chain {
             first: &act,
@@ -112,15 +103,13 @@ pub fn linearise(
             u: point.u,
             v: point.variation(),
         };
-        return Err(bad(s, file, key, kink_message(&chain, &p, &lp)));
+        return Err(bad(file, key, kink_message(&chain, &p, &lp)));
     }
     let lp_kinks_empty = lp.kinks.is_empty();
     // The controller's own output limit at the point.
     if let Some(c) = &lp.controller {
         if point.u.abs() >= c.u_limit {
-            return Err(bad(
-                s,
-                file,
+            return Err(bad(file,
                 key,
                 format!(
                     "the controller's command {:.6} V is at its output limit controller.u_limit = {} V there: its linear model (slope 1 inside, 0 beyond) does not hold",
@@ -130,7 +119,7 @@ pub fn linearise(
         }
     }
     Ok(Linearised {
-        setup,
+        setup: setup.clone(),
         point,
         lp,
         // A side only means something at a kink.
@@ -140,7 +129,7 @@ pub fn linearise(
 
 /// The one line naming the kinks and the one-sided derivatives that differ
 /// most.
-fn kink_message(chain: &Chain, p: &Point, lp: &Loop) -> String {
+fn kink_message(chain: &Chain, p: &Point, lp: &LoopModel) -> String {
     let jm = chain.jacobian(p, Side::Minus);
     let jp = chain.jacobian(p, Side::Plus);
     let names = chain.states();
@@ -203,7 +192,8 @@ pub fn model_json(m: &StateSpace) -> Value {
 }
 
 /// The linearisation as JSON (what `ehservo linearize` writes).
-pub fn linearisation_json(s: &Scenario, l: &Linearised) -> Value {
+pub fn linearisation_json(l: &Linearised) -> Value {
+    let s = l.setup.scenario();
     let lp = &l.lp;
     let ctrl = lp.controller.as_ref().map(|c| {
         json!({
@@ -292,13 +282,13 @@ mod tests {
     #[test]
     fn a_kink_is_refused_with_its_one_sided_values() {
         let toml = "[plant.params]\nKce = 0.0\n[uncertainty]\na_bias = 0.0\nb_bias = 0.0\n[controller]\nkind = \"pid\"\n";
-        let s = Scenario::parse(toml).unwrap();
+        let s = Loop::parse(toml).unwrap();
         let e =
             linearise(&s, "k.toml", Some(At::Trim(0.2)), None, Discretisation::Zoh).unwrap_err();
         assert_eq!(e.key, "--trim");
         assert!(e.reason.contains("sgn(xv)"), "{}", e.reason);
         assert!(e.reason.contains("from below"), "{}", e.reason);
-        assert!(!e.reason.contains('\n'));
+        assert!(!e.reason.contains("\n"));
         for side in [Side::Minus, Side::Plus] {
             let l = linearise(
                 &s,

@@ -26,7 +26,7 @@
 
 use super::linearize::{ActuatorStage, Linearize, PlantState, Point, Side};
 use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant, UncertaintySignal, Variation};
-use crate::scenario::{self, ControllerConfig, PlantVisit, Setup, Visit};
+use crate::scenario::{self, ControllerConfig, Loop, LoopPlant, LoopVisit, Typed};
 use crate::simulation::{Mode, Simulation, Stop};
 use crate::third_order::varied;
 use crate::uncertainty::{Draw, Factors};
@@ -65,18 +65,18 @@ pub enum LinPlant {
 impl LinPlant {
     /// The scenario's plant at its variation's bias; an error (key,
     /// reason) for a plant without a [`Linearize`] implementation.
-    pub fn of(setup: &Setup) -> Result<Self, (String, String)> {
+    pub fn of(setup: &Loop) -> Result<Self, (String, String)> {
         Self::with_factors(setup, &bias(setup).1)
     }
 
     /// The scenario's plant with the physical factors `f`.
-    pub fn with_factors(setup: &Setup, f: &Factors) -> Result<Self, (String, String)> {
+    pub fn with_factors(setup: &Loop, f: &Factors) -> Result<Self, (String, String)> {
         let (p, l) = if *f == Factors::ONE {
-            (setup.model.params, setup.model.load)
+            (setup.model().params, setup.model().load)
         } else {
-            varied(&setup.model.params, &setup.model.load, f)
+            varied(&setup.model().params, &setup.model().load, f)
         };
-        match &setup.plant {
+        match &setup.plant() {
             scenario::AnyPlant::ThirdOrder(_) => Ok(LinPlant::Third(ThirdOrderPlant::new(p, l))),
             scenario::AnyPlant::Physical(_) => Ok(LinPlant::Physical(PhysicalPlant::new(p, l))),
             // Any other registered plant (a new one need not be named here).
@@ -161,16 +161,16 @@ impl OperatingPoint {
 /// The scenario's variation for the draw `r`: the paper's part on the
 /// nominal coefficients and the physical factors, as the plants make them
 /// (`Plant::variation`).
-fn variation_of(setup: &Setup, r: &Draw) -> (Variation, Factors) {
-    let spec = &setup.stages.uncertainty;
+fn variation_of(setup: &Loop, r: &Draw) -> (Variation, Factors) {
+    let spec = &setup.stages().uncertainty;
     (
-        Variation::of(spec, &setup.model.coeffs.as_array(), r),
+        Variation::of(spec, &setup.model().coeffs.as_array(), r),
         spec.physical.factors(&r.physical),
     )
 }
 
 /// The bias part of the scenario's variation (every r = 0).
-fn bias(setup: &Setup) -> (Variation, Factors) {
+fn bias(setup: &Loop) -> (Variation, Factors) {
     variation_of(setup, &Draw::default())
 }
 
@@ -325,7 +325,7 @@ pub fn trim_plant(
 
 /// The trim point of the scenario's loop at θ0 (rad).
 pub fn trim(
-    setup: &Setup,
+    setup: &Loop,
     plant: &LinPlant,
     actuator: &ActuatorStage,
     theta0: f64,
@@ -355,27 +355,27 @@ pub fn trim(
 
 /// The run's state at the sample nearest `t`.
 pub fn at_time(
-    setup: &Setup,
+    setup: &Loop,
     plant: &LinPlant,
     actuator: &ActuatorStage,
     t: f64,
 ) -> Result<OperatingPoint, (String, String)> {
-    let h = setup.sim.step;
-    if !(t.is_finite() && t >= 0.0 && t <= setup.horizon * (1.0 + 1e-12)) {
+    let h = setup.sim().step;
+    if !(t.is_finite() && t >= 0.0 && t <= setup.horizon() * (1.0 + 1e-12)) {
         return Err((
             "--at".into(),
             format!(
                 "{t}: must be a time within the run, 0 to simulation.horizon = {} s",
-                setup.horizon
+                setup.horizon()
             ),
         ));
     }
     let k = (t / h).round() as u64;
-    let rec = setup.controller.visit(RunTo { setup, k })?;
+    let rec = setup.simulate(RunTo { k })?;
     let tk = k as f64 * h;
     let x = plant.state_of(&rec.sample);
     // The command the plant gets over [t_k, t_k + h).
-    let delay = setup.sim.computation_delay && setup.sim.mode == Mode::Sampled;
+    let delay = setup.sim().computation_delay && setup.sim().mode == Mode::Sampled;
     let applied: Vec<f64> = if delay {
         std::iter::once(0.0)
             .chain(rec.commands.iter().copied())
@@ -384,10 +384,10 @@ pub fn at_time(
         rec.commands.clone()
     };
     let u = applied[k as usize];
-    let spool = actuator.replay(&applied[..k as usize], h, setup.sim.substeps);
+    let spool = actuator.replay(&applied[..k as usize], h, setup.sim().substeps);
     let xa = actuator.state_from(rec.sample.spool, spool[1]);
-    let (v, factors) = if setup.stages.uncertainty.is_random() {
-        let mut unc = UncertaintySignal::new(setup.stages.uncertainty);
+    let (v, factors) = if setup.stages().uncertainty.is_random() {
+        let mut unc = UncertaintySignal::new(setup.stages().uncertainty);
         let r = *unc.draw_at(unc.interval_at(tk));
         variation_of(setup, &r)
     } else {
@@ -426,51 +426,24 @@ struct Recorded {
     commands: Vec<f64>,
 }
 
-struct RunTo<'a> {
-    setup: &'a Setup,
+/// Runs the scenario's own plant and controller, typed, to sample `k`.
+struct RunTo {
     k: u64,
 }
 
-impl Visit for RunTo<'_> {
+impl LoopVisit for RunTo {
     type Out = Result<Recorded, (String, String)>;
-    fn visit<K: ControllerConfig>(self, cfg: &K) -> Self::Out {
-        let s = self.setup;
-        let ctrl = cfg
-            .build(&s.design)
-            .expect("Setup::new built this controller once already");
-        s.plant.visit(RecordOn {
-            ctrl,
-            setup: s,
-            k: self.k,
-        })
-    }
-}
-
-/// The second half of [`RunTo`]: the scenario's own plant, typed.
-struct RecordOn<'a, C> {
-    ctrl: C,
-    setup: &'a Setup,
-    k: u64,
-}
-
-impl<C: ehservo_core::control::Controller> PlantVisit for RecordOn<'_, C> {
-    type Out = Result<Recorded, (String, String)>;
-    fn visit<P: Plant + Clone + std::fmt::Debug + Send + Sync + 'static>(
-        self,
-        plant: &P,
-    ) -> Self::Out {
-        record(plant.clone(), self.ctrl, self.setup, self.k)
+    fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
+        let s = t.lp;
+        record(t.simulation(), s, self.k)
     }
 }
 
 fn record<P: Plant, C: ehservo_core::control::Controller>(
-    plant: P,
-    ctrl: C,
-    s: &Setup,
+    mut sim: Simulation<P, C, scenario::AnyReference>,
+    s: &Loop,
     k: u64,
 ) -> Result<Recorded, (String, String)> {
-    let mut sim = Simulation::new(plant, ctrl, s.reference.clone(), s.stages.clone(), s.sim)
-        .expect("Setup::new validated the sample period and the policy");
     sim.log_states(true);
     let mut commands = Vec::with_capacity(k as usize + 1);
     loop {
@@ -491,7 +464,7 @@ fn record<P: Plant, C: ehservo_core::control::Controller>(
                 };
                 return Err((
                     "--at".into(),
-                    format!("{when}, before t = {} s", k as f64 * s.sim.step),
+                    format!("{when}, before t = {} s", k as f64 * s.sim().step),
                 ));
             }
         }

@@ -28,7 +28,7 @@ use super::oppoint::At;
 use super::response::Discretisation;
 use super::ss::C64;
 use crate::output::Staging;
-use crate::scenario::{Scenario, ScenarioError};
+use crate::scenario::{Loop, ScenarioError};
 use files::write;
 
 /// The work limit of a run, for a whole measurement.
@@ -137,7 +137,6 @@ impl FreqOptions {
 
 /// The frequency range checks (bad input names the flag).
 fn check_range(
-    s: &Scenario,
     file: &str,
     lo: (&str, f64),
     hi: (&str, f64),
@@ -145,7 +144,7 @@ fn check_range(
     nyquist: f64,
     h: f64,
 ) -> Result<(), ScenarioError> {
-    let bad = |k: &str, r: String| Err(super::bad(s, file, k, r));
+    let bad = |k: &str, r: String| Err(super::bad(file, k, r));
     if !(lo.1.is_finite() && lo.1 > 0.0) {
         return bad(lo.0, format!("{}: must be a frequency > 0 Hz", lo.1));
     }
@@ -194,13 +193,11 @@ struct MeasuredSet {
 }
 
 /// Runs `ehservo freq` on a loaded scenario into `dir`.
-pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Result<FreqSummary> {
-    let setup = s.setup()?;
-    let h = setup.sim.step;
+pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Result<FreqSummary> {
+    let h = setup.sim().step;
     let nyq = 0.5 / h;
     let f_max = o.f_max.unwrap_or(0.99 * nyq);
     check_range(
-        s,
         file,
         ("--f-min", o.f_min),
         ("--f-max", f_max),
@@ -211,7 +208,6 @@ pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Res
     let mf_max = o.measure_f_max.unwrap_or(0.9 * nyq);
     if !o.methods.is_empty() {
         check_range(
-            s,
             file,
             ("--measure-f-min", o.measure_f_min),
             ("--measure-f-max", mf_max),
@@ -225,33 +221,29 @@ pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Res
             ("--disturbance", st.disturbance),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                Err(super::bad(s, file, k, format!("{v}: must be > 0")))?;
+                Err(super::bad(file, k, format!("{v}: must be > 0")))?;
             }
         }
         if !(st.settle_s.is_finite() && st.settle_s >= 0.0) {
-            Err(super::bad(s, file, "--settle", "must be finite and >= 0"))?;
+            Err(super::bad(file, "--settle", "must be finite and >= 0"))?;
         }
         if st.cycles == 0 || st.cycles > 10_000 {
-            Err(super::bad(
-                s,
-                file,
-                "--cycles",
-                "must be between 1 and 10000",
-            ))?;
+            Err(super::bad(file, "--cycles", "must be between 1 and 10000"))?;
         }
         if o.periods < 2 || o.periods > 10_000 {
-            Err(super::bad(
-                s,
-                file,
-                "--periods",
-                "must be between 2 and 10000",
-            ))?;
+            Err(super::bad(file, "--periods", "must be between 2 and 10000"))?;
         }
     }
     // The computed part, where the plant is linearised.
-    let computed = match super::oppoint::LinPlant::of(&setup) {
+    let computed = match super::oppoint::LinPlant::of(setup) {
         Err((_, why)) => Err(why),
-        Ok(_) => Ok(super::linearise(s, file, o.at, o.side, o.discretisation)?),
+        Ok(_) => Ok(super::linearise(
+            setup,
+            file,
+            o.at,
+            o.side,
+            o.discretisation,
+        )?),
     };
     if let Ok(l) = &computed {
         if !super::all_finite(l) {
@@ -262,7 +254,7 @@ pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Res
         Ok(l) => l.point.theta_deg * ehservo_core::math::DR,
         Err(_) => match o.at {
             Some(At::Trim(t)) => t,
-            _ => super::default_at(&setup).theta0(),
+            _ => super::default_at(setup).theta0(),
         },
     };
     let settings = Settings {
@@ -299,19 +291,17 @@ pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Res
                     .iter()
                     .map(|&f| {
                         let p = measure::plan_sine(f, h, &settings);
-                        measure::work(&setup, p.settle + p.window)
+                        measure::work(setup, p.settle + p.window)
                     })
                     .sum::<f64>(),
                 Method::Multisine => {
-                    measure::work(&setup, welch_plan(Broadband::Multisine).samples())
+                    measure::work(setup, welch_plan(Broadband::Multisine).samples())
                 }
-                Method::Chirp => measure::work(&setup, welch_plan(Broadband::Chirp).samples()),
+                Method::Chirp => measure::work(setup, welch_plan(Broadband::Chirp).samples()),
             };
     }
     if total > MAX_WORK {
-        Err(super::bad(
-            s,
-            file,
+        Err(super::bad(file,
             "--measure-f-min",
             format!(
                 "the measurement is about {total:.2e} law and RK4 evaluations, more than the limit of {MAX_WORK:.0e}: raise --measure-f-min, lower --measure-points, --cycles or --periods"
@@ -325,8 +315,8 @@ pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Res
         let set = match m {
             Method::Sine => {
                 let (tr, di) = rayon::join(
-                    || measure::sinestream(&setup, Input::Tracking, &mgrid, &settings),
-                    || measure::sinestream(&setup, Input::Disturbance, &mgrid, &settings),
+                    || measure::sinestream(setup, Input::Tracking, &mgrid, &settings),
+                    || measure::sinestream(setup, Input::Disturbance, &mgrid, &settings),
                 );
                 let plans: Vec<_> = mgrid
                     .iter()
@@ -346,7 +336,7 @@ pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Res
                     Broadband::Multisine
                 };
                 let plan = welch_plan(kind);
-                let (tr, di) = measure::welch_both(&setup, &plan, &settings);
+                let (tr, di) = measure::welch_both(setup, &plan, &settings);
                 MeasuredSet {
                     method: m,
                     tracking: tr,
@@ -357,7 +347,7 @@ pub fn freq_to_dir(s: &Scenario, file: &str, o: &FreqOptions, dir: &Path) -> Res
         };
         sets.push(set);
     }
-    write(s, &setup, o, &computed, &sets, f_max, settings, stage)
+    write(setup, o, &computed, &sets, f_max, settings, stage)
 }
 
 impl At {

@@ -30,7 +30,7 @@ use super::controllers::{controller_model, observer_model, ControllerModel};
 use super::linearize::{ActuatorStage, Chain, Delay, Kink, Linearize, Point, Side};
 use super::oppoint::{LinPlant, OperatingPoint};
 use super::ss::{Quantity, StateSpace, C64};
-use crate::scenario::Setup;
+use crate::scenario::Loop;
 use crate::simulation::Mode;
 use ehservo_sim::estimator::AnyEstimator;
 
@@ -55,7 +55,7 @@ impl Discretisation {
 
 /// The loop's linear models at an operating point.
 #[derive(Debug, Clone)]
-pub struct Loop {
+pub struct LoopModel {
     /// The loop's mode.
     pub mode: Mode,
     /// The sample period (s).
@@ -143,17 +143,17 @@ impl Responses {
     }
 }
 
-impl Loop {
+impl LoopModel {
     /// The loop of `setup` at the operating point `op`, on `side` at a kink.
     pub fn new(
-        setup: &Setup,
+        setup: &Loop,
         plant: &LinPlant,
         actuator: &ActuatorStage,
         op: &OperatingPoint,
         side: Side,
         discretisation: Discretisation,
-    ) -> Result<Loop, (String, String)> {
-        let h = setup.sim.step;
+    ) -> Result<LoopModel, (String, String)> {
+        let h = setup.sim().step;
         let v = op.variation();
         let chain = Chain {
             first: actuator,
@@ -163,7 +163,7 @@ impl Loop {
         let p = Point { x: &x, u: op.u, v };
         let kinks = chain.kinks(&p);
         let mut notes = chain.notes(&p);
-        let sc = setup.stages.sensor.config();
+        let sc = setup.stages().sensor.config();
         if sc.resolution.iter().any(|&r| r > 0.0) {
             notes.push(
                 "sensor.resolution: the quantiser is taken as the identity (its slope is 0 between steps and undefined at them; 1 on average)"
@@ -173,7 +173,7 @@ impl Loop {
         if sc.noise.iter().any(|&v| v > 0.0) {
             notes.push("sensor.noise: left out of the linear model".into());
         }
-        if matches!(setup.stages.estimator, Some(AnyEstimator::Levant(_))) {
+        if matches!(setup.stages().estimator, Some(AnyEstimator::Levant(_))) {
             notes.push(
                 "estimator: Levant's differentiator is nonlinear and not linearised; PID and ADRC read θ only, so it is outside their loop"
                     .into(),
@@ -208,12 +208,12 @@ impl Loop {
                 ),
             ));
         }
-        let sampled = setup.sim.mode == Mode::Sampled;
+        let sampled = setup.sim().mode == Mode::Sampled;
         let g_d = if sampled {
             Some(
                 match discretisation {
                     Discretisation::Zoh => g.zoh(h),
-                    Discretisation::Rk4 => g.rk4_map(h, setup.sim.substeps),
+                    Discretisation::Rk4 => g.rk4_map(h, setup.sim().substeps),
                 }
                 .map_err(|e| ("plant".to_string(), e.to_string()))?,
             )
@@ -221,12 +221,12 @@ impl Loop {
             None
         };
         let sensor_delay = if sampled {
-            setup.stages.sensor.config().delay as usize
+            setup.stages().sensor.config().delay as usize
         } else {
             0
         };
-        let computation_delay = usize::from(sampled && setup.sim.computation_delay);
-        let controller = match controller_model(&setup.controller, &setup.design) {
+        let computation_delay = usize::from(sampled && setup.sim().computation_delay);
+        let controller = match controller_model(setup.controller(), setup.design()) {
             None => None,
             Some(r) => Some(r.map_err(|e| {
                 (
@@ -271,12 +271,12 @@ impl Loop {
             (Some(c), None) => Some(g.series(c).map_err(|e| ("loop".to_string(), e.0))?),
             _ => None,
         };
-        let observer = match &setup.stages.estimator {
+        let observer = match &setup.stages().estimator {
             Some(AnyEstimator::Linear(o)) if sampled => Some(observer_model(o, h)),
             _ => None,
         };
-        Ok(Loop {
-            mode: setup.sim.mode,
+        Ok(LoopModel {
+            mode: setup.sim().mode,
             h,
             discretisation,
             plant: plant_m,
@@ -409,18 +409,16 @@ impl Loop {
 mod tests {
     use super::*;
     use crate::freq::oppoint;
-    use crate::scenario::Scenario;
-
-    fn setup(toml: &str) -> Setup {
-        Scenario::parse(toml).unwrap().setup().unwrap()
+    fn setup(toml: &str) -> Loop {
+        Loop::parse(toml).unwrap()
     }
 
-    fn loop_of(toml: &str, d: Discretisation) -> Loop {
+    fn loop_of(toml: &str, d: Discretisation) -> LoopModel {
         let s = setup(toml);
         let plant = LinPlant::of(&s).unwrap();
-        let act = ActuatorStage::new(&Scenario::parse(toml).unwrap().actuator).unwrap();
+        let act = ActuatorStage::new(&s.stages().actuator);
         let op = oppoint::trim(&s, &plant, &act, 0.0).unwrap();
-        Loop::new(&s, &plant, &act, &op, Side::Plus, d).unwrap()
+        LoopModel::new(&s, &plant, &act, &op, Side::Plus, d).unwrap()
     }
 
     /// PID on the nominal third-order plant at rest, by hand: G(s) =
@@ -434,7 +432,7 @@ mod tests {
         let toml = "[simulation]\nmode = \"continuous\"\nstep = 0.001\n[controller]\nkind = \"pid\"\n[uncertainty]\na_bias = 0.0\nb_bias = 0.0\n";
         let lp = loop_of(toml, Discretisation::Zoh);
         let s = setup(toml);
-        let m = &s.design.model;
+        let m = &s.design().model;
         let a = m.coeffs;
         let ak = 2.0 * 4.0;
         let (a1, a2, a3) = (
@@ -444,10 +442,10 @@ mod tests {
         );
         let b0 = m.b_at_rest();
         let pid = s
-            .controller
+            .controller()
             .get::<ehservo_core::control::pid::PidConfig>()
             .unwrap();
-        let built = ehservo_core::control::Config::build(pid, &s.design).unwrap();
+        let built = ehservo_core::control::Config::build(pid, s.design()).unwrap();
         let (kp, ki, kd) = built.gains();
         let (tf, _) = built.times();
         for w in [0.3, 5.0, 60.0, 800.0] {

@@ -446,14 +446,16 @@ pub fn excite_to_dir(
     out: &Path,
 ) -> Result<Written> {
     let prior = match prior_path {
-        Some(p) => Scenario::load(p, set)?,
-        None => Scenario::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", set)?,
+        Some(p) => crate::formats::load(p, set)?,
+        None => {
+            crate::scenario::Loop::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", set)?
+        }
     };
     let d = design(spec)?;
     let h = 1.0 / spec.rate;
-    let pp = prior.servo();
-    let a = super::greybox::effective(&pp, &prior.load_model());
-    let b = ehservo_core::servo::NominalModel::new(pp, prior.load_model()).b_at_rest();
+    let pm = prior.model();
+    let a = super::greybox::effective(&pm.params, &pm.load);
+    let b = pm.b_at_rest();
     let kp = match spec.loop_kind {
         Loop::Open => None,
         Loop::Closed => Some(spec.kp.unwrap_or_else(|| default_kp(a, b))),

@@ -44,7 +44,7 @@ mod scenario;
 pub use bounds::Bounds;
 
 use crate::error::InputError;
-use crate::scenario::Scenario;
+use crate::scenario::{Loop, Scenario};
 use bounds::spread;
 use data::{Axis, ColumnMap, Experiment, ReadOptions};
 use derived::{greybox_derived, linear_derived};
@@ -178,8 +178,8 @@ pub struct Outcome {
     pub bounds: Option<Bounds>,
     /// The identified scenario (rotary data).
     pub scenario: Option<Scenario>,
-    /// The prior scenario.
-    pub prior: Scenario,
+    /// The prior scenario, built.
+    pub prior: Loop,
     /// Things the reader should know.
     pub notes: Vec<String>,
     /// The linear model's settings (for the response over the FRF).
@@ -241,11 +241,11 @@ fn read_all(opts: &Options) -> anyhow::Result<(Vec<Experiment>, Vec<Experiment>)
     Ok((exps, vals))
 }
 
-/// The prior scenario.
-fn prior(opts: &Options) -> anyhow::Result<Scenario> {
+/// The prior scenario, built.
+fn prior(opts: &Options) -> anyhow::Result<Loop> {
     Ok(match &opts.prior {
-        Some(p) => Scenario::load(p, &opts.set)?,
-        None => Scenario::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", &opts.set)?,
+        Some(p) => crate::formats::load(p, &opts.set)?,
+        None => Loop::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", &opts.set)?,
     })
 }
 
@@ -285,15 +285,14 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         .collect();
     // 2. The linear model.
     let load_terms = opts.load_terms;
-    let k = prior.load_model().wavenumber;
+    let k = prior.model().load.wavenumber;
     if load_terms && !(k.is_finite() && k > 0.0) {
         return Err(bad(format!(
             "--load-terms: the prior's load.wavenumber is {k}: the load terms need k > 0 (set it with --set load.wavenumber=K)"
         )));
     }
-    let pp = prior.servo();
-    let pl = prior.load_model();
-    let pm = ehservo_core::servo::NominalModel::new(pp, pl);
+    let pm = *prior.model();
+    let (pp, pl) = (pm.params, pm.load);
     let prior_eff = greybox::effective(&pp, &pl);
     let prior_d = [
         pp.d_per_torque() * pl.amplitude,

@@ -47,7 +47,7 @@ fn model_responses(o: &Outcome, i: usize, f: &[f64]) -> Vec<(&'static str, Vec<C
     ));
     if let Some(g) = &o.greybox {
         let nk = super::greybox::KEYS.len();
-        let (p, l) = super::greybox::from_vec(&g.fit.values()[..nk], &o.prior.load_model());
+        let (p, l) = super::greybox::from_vec(&g.fit.values()[..nk], &o.prior.model().load);
         let e = super::greybox::effective(&p, &l);
         let b = ehservo_core::servo::NominalModel::new(p, l).b_at_rest();
         out.push(("greybox", oe::discrete_response(e, b, h, f)));

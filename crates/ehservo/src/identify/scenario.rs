@@ -4,7 +4,7 @@
 
 use super::fit::{self, FitOptions, Param, Problem, Status};
 use super::{greybox, Bounds, ModelResult};
-use crate::scenario::Scenario;
+use crate::scenario::{Loop, Scenario};
 use ehservo_core::servo::{Load, ServoParams};
 use std::path::PathBuf;
 
@@ -87,24 +87,24 @@ pub(super) fn match_coefficients(
 /// The prior scenario with the grey-box's parameters, no variation, and
 /// the controller told the bounds.
 pub(super) fn identified_scenario(
-    prior: &Scenario,
+    prior: &Loop,
     g: &ModelResult,
     bounds: Option<&Bounds>,
     files: &[PathBuf],
 ) -> anyhow::Result<Scenario> {
     let nk = greybox::KEYS.len();
-    let (p, l): (ServoParams, Load) = greybox::from_vec(&g.fit.values()[..nk], &prior.load_model());
-    let mut s = prior.clone();
+    let (p, l): (ServoParams, Load) = greybox::from_vec(&g.fit.values()[..nk], &prior.model().load);
+    let mut s = prior.scenario().clone();
     s.name = "identified".into();
     s.description = format!(
         "Identified by `ehservo identify` from {}: the grey-box fit's physical parameters (the paper's model (1)-(6)); no parameter variation; the controller's bound_a and bound_b from the estimates' spread when there was one.",
         files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ")
     );
-    s.plant = if prior.plant.model() == "physical" {
-        crate::scenario::PlantCfg::Physical(ehservo_sim::physical::PhysicalCfg { params: p })
-    } else {
+    // The prior's own model when it is of the paper's family (physical or
+    // third-order), else the third-order model the grey-box is.
+    s.plant = s.plant.with_paper_params(p).unwrap_or({
         crate::scenario::PlantCfg::ThirdOrder(ehservo_sim::third_order::ThirdOrderCfg { params: p })
-    };
+    });
     s.load = Some(l);
     s.uncertainty = crate::scenario::UncertaintyCfg {
         a_bias: Some(0.0),
@@ -128,8 +128,10 @@ pub(super) fn identified_scenario(
             ));
         }
     }
-    let (s, _) = s.with_values_built(&values).map_err(anyhow::Error::from)?;
-    Ok(s)
+    let s = Loop::new(s)
+        .and_then(|lp| lp.with_values(&values))
+        .map_err(anyhow::Error::from)?;
+    Ok(s.scenario().clone())
 }
 
 fn round6(v: f64) -> f64 {

@@ -2,7 +2,7 @@
 //! a controller stays bounded at, found by bisection.
 
 use super::MarginCfg;
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use serde::Serialize;
 
 /// A checked `[margin]`.
@@ -10,7 +10,7 @@ use serde::Serialize;
 pub struct Margin {
     /// As written.
     pub cfg: MarginCfg,
-    pub(super) scenario: Scenario,
+    pub(super) scenario: Loop,
     pub(super) table: toml::Table,
 }
 
@@ -19,7 +19,7 @@ impl Margin {
         &self,
         table: &toml::Table,
         x: f64,
-    ) -> Result<(Scenario, crate::scenario::Setup), String> {
+    ) -> Result<Loop, crate::scenario::ScenarioError> {
         let mut tab = self.table.clone();
         tab.insert("controller".into(), toml::Value::Table(table.clone()));
         let sets: Vec<(String, toml::Value)> = self
@@ -28,9 +28,7 @@ impl Margin {
             .iter()
             .map(|k| (k.clone(), toml::Value::Float(self.cfg.scale * x)))
             .collect();
-        self.scenario
-            .with_values_built_on(tab, &sets)
-            .map_err(|e| e.to_string())
+        self.scenario.with_values_on(tab, &sets)
     }
 
     /// Bisection steps at most (the two ends and the halvings).
@@ -40,10 +38,10 @@ impl Margin {
 
     /// Whether the run at x stays bounded.
     fn bounded(&self, table: &toml::Table, x: f64) -> bool {
-        let Ok((_, setup)) = self.build(table, x) else {
+        let Ok(lp) = self.build(table, x) else {
             return false;
         };
-        let m = crate::run::run_setup(&setup, &mut |_| {}).1;
+        let m = crate::run::run_metrics(&lp, &mut |_| {}).1;
         !m.diverged
             && m.e_max
                 .is_some_and(|e| e.is_finite() && self.cfg.e_limit().is_none_or(|l| e <= l))

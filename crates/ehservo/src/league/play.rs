@@ -5,7 +5,7 @@
 use super::{report, Case, League, MarginResult, Source};
 use crate::metrics::Metrics;
 use crate::output::{write_atomic, Staging};
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use crate::tune::TuneResult;
 use anyhow::{Context, Result};
 use rayon::prelude::*;
@@ -14,11 +14,7 @@ use std::path::Path;
 
 /// The scenario of case `c` with `[controller]` = `table`, at draw seed
 /// `seed`.
-pub(super) fn build_with(
-    c: &Case,
-    table: &toml::Table,
-    seed: Option<u64>,
-) -> Result<(Scenario, crate::scenario::Setup), String> {
+pub(super) fn build_with(c: &Case, table: &toml::Table, seed: Option<u64>) -> Result<Loop, String> {
     let mut tab = c.table.clone();
     tab.insert("controller".into(), toml::Value::Table(table.clone()));
     let sets: Vec<(String, toml::Value)> = seed
@@ -31,7 +27,7 @@ pub(super) fn build_with(
         .into_iter()
         .collect();
     c.scenario
-        .with_values_built_on(tab, &sets)
+        .with_values_on(tab, &sets)
         .map_err(|e| e.to_string())
 }
 
@@ -166,13 +162,14 @@ pub fn play(
                         controller: ci,
                         scenario: si,
                         draw: d,
-                        seed: case.seeds[d].unwrap_or(case.scenario.uncertainty.seed),
+                        seed: case.seeds[d].unwrap_or(case.scenario.scenario().uncertainty.seed),
                         metrics: None,
                         refused: Some(reason),
                         energy: None,
                     },
-                    Ok((s, setup)) => {
-                        let m = crate::run::run_setup(&setup, &mut |_| {}).1;
+                    Ok(lp) => {
+                        let m = crate::run::run_metrics(&lp, &mut |_| {}).1;
+                        let s = lp.scenario();
                         let span = s.simulation.horizon - s.simulation.settle;
                         let energy = match (m.diverged, m.u_rms) {
                             (false, Some(u)) if span > 0.0 => Some(u * u * span),
@@ -212,8 +209,10 @@ pub fn play(
 /// The scenario file of controller `ci` on case `si` (its first draw).
 fn cell_scenario(l: &League, r: &LeagueResult, ci: usize, si: usize) -> Result<String> {
     let case = &l.cases[si];
-    let (mut s, _) = build_with(case, &r.standings[ci].table, case.seeds[0])
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut s = build_with(case, &r.standings[ci].table, case.seeds[0])
+        .map_err(|e| anyhow::anyhow!("{e}"))?
+        .scenario()
+        .clone();
     s.name = format!("{}--{}", r.standings[ci].name, case.name);
     s.description = format!(
         "league `{}`: controller `{}` ({}, {}) on scenario `{}`",

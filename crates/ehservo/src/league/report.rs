@@ -286,7 +286,7 @@ fn setup_lines(l: &League) -> Vec<String> {
     }
     for c in &l.cases {
         let draws = match (c.seeds.len(), c.seeds[0]) {
-            (1, None) => format!("its own seed ({})", c.scenario.uncertainty.seed),
+            (1, None) => format!("its own seed ({})", c.scenario.scenario().uncertainty.seed),
             (1, Some(s)) => format!("seed {s}"),
             (n, Some(s)) => format!("{n} draws, seeds {s}–{}", s + n as u64 - 1),
             (n, None) => format!("{n} draws"),
@@ -294,10 +294,10 @@ fn setup_lines(l: &League) -> Vec<String> {
         v.push(format!(
             "Scenario `{}`: {} — {}.",
             c.name,
-            if c.scenario.description.is_empty() {
-                c.scenario.name.clone()
+            if c.scenario.scenario().description.is_empty() {
+                c.scenario.name().to_string()
             } else {
-                c.scenario.description.clone()
+                c.scenario.scenario().description.clone()
             },
             draws
         ));

@@ -3,7 +3,7 @@
 //! scenarios loaded and its tunes built, with the work it asks for.
 
 use super::{build_with, Margin};
-use crate::scenario::{ControllerCfg, Scenario};
+use crate::scenario::{ControllerCfg, Loop};
 use crate::study::StudyError;
 use crate::tune::{Objective, Penalty, Tune, TuneFile};
 use anyhow::Result;
@@ -181,8 +181,8 @@ pub struct Contestant {
 pub struct Case {
     /// Its label.
     pub name: String,
-    /// The scenario (overrides applied).
-    pub scenario: Scenario,
+    /// The scenario (overrides applied), built.
+    pub scenario: Loop,
     pub(super) table: toml::Table,
     /// The seed of each draw (None: the scenario's own).
     pub seeds: Vec<Option<u64>>,
@@ -234,7 +234,7 @@ impl League {
         // A scenario that fails to load is named by its file, or by its
         // `set` when an override is what fails.
         let load = |key: &str, p: &Path, set: &[String]| {
-            Scenario::load(&dir.join(p), set).map_err(|e| {
+            crate::formats::load(&dir.join(p), set).map_err(|e| {
                 let msg = e.to_string();
                 let at = if msg.starts_with("--set") {
                     "set"
@@ -248,7 +248,7 @@ impl League {
                 bad(&key, msg)
             })
         };
-        let table_of = |key: &str, s: &Scenario| s.table().map_err(|e| bad(key, e.to_string()));
+        let table_of = |key: &str, s: &Loop| s.table().map_err(|e| bad(key, e.to_string()));
 
         // Scenarios.
         let mut cases = Vec::new();
@@ -423,7 +423,7 @@ impl League {
                 let scenario = load("margin.file", &m.scenario, &m.set)
                     .map_err(|e| StudyError(e.0.replace("`margin.file`", "`margin.scenario`")))?;
                 // The limit's key says its unit: the one of the scenario's axis.
-                let (own, other) = match scenario.plant.axis() {
+                let (own, other) = match scenario.axis() {
                     crate::axis::Axis::Rotary => {
                         (("e_limit_deg", m.e_limit_deg), ("e_limit_mm", m.e_limit_mm))
                     }
@@ -436,7 +436,7 @@ impl League {
                         &format!("margin.{}", other.0),
                         format!(
                             "the margin's scenario is on a {} axis: give its error limit as `{}`",
-                            scenario.plant.axis().name(),
+                            scenario.axis().name(),
                             own.0
                         ),
                     ));
@@ -468,8 +468,9 @@ impl League {
                 }
                 for x in [m.low, m.high] {
                     for c in &contestants {
-                        if let Err(r) = margin.build(&c.table, x) {
-                            if r.contains("unknown") || crate::tune::not_a_result(&r) {
+                        if let Err(e) = margin.build(&c.table, x) {
+                            let r = e.to_string();
+                            if r.contains("unknown") || crate::tune::not_a_result(&e.reason) {
                                 return Err(bad("margin.keys", r));
                             }
                         }
@@ -479,8 +480,8 @@ impl League {
             }
         };
         // One league, one unit: every scenario on the first one's axis.
-        let axis = cases[0].scenario.plant.axis();
-        let mut axes: Vec<(String, &Scenario)> = cases
+        let axis = cases[0].scenario.axis();
+        let mut axes: Vec<(String, &Loop)> = cases
             .iter()
             .enumerate()
             .map(|(i, c)| (format!("scenario[{i}].file"), &c.scenario))
@@ -488,14 +489,14 @@ impl League {
         if let Some(m) = &margin {
             axes.push(("margin.scenario".into(), &m.scenario));
         }
-        if let Some((key, s)) = axes.iter().find(|(_, s)| s.plant.axis() != axis) {
+        if let Some((key, s)) = axes.iter().find(|(_, s)| s.axis() != axis) {
             return Err(bad(
                 key,
                 format!(
                     "`{}` is on a {} axis, `{}` on a {} one: a league's errors share one unit",
-                    s.name,
-                    s.plant.axis().name(),
-                    cases[0].scenario.name,
+                    s.name(),
+                    s.axis().name(),
+                    cases[0].scenario.name(),
                     axis.name()
                 ),
             ));
@@ -510,7 +511,7 @@ impl League {
         league
             .work_asked()
             .check("league")
-            .map_err(|(k, r)| bad(&k, r))?;
+            .map_err(|e| bad(&e.key, e.reason.to_string()))?;
         Ok(league)
     }
 
@@ -532,7 +533,7 @@ impl League {
             let per: f64 = t
                 .scenarios
                 .iter()
-                .map(|s| run_evaluations(s) + RUN_OVERHEAD)
+                .map(|s| run_evaluations(s.scenario()) + RUN_OVERHEAD)
                 .sum::<f64>()
                 * t.file.draws as f64;
             b.add(
@@ -551,7 +552,7 @@ impl League {
             b.add(
                 &format!("scenario[{i}].draws"),
                 n * c.seeds.len() as f64,
-                run_evaluations(&c.scenario),
+                run_evaluations(c.scenario.scenario()),
                 format!(
                     "scenario `{}`: {} controllers × {} draws",
                     c.name,
@@ -564,7 +565,7 @@ impl League {
             b.add(
                 "margin.tolerance",
                 n * m.steps() as f64,
-                run_evaluations(&m.scenario),
+                run_evaluations(m.scenario.scenario()),
                 format!(
                     "the margin: {} controllers × {} bisection runs",
                     self.contestants.len(),
@@ -648,14 +649,13 @@ fn tune_for(
         .scenarios
         .iter()
         .map(|p| {
-            let s = Scenario::load(&dir.join(p), &[])
+            let s = crate::formats::load(&dir.join(p), &[])
                 .map_err(|e| bad("tuning.scenarios", e.to_string()))?;
             let mut tab = s
                 .table()
                 .map_err(|e| bad("tuning.scenarios", e.to_string()))?;
             tab.insert("controller".into(), toml::Value::Table(table.clone()));
-            s.with_values_built_on(tab, &[])
-                .map(|(s, _)| s)
+            s.with_values_on(tab, &[])
                 .map_err(|e| bad("tuning.scenarios", e.to_string()))
         })
         .collect::<Result<Vec<_>, _>>()?;

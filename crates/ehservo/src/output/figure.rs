@@ -4,7 +4,7 @@
 
 use crate::plot::{Dash, Figure, Mark, Panel, Series};
 use crate::run::RunResult;
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use crate::simulation::Sample;
 use ehservo_sim::axis::Axis;
 use ehservo_sim::plant::UncertaintySpec;
@@ -110,7 +110,8 @@ pub fn clip_diverged(p: &mut Panel, r: &RunResult) {
 }
 
 /// The main time histories of a run: the paper's Fig. 2 panels.
-pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
+pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
+    let s = lp.scenario();
     let t: Vec<f64> = run.trace.iter().map(|x| x.t).collect();
     let col = |f: &dyn Fn(&Sample) -> f64| run.trace.iter().map(f).collect::<Vec<f64>>();
     let mut title = format!(
@@ -262,13 +263,14 @@ pub fn trace_figure(s: &Scenario, run: &RunResult) -> Figure {
         cols: 2,
         size: (1400, 500 * rows as u32),
         panels,
-        footer: variation_footer(s),
+        footer: variation_footer(lp),
     }
 }
 
 /// A figure's footer: the true variation as the scenario sets it.
-pub fn variation_footer(s: &Scenario) -> String {
-    let u = s.uncertainty_spec();
+pub fn variation_footer(lp: &Loop) -> String {
+    let s = lp.scenario();
+    let u = lp.stages().uncertainty;
     let physical = physical_variation(&u.physical);
     if s.plant.paper_uncertainty() {
         let paper = format!("True variation: {}, {}", a_variation(&u), b_variation(&u));

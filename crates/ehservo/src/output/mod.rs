@@ -2,8 +2,9 @@
 //! staging directory first, moved into place only when complete.
 
 use crate::metrics::Metrics;
+use crate::run::Decimate;
 use crate::run::RunResult;
-use crate::scenario::Scenario;
+use crate::scenario::{Loop, Scenario};
 use crate::simulation::{Divergence, Sample};
 use anyhow::{Context, Result};
 use ehservo_sim::axis::Axis;
@@ -139,20 +140,20 @@ impl TraceLayout {
         ]
     }
 
-    /// The layout of a scenario's runs.
-    pub fn of(s: &Scenario) -> Self {
+    /// The layout of a loop's runs.
+    pub fn of(lp: &Loop) -> Self {
+        let s = lp.scenario();
         let signals = s.controller.visit(SignalsOf);
         let exact = s.sensor.is_exact();
-        let actuator = crate::actuator::Actuator::try_new(&s.actuator).ok();
         Self::new(
             signals,
             TraceExtras {
                 actuator: !s.actuator.is_identity(),
-                states: s.plant.states(),
-                spool: actuator.is_some_and(|a| a.has_lag()),
+                states: lp.plant().states(),
+                spool: lp.stages().actuator.has_lag(),
                 measured: (!exact || s.estimator.is_some()).then_some(s.sensor.measured.0),
                 estimated: s.estimator.is_some(),
-                axis: s.plant.axis(),
+                axis: lp.axis(),
             },
         )
     }
@@ -335,21 +336,25 @@ pub struct Derived {
 }
 
 /// Builds the summary of a run (its diagnostics from the run's trace).
-pub fn summary<'a>(s: &'a Scenario, run: &RunResult) -> Summary<'a> {
-    summary_with(s, run, crate::analysis::diagnostics(s, &run.trace))
+pub fn summary<'a>(lp: &'a Loop, run: &RunResult) -> Summary<'a> {
+    summary_with(
+        lp,
+        run,
+        crate::analysis::diagnostics(lp.scenario(), &run.trace),
+    )
 }
 
 /// [`summary`] with the run's diagnostics given (as a
 /// [`crate::analysis::DiagRecorder`] collected them).
 pub fn summary_with<'a>(
-    s: &'a Scenario,
+    lp: &'a Loop,
     run: &RunResult,
     diagnostics: Option<crate::analysis::RunDiagnostics>,
 ) -> Summary<'a> {
-    let model = ehservo_core::servo::NominalModel::new(s.servo(), s.load_model());
+    let model = lp.model();
     Summary {
         software: SOFTWARE,
-        scenario: s,
+        scenario: lp.scenario(),
         metrics: run.metrics,
         divergence: run.outcome.diverged.map(Into::into),
         faults: Faults {
@@ -361,10 +366,10 @@ pub fn summary_with<'a>(
         derived: Derived {
             a_nominal: model.coeffs.as_array(),
             b_at_rest: model.b_at_rest(),
-            p: s.surface().map(|x| x.p()).unwrap_or([f64::NAN; 3]),
-            steps: s.sim_config().steps,
+            p: lp.design().surface.p(),
+            steps: lp.sim().steps,
         },
-        analysis: crate::analysis::analyze(s),
+        analysis: crate::analysis::analyze(lp),
         diagnostics,
         offboard: None,
     }
@@ -382,19 +387,19 @@ pub const MAX_KEPT: u64 = 200_000;
 /// the kept subsample when `plot`, else empty (without a plot only the
 /// few numbers of each kept sample that the diagnostics read are kept,
 /// [`crate::analysis::DiagRecorder`]: the same summary.json).
-pub fn run_to_dir(dir: &Path, s: &Scenario, plot: bool) -> Result<(RunResult, Vec<PathBuf>)> {
-    run_to_dir_with(dir, s, plot, &mut InSimulator)
+pub fn run_to_dir(dir: &Path, lp: &Loop, plot: bool) -> Result<(RunResult, Vec<PathBuf>)> {
+    run_to_dir_with(dir, lp, plot, &mut InSimulator)
 }
 
 /// How [`run_to_dir_with`] runs the loop, and what it adds to the output:
 /// the hook of the off-board runs ([`crate::pil`]: `ehservo run --float
 /// f32`, `ehservo pil`).
 pub trait RunHooks {
-    /// Runs `s`, handing every sample to `observe`; `stage` is the staging
+    /// Runs `lp`, handing every sample to `observe`; `stage` is the staging
     /// folder, for files written as the run goes.
     fn run(
         &mut self,
-        s: &Scenario,
+        lp: &Loop,
         stage: &Path,
         observe: &mut dyn FnMut(&Sample),
     ) -> Result<(crate::simulation::Outcome, Metrics)>;
@@ -409,11 +414,11 @@ struct InSimulator;
 impl RunHooks for InSimulator {
     fn run(
         &mut self,
-        s: &Scenario,
+        lp: &Loop,
         _stage: &Path,
         observe: &mut dyn FnMut(&Sample),
     ) -> Result<(crate::simulation::Outcome, Metrics)> {
-        Ok(crate::run::run_observed(s, observe)?)
+        Ok(crate::run::run_observed(lp, observe))
     }
     fn finish(&mut self, _stage: &Path) -> Result<(Vec<&'static str>, Option<serde_json::Value>)> {
         Ok((Vec::new(), None))
@@ -424,20 +429,21 @@ impl RunHooks for InSimulator {
 /// summary section added.
 pub fn run_to_dir_with(
     dir: &Path,
-    s: &Scenario,
+    lp: &Loop,
     plot: bool,
     hooks: &mut dyn RunHooks,
 ) -> Result<(RunResult, Vec<PathBuf>)> {
+    let s = lp.scenario();
     let stage = Staging::new(dir)?;
     let csv_path = stage.path().join("trace.csv");
     let file =
         fs::File::create(&csv_path).with_context(|| format!("creating {}", csv_path.display()))?;
     let mut w = TraceWriter::new(
         std::io::BufWriter::with_capacity(1 << 16, file),
-        TraceLayout::of(s),
+        TraceLayout::of(lp),
     )?;
     let decimate = s.output.decimate.max(1) as u64;
-    let steps = s.sim_config().steps;
+    let steps = lp.sim().steps;
     let keep_every = decimate.max((steps + 1).div_ceil(MAX_KEPT));
     let capacity = ((steps + 1) / keep_every + 2) as usize;
     // The samples the plot and the diagnostics see: every keep_every-th
@@ -446,35 +452,29 @@ pub fn run_to_dir_with(
     // each in any case.
     let mut kept = Vec::with_capacity(if plot { capacity } else { 0 });
     let mut diag = crate::analysis::DiagRecorder::new(s, capacity);
-    let mut last_kept: Option<u64> = None;
-    let mut last = None;
+    let mut keep = Decimate::every(keep_every);
     let mut failure: Option<anyhow::Error> = None;
-    let (outcome, metrics) = hooks.run(s, stage.path(), &mut |smp| {
+    let (outcome, metrics) = hooks.run(lp, stage.path(), &mut |smp| {
         if failure.is_none() && smp.k % decimate == 0 {
             if let Err(e) = w.write(smp) {
                 failure = Some(e.context(format!("writing {}", dir.join("trace.csv").display())));
             }
         }
-        if smp.k % keep_every == 0 {
+        if let Some(smp) = keep.offer(smp) {
             if plot {
                 kept.push(*smp);
             }
             diag.push(smp);
-            last_kept = Some(smp.k);
-        } else {
-            last = Some(*smp);
         }
     })?;
     if let Some(e) = failure {
         return Err(e);
     }
-    if let Some(l) = last {
-        if last_kept.is_none_or(|k| k < l.k) {
-            if plot {
-                kept.push(l);
-            }
-            diag.push(&l);
+    if let Some(l) = keep.finish() {
+        if plot {
+            kept.push(l);
         }
+        diag.push(&l);
     }
     let writing = || format!("writing {}", dir.join("trace.csv").display());
     let mut inner = w.finish().with_context(writing)?;
@@ -487,7 +487,7 @@ pub fn run_to_dir_with(
     let mut files = vec!["trace.csv", "summary.json"];
     let (extra, offboard) = hooks.finish(stage.path())?;
     files.extend(extra);
-    let mut summary = summary_with(s, &run, diag.finish(s));
+    let mut summary = summary_with(lp, &run, diag.finish(s));
     summary.offboard = offboard;
     let json = serde_json::to_string_pretty(&summary)?;
     // Straight into the staging folder, which is what makes the output
@@ -498,7 +498,7 @@ pub fn run_to_dir_with(
     fs::write(&summary_path, json.as_bytes())
         .with_context(|| format!("writing {}", summary_path.display()))?;
     if plot {
-        trace_figure(s, &run).png(&stage.path().join("trace.png"))?;
+        trace_figure(lp, &run).png(&stage.path().join("trace.png"))?;
         files.push("trace.png");
     }
     stage.commit()?;

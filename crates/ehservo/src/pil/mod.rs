@@ -24,7 +24,7 @@ pub mod transport;
 use crate::metrics::Metrics;
 use crate::output::RunHooks;
 use crate::run::RunResult;
-use crate::scenario::{ControllerCfg, ControllerConfig, Scenario, Setup, Visit};
+use crate::scenario::{ControllerCfg, ControllerConfig, Loop, Scenario, Visit};
 use crate::simulation::{Mode, Outcome, Sample};
 use anyhow::{Context, Result};
 use ehservo_core::control::{flags, Config, Controller, Signals};
@@ -45,21 +45,10 @@ use std::rc::Rc;
 use std::time::{Duration, Instant};
 use transport::{Faulty, InProcess, Inject, Transport};
 
-/// The registry's kind as the wire carries it. A new kind in the registry
-/// does not compile here until it has its variant.
+/// The registry's kind as the wire carries it (generated from the one
+/// list of kinds, as the wire's enum is).
 pub fn wire_controller(c: &ControllerCfg) -> WireController {
-    match c {
-        ControllerCfg::Nnvsc(p) => WireController::Nnvsc(*p),
-        ControllerCfg::Vsc(p) => WireController::Vsc(*p),
-        ControllerCfg::VscSat(p) => WireController::VscSat(*p),
-        ControllerCfg::Pid(p) => WireController::Pid(*p),
-        ControllerCfg::NnRobust(p) => WireController::NnRobust(*p),
-        ControllerCfg::Adrc(p) => WireController::Adrc(*p),
-        ControllerCfg::Sta(p) => WireController::Sta(*p),
-        ControllerCfg::Arc(p) => WireController::Arc(*p),
-        ControllerCfg::Backstepping(p) => WireController::Backstepping(*p),
-        ControllerCfg::OpenLoop(p) => WireController::OpenLoop(*p),
-    }
+    c.wire()
 }
 
 struct SignalCount;
@@ -82,14 +71,14 @@ pub fn scenario_hash(s: &Scenario) -> u64 {
 /// period), the fault policy. Fails when the scenario cannot run off-board
 /// (the continuous mode) or when the design has something the wire does
 /// not carry.
-pub fn hello(s: &Scenario, setup: &Setup, float: FloatType) -> Result<Hello> {
-    if setup.sim.mode != Mode::Sampled {
+pub fn hello(lp: &Loop, float: FloatType) -> Result<Hello> {
+    if lp.sim().mode != Mode::Sampled {
         crate::bad_input!(
             "`simulation.mode` = \"{}\": an off-board controller runs in the sampled loop; set simulation.mode = \"sampled\"",
-            setup.sim.mode.as_str()
+            lp.sim().mode.as_str()
         );
     }
-    let d = &setup.design;
+    let d = lp.design();
     // The wire carries the model as its constructor's inputs: the board
     // must rebuild exactly the model the host designs with.
     let model = ModelInputs {
@@ -107,17 +96,17 @@ pub fn hello(s: &Scenario, setup: &Setup, float: FloatType) -> Result<Hello> {
     );
     // (Design::dt is the simulation step: t_k = k·h on both sides.)
     anyhow::ensure!(
-        d.dt.to_bits() == setup.sim.step.to_bits(),
+        d.dt.to_bits() == lp.sim().step.to_bits(),
         "internal: the design's sample period differs from the simulation step"
     );
-    let p = &setup.stages.policy;
-    let signals = setup.controller.visit(SignalCount);
+    let p = &lp.stages().policy;
+    let signals = lp.controller().visit(SignalCount);
     Ok(Hello {
         protocol: PROTOCOL_VERSION,
-        scenario_hash: scenario_hash(s),
+        scenario_hash: scenario_hash(lp.scenario()),
         float,
-        dt: setup.sim.step,
-        controller: wire_controller(&setup.controller),
+        dt: lp.sim().step,
+        controller: lp.controller().wire(),
         model,
         surface: d.surface.p(),
         policy: WirePolicy {
@@ -404,12 +393,11 @@ pub const PIL_COLUMNS: &str = "k,t_s,rtt_us,board_ticks,board_cycles,link";
 impl RunHooks for Hooks {
     fn run(
         &mut self,
-        s: &Scenario,
+        lp: &Loop,
         stage: &Path,
         observe: &mut dyn FnMut(&Sample),
     ) -> Result<(Outcome, Metrics)> {
-        let mut setup = s.setup()?;
-        let h = hello(s, &setup, self.opts.float)?;
+        let h = hello(lp, self.opts.float)?;
         // The shadow (the diagnostics' controller) is built here from the
         // same Hello, with the board's code: a Hello it refuses is refused
         // here first, with the key named.
@@ -437,11 +425,11 @@ impl RunHooks for Hooks {
                     .unwrap_or_default();
                 anyhow::anyhow!("{e}{extra}")
             })?;
-        let link = Link::new(session, shadow, setup.stages.policy.safe);
+        let link = Link::new(session, shadow, lp.stages().policy.safe);
         if link.cannot_annotate() {
             anyhow::bail!(
-                "internal: kind `{}` has diagnostics that need the plant, and its parts cannot be rebuilt on the host (ehservo_wire::law::Rebuild)",
-                setup.controller.kind()
+                "internal: kind `{}` has diagnostics that need the plant, and its parts cannot be rebuilt on the host (Signals::rebuild)",
+                lp.controller().kind()
             );
         }
         let link = Rc::new(RefCell::new(link));
@@ -454,17 +442,19 @@ impl RunHooks for Hooks {
             writeln!(w, "{PIL_COLUMNS}")?;
             self.csv = Some(w);
         }
-        self.step = setup.sim.step;
+        self.step = lp.sim().step;
         // The board applies the limits (in its float type); the
         // simulator's loop keeps its finiteness check and the same safe
         // command.
-        setup.stages.policy.limits = Limits::NONE;
+        let lp = lp
+            .with_limits(Limits::NONE)
+            .context("internal: a policy without limits is valid")?;
         self.started = Some(Instant::now());
         let mut samples = 0u64;
         let (outcome, metrics) = {
             let link2 = Rc::clone(&link);
             let mut pending = Vec::new();
-            let r = crate::run::run_setup_mapped(&setup, OnBoard(link), &mut |smp| {
+            let r = crate::run::run_mapped(&lp, OnBoard(link), &mut |smp| {
                 samples += 1;
                 observe(smp);
                 pending.extend(link2.borrow_mut().session.settled(false));
@@ -553,12 +543,12 @@ pub struct Report {
 /// (plus pil.csv from a board) into `dir`.
 pub fn run_to_dir(
     dir: &Path,
-    s: &Scenario,
+    lp: &Loop,
     plot: bool,
     opts: Options,
 ) -> Result<(RunResult, Vec<PathBuf>, Report)> {
     let mut hooks = Hooks::new(opts);
-    let r = crate::output::run_to_dir_with(dir, s, plot, &mut hooks);
+    let r = crate::output::run_to_dir_with(dir, lp, plot, &mut hooks);
     if let Some(q) = hooks.qemu.as_mut() {
         q.stop();
     }

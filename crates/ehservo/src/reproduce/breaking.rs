@@ -33,7 +33,7 @@
 
 use super::doc::Block;
 use crate::run::{run, Keep};
-use crate::scenario::{parse_value, Scenario};
+use crate::scenario::{parse_value, Loop};
 use anyhow::Result;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -196,14 +196,14 @@ pub struct Boundary {
     pub found: Search,
 }
 
-fn point(base: &Scenario, set: &[String], x: f64) -> Result<ScanPoint> {
+fn point(base: &Loop, set: &[String], x: f64) -> Result<ScanPoint> {
     let values: Vec<(String, toml::Value)> = set
         .iter()
         .filter_map(|s| s.split_once('='))
         .map(|(k, v)| (k.trim().to_string(), parse_value(v)))
         .collect();
     let s = base.with_values(&values).map_err(anyhow::Error::from)?;
-    let m = run(&s, Keep::Nothing)?.metrics;
+    let m = run(&s, Keep::Nothing).metrics;
     Ok(ScanPoint {
         x,
         e_max_deg: m.e_max,
@@ -311,12 +311,13 @@ pub fn search_with(
 /// A boundary search on `base` with `sets(x)` giving the overrides at x; the
 /// tracking limit is [`TRACKING_FRACTION`] of the base's reference amplitude.
 pub fn search(
-    base: &Scenario,
+    base: &Loop,
     grid: Scan,
     sets: &(dyn Fn(f64) -> Vec<String> + Sync),
 ) -> Result<Search> {
     let e_limit = TRACKING_FRACTION
         * base
+            .scenario()
             .reference
             .amplitude_deg
             .unwrap_or(crate::scenario::DEFAULT_AMPLITUDE_DEG)

@@ -6,7 +6,7 @@ use super::derived::CaseMetrics;
 use super::manifest::Manifest;
 use super::SensitivityRow;
 use crate::run::{run, Keep, RunResult};
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
@@ -33,31 +33,29 @@ pub(super) fn bar(progress: bool, len: u64, msg: &str) -> ProgressBar {
 
 /// Loads every case under every reading (bad input is reported before any
 /// run starts).
-pub fn load_cases(m: &Manifest, dir: &Path) -> Result<Vec<(usize, usize, Scenario)>> {
+pub fn load_cases(m: &Manifest, dir: &Path) -> Result<Vec<(usize, usize, Loop)>> {
     let mut v = Vec::new();
     for (ri, r) in m.reading.iter().enumerate() {
         for (ci, c) in m.case.iter().enumerate() {
-            let s = Scenario::load(&dir.join(&c.file), &r.set).map_err(anyhow::Error::from)?;
+            let s = Loop::load(&dir.join(&c.file), &r.set).map_err(anyhow::Error::from)?;
             v.push((ri, ci, s));
         }
     }
     Ok(v)
 }
 
-pub(super) fn measure(s: &Scenario, keep_trace: bool) -> Result<(CaseMetrics, Option<RunResult>)> {
+pub(super) fn measure(s: &Loop, keep_trace: bool) -> Result<(CaseMetrics, Option<RunResult>)> {
     // At most MAX_KEPT samples in memory (every one for the shipped cases,
     // which are at most 60 001 samples; a legal 2·10⁷-step case is thinned).
-    let stride = (s.sim_config().steps + 1)
-        .div_ceil(crate::output::MAX_KEPT)
-        .max(1);
-    let r = run(s, Keep::Every(stride as u32))?;
+    let stride = (s.sim().steps + 1).div_ceil(crate::output::MAX_KEPT).max(1);
+    let r = run(s, Keep::Every(stride as u32));
     let network = r.metrics.w_norm_max.is_some();
     let cm = CaseMetrics::from_trace(
         r.metrics,
         &r.trace,
-        s.simulation.settle,
-        s.simulation.horizon,
-        s.reference.base_frequency_hz(s.simulation.horizon),
+        s.settle(),
+        s.horizon(),
+        s.scenario().reference.base_frequency_hz(s.horizon()),
         network,
     );
     Ok((cm, if keep_trace { Some(r) } else { None }))
@@ -72,7 +70,7 @@ pub(super) fn sensitivity(
     progress: bool,
 ) -> Result<Vec<SensitivityRow>> {
     // (sensitivity, case, seed) jobs, each a scenario loaded up front.
-    let mut jobs: Vec<(usize, usize, Option<u32>, Scenario)> = Vec::new();
+    let mut jobs: Vec<(usize, usize, Option<u32>, Loop)> = Vec::new();
     for (si, sv) in m.sensitivity.iter().enumerate() {
         for (ci, case) in sv.cases.iter().enumerate() {
             let file = &m.case.iter().find(|c| &c.id == case).expect("checked").file;
@@ -86,7 +84,7 @@ pub(super) fn sensitivity(
                 if let Some(k) = seed {
                     set.push(format!("uncertainty.seed={k}"));
                 }
-                let s = Scenario::load(&dir.join(file), &set).map_err(anyhow::Error::from)?;
+                let s = Loop::load(&dir.join(file), &set).map_err(anyhow::Error::from)?;
                 jobs.push((si, ci, seed, s));
             }
         }
@@ -135,11 +133,10 @@ pub(super) fn boundaries(
     dir: &Path,
     progress: bool,
 ) -> Result<(Vec<Boundary>, Vec<Boundary>)> {
-    let load = |file: &str, set: &[String]| {
-        Scenario::load(&dir.join(file), set).map_err(anyhow::Error::from)
-    };
+    let load =
+        |file: &str, set: &[String]| Loop::load(&dir.join(file), set).map_err(anyhow::Error::from);
     // (reading id, bias reading, base scenario with the reading applied)
-    let mut tasks: Vec<(String, Option<BiasReading>, Scenario)> = Vec::new();
+    let mut tasks: Vec<(String, Option<BiasReading>, Loop)> = Vec::new();
     for (id, fig3_set, fig2_set) in sets {
         let vsc_base = load("fig3.toml", fig3_set)?;
         for br in [BiasReading::R1, BiasReading::R2] {
@@ -151,7 +148,7 @@ pub(super) fn boundaries(
     let results: Vec<Boundary> = tasks
         .par_iter()
         .map(|(rid, br, base)| {
-            let b_ref = base.uncertainty_spec().b_reference;
+            let b_ref = base.stages().uncertainty.b_reference;
             let found = match br {
                 Some(b) => {
                     let (start, mut end, step) = VSC_SCAN;

@@ -27,7 +27,7 @@ use super::derived::CaseMetrics;
 use super::doc::{Block, Doc};
 use super::manifest::{Manifest, Reading};
 use super::Reproduction;
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -257,13 +257,13 @@ pub fn estimate(
     r: &Reading,
     tol: &Tolerance,
     checked: Vec<String>,
-    measure: &dyn Fn(&Scenario) -> Result<CaseMetrics>,
+    measure: &dyn Fn(&Loop) -> Result<CaseMetrics>,
 ) -> Result<Estimate> {
     let mut levels: Vec<LevelRun> = Vec::new();
     let mut unconverged = checked.clone();
-    let mut last: Option<Scenario> = None;
+    let mut last: Option<Loop> = None;
     for &value in &r.refine.levels {
-        let s = Scenario::load(&dir.join(file), &set_at(r, value)).map_err(anyhow::Error::from)?;
+        let s = Loop::load(&dir.join(file), &set_at(r, value)).map_err(anyhow::Error::from)?;
         let metrics = measure(&s)?;
         levels.push(LevelRun { value, metrics });
         last = Some(s);
@@ -280,9 +280,12 @@ pub fn estimate(
             break;
         }
     }
-    let mut s = last.expect("refine.levels is not empty (checked)");
+    let mut s = last
+        .expect("refine.levels is not empty (checked)")
+        .scenario()
+        .clone();
     s.simulation.x0[0] += tol.perturbation;
-    let perturbed = measure(&s)?;
+    let perturbed = measure(&Loop::new(s)?)?;
     Ok(Estimate {
         levels,
         perturbed,

@@ -36,7 +36,7 @@ pub struct Refine {
 pub struct Case {
     /// Short id.
     pub id: String,
-    /// Scenario file, relative to the manifest.
+    /// Loop file, relative to the manifest.
     pub file: String,
 }
 

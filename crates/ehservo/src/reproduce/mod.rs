@@ -29,7 +29,7 @@ pub use cases::load_cases;
 
 use crate::output::{write_atomic, Staging, SOFTWARE};
 use crate::run::{run, Keep, RunResult};
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use anyhow::{Context, Result};
 use breaking::Boundary;
 use cases::{bar, boundaries, measure, sensitivity};
@@ -174,11 +174,11 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         .iter()
         .find(|c| c.id == "fig2")
         .map(|c| &c.file);
-    let converged_jobs: Vec<(usize, usize, Scenario)> = jobs
+    let converged_jobs: Vec<(usize, usize, Loop)> = jobs
         .iter()
         .map(|(ri, ci, _)| {
             let set = converged_set(*ri, &manifest.case[*ci].id);
-            let s = Scenario::load(&opts.paper_dir.join(&manifest.case[*ci].file), &set)?;
+            let s = Loop::load(&opts.paper_dir.join(&manifest.case[*ci].file), &set)?;
             Ok((*ri, *ci, s))
         })
         .collect::<Result<_>>()?;
@@ -299,11 +299,9 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
         .iter()
         .find(|(ri, ci, _)| *ri == primary_idx && manifest.case[*ci].id == "fig2")
         .map(|(_, _, s)| -> Result<_> {
-            let stride = (s.sim_config().steps + 1)
-                .div_ceil(crate::output::MAX_KEPT)
-                .max(1);
-            let r = run(s, Keep::Every(stride as u32))?;
-            Ok(crate::analysis::diagnostics(s, &r.trace))
+            let stride = (s.sim().steps + 1).div_ceil(crate::output::MAX_KEPT).max(1);
+            let r = run(s, Keep::Every(stride as u32));
+            Ok(crate::analysis::diagnostics(s.scenario(), &r.trace))
         })
         .transpose()?
         .flatten();
@@ -332,7 +330,7 @@ pub fn reproduce(opts: &Options) -> Result<Reproduction> {
             .iter()
             .position(|r| r.id == primary)
             .unwrap_or(0);
-        let pjobs: Vec<&(usize, usize, Scenario)> = converged_jobs
+        let pjobs: Vec<&(usize, usize, Loop)> = converged_jobs
             .iter()
             .filter(|j| j.0 == primary_idx)
             .collect();

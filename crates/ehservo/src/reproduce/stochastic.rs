@@ -33,7 +33,7 @@ use super::derived::{format_metric, CaseMetrics};
 use super::doc::Block;
 use super::manifest::{Claim, ClaimKind, Manifest};
 use crate::plot::{HistPanel, Histogram};
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use anyhow::Result;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -44,8 +44,8 @@ use std::path::Path;
 pub const DEFAULT_SEEDS: u32 = 400;
 
 /// Whether a scenario's variation has a random part.
-pub fn is_random(s: &Scenario) -> bool {
-    s.uncertainty_spec().paper_is_random()
+pub fn is_random(s: &Loop) -> bool {
+    s.stages().uncertainty.paper_is_random()
 }
 
 /// The p-quantile (0 ≤ p ≤ 1) of an ascending sample, by linear
@@ -315,13 +315,13 @@ pub fn judge(
 /// reading's single-run metrics of every case.
 pub(super) fn run(
     m: &Manifest,
-    jobs: &[(usize, usize, Scenario)],
+    jobs: &[(usize, usize, Loop)],
     reading: usize,
     base: &BTreeMap<String, CaseMetrics>,
     seeds_override: Option<u32>,
     progress: bool,
 ) -> Result<Stochastic> {
-    let random: Vec<(String, &Scenario)> = jobs
+    let random: Vec<(String, &Loop)> = jobs
         .iter()
         .filter(|(ri, _, s)| *ri == reading && is_random(s))
         .map(|(_, ci, s)| (m.case[*ci].id.clone(), s))

@@ -53,22 +53,22 @@ pub fn execute(
                     // Validation built the Setup: run it, not the scenario again.
                     // One study, one unit: a run whose plant is on another
                     // axis (a swept plant.model) is refused, not mixed in.
-                    Ok((_, setup)) if setup.axis != plan.axis() => RunRow {
+                    Ok(lp) if lp.axis() != plan.axis() => RunRow {
                         index: i,
                         values,
                         seed,
                         metrics: None,
                         error: Some(format!(
                             "`plant.model`: its axis is {} but the base scenario's is {}: a study's errors share one unit",
-                            setup.axis.name(),
+                            lp.axis().name(),
                             plan.axis().name()
                         )),
                     },
-                    Ok((_, setup)) => RunRow {
+                    Ok(lp) => RunRow {
                         index: i,
                         values,
                         seed,
-                        metrics: Some(crate::run::run_setup(&setup, &mut |_| {}).1),
+                        metrics: Some(crate::run::run_metrics(&lp, &mut |_| {}).1),
                         error: None,
                     },
                     Err(e) => RunRow {
@@ -125,7 +125,7 @@ fn study_json(plan: &Plan, shard: Option<(u64, u64)>) -> Result<String> {
         software: SOFTWARE.name.into(),
         version: SOFTWARE.version.into(),
         study: plan.study.clone(),
-        base: serde_json::to_value(&plan.base)?,
+        base: serde_json::to_value(plan.base.scenario())?,
         runs: plan.runs,
         shard: shard.map(|(k, n)| [k, n]),
         range: [range.start, range.end],

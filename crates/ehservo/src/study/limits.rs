@@ -40,13 +40,14 @@ pub fn check_study(
     let runs = (range.end - range.start) as f64;
     let mut b = Batch::default();
     if !varied {
-        b.add("runs", runs, of(&plan.base), String::new());
+        b.add("runs", runs, of(plan.base.scenario()), String::new());
     } else {
-        let mut s = plan.base.clone();
+        let base = plan.base.scenario();
+        let mut s = base.clone();
         for i in range {
             let (_, sets, _) = plan.run_values(i);
-            s.simulation = plan.base.simulation.clone();
-            s.estimator = plan.base.estimator;
+            s.simulation = base.simulation.clone();
+            s.estimator = base.estimator;
             for (k, v) in &sets {
                 set_work_key(&mut s, k.trim(), v);
             }

@@ -2,7 +2,7 @@
 //! and draws, its seed, and shards.
 
 use super::schema::{Axis, Dist, Draw, Study};
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 
 /// SplitMix64: the seed of run `i` of a study with seed `seed`.
 pub fn derive_seed(seed: u64, i: u64) -> u64 {
@@ -59,8 +59,8 @@ pub struct Plan {
     pub file: String,
     /// The study as written.
     pub study: Study,
-    /// The base scenario with `set` applied.
-    pub base: Scenario,
+    /// The base scenario with `set` applied, built.
+    pub base: Loop,
     /// Expanded values of every axis.
     pub axes: Vec<(Axis, Vec<toml::Value>)>,
     /// Replicates per grid point (1 without Monte Carlo).
@@ -80,7 +80,7 @@ pub struct Plan {
 impl Plan {
     /// The axis of the base scenario's plant: the unit of the study's errors.
     pub fn axis(&self) -> crate::axis::Axis {
-        self.base.plant.axis()
+        self.base.axis()
     }
 
     /// The varied columns of results.csv, in order: axes, then drawn keys.
@@ -122,20 +122,19 @@ impl Plan {
         (cols, sets, seed)
     }
 
-    /// Run `i`'s scenario, checked, and the [`Setup`](crate::scenario::Setup)
-    /// its validation built, from the base with the run's overrides `sets`.
+    /// Run `i`'s loop, built from the base with the run's overrides `sets`.
     pub fn build_run(
         &self,
         sets: &[(String, toml::Value)],
-    ) -> Result<(Scenario, crate::scenario::Setup), crate::scenario::ScenarioError> {
+    ) -> Result<Loop, crate::scenario::ScenarioError> {
         if let [(key, toml::Value::Integer(seed))] = sets {
             if self.seed_only_typed && key.trim() == "uncertainty.seed" && *seed >= 0 {
-                return self.base.with_seed_built(*seed as u64);
+                return self.base.with_seed(*seed as u64);
             }
         }
         match &self.base_table {
-            Some(t) => self.base.with_values_built_on(t.clone(), sets),
-            None => self.base.with_values_built(sets),
+            Some(t) => self.base.with_values_on(t.clone(), sets),
+            None => self.base.with_values(sets),
         }
     }
 
@@ -178,7 +177,7 @@ mod tests {
 
     fn plan(text: &str) -> Plan {
         let study: Study = toml::from_str(text).unwrap();
-        Plan::build(study, Scenario::parse("").unwrap(), "t.toml").unwrap()
+        Plan::build(study, Loop::parse("").unwrap(), "t.toml").unwrap()
     }
 
     /// A seed-only run set on the typed base is the run the TOML round
@@ -195,7 +194,7 @@ mod tests {
                 if path.extension().is_none_or(|x| x != "toml") {
                     continue;
                 }
-                let Ok(base) = Scenario::load(&path, &[]) else {
+                let Ok(base) = Loop::load(&path, &[]) else {
                     continue; // (a study or tuning file, not a scenario)
                 };
                 let study: Study = toml::from_str(
@@ -206,10 +205,18 @@ mod tests {
                 assert!(p.seed_only_typed, "{}", path.display());
                 for i in 0..3 {
                     let (_, sets, _) = p.run_values(i);
-                    let (fast, _) = p.build_run(&sets).unwrap();
-                    let (slow, _) = p.base.with_values_built(&sets).unwrap();
-                    assert_eq!(fast, slow, "{} run {i}", path.display());
-                    assert_ne!(fast.uncertainty.seed, p.base.uncertainty.seed);
+                    let fast = p.build_run(&sets).unwrap();
+                    let slow = p.base.with_values(&sets).unwrap();
+                    assert_eq!(
+                        fast.scenario(),
+                        slow.scenario(),
+                        "{} run {i}",
+                        path.display()
+                    );
+                    assert_ne!(
+                        fast.scenario().uncertainty.seed,
+                        p.base.scenario().uncertainty.seed
+                    );
                 }
                 files += 1;
             }

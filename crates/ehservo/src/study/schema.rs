@@ -2,7 +2,7 @@
 //! that turn it into a [`Plan`].
 
 use super::Plan;
-use crate::scenario::{parse_value, Scenario, ScenarioError};
+use crate::scenario::{parse_value, Loop, ScenarioError};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -440,12 +440,12 @@ impl Plan {
         let file = path.display().to_string();
         let study: Study = load_toml(path, "study")?;
         let base_path = path.parent().unwrap_or(Path::new(".")).join(&study.base);
-        let base = Scenario::load(&base_path, &study.set)
+        let base = crate::formats::load(&base_path, &study.set)
             .map_err(|e: ScenarioError| StudyError(format!("{file}: base: {e}")))?;
         Self::build(study, base, &file)
     }
 
-    pub(super) fn build(study: Study, base: Scenario, file: &str) -> Result<Plan, StudyError> {
+    pub(super) fn build(study: Study, base: Loop, file: &str) -> Result<Plan, StudyError> {
         let bad = |key: String, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
 
         // First the size, from the ranges alone: every axis's count and
@@ -586,8 +586,9 @@ impl Plan {
         let base_table = base.table().ok();
         // The typed seed-only path must give what the round trip gives.
         let seed_only_typed = base_table.as_ref().is_some_and(|t| {
-            base.with_values_built_on(t.clone(), &[])
-                .is_ok_and(|(s, _)| s == base)
+            base.scenario()
+                .with_values_on(t.clone(), &[])
+                .is_ok_and(|s| s == *base.scenario())
         });
         Ok(Plan {
             file: file.to_string(),
@@ -622,13 +623,13 @@ values = [-1.0]
 "#,
         )
         .unwrap();
-        let e = Plan::build(study, Scenario::parse("").unwrap(), "t.toml").unwrap_err();
+        let e = Plan::build(study, Loop::parse("").unwrap(), "t.toml").unwrap_err();
         assert!(e.0.contains("axis[0]") && e.0.contains("gamma1"), "{e}");
     }
 
     fn build(text: &str) -> Result<Plan, StudyError> {
         let study: Study = toml::from_str(text).unwrap();
-        Plan::build(study, Scenario::parse("").unwrap(), "t.toml")
+        Plan::build(study, Loop::parse("").unwrap(), "t.toml")
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! and [`Tune`], the file checked against its scenarios and the kind's
 //! tunables.
 
-use crate::scenario::{ControllerCfg, Scenario};
+use crate::scenario::{ControllerCfg, Loop, Reason};
 use crate::study::StudyError;
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
@@ -130,8 +130,8 @@ pub const MAX_BUDGET: u64 = 1_000_000;
 pub struct Tune {
     /// The file as written (defaults filled).
     pub file: TuneFile,
-    /// The scenarios.
-    pub scenarios: Vec<Scenario>,
+    /// The scenarios, built.
+    pub scenarios: Vec<Loop>,
     pub(super) tables: Vec<toml::Table>,
     /// The kind tuned.
     pub kind: &'static str,
@@ -143,12 +143,9 @@ pub struct Tune {
 
 /// The one axis of a tune's or a league's scenarios (their scores add up
 /// in one unit): the first's, or the index of the first that differs.
-pub fn common_axis(scenarios: &[Scenario]) -> Result<crate::axis::Axis, usize> {
-    let axis = scenarios
-        .first()
-        .map(|s| s.plant.axis())
-        .unwrap_or_default();
-    match scenarios.iter().position(|s| s.plant.axis() != axis) {
+pub fn common_axis(scenarios: &[Loop]) -> Result<crate::axis::Axis, usize> {
+    let axis = scenarios.first().map(Loop::axis).unwrap_or_default();
+    match scenarios.iter().position(|s| s.axis() != axis) {
         Some(i) => Err(i),
         None => Ok(axis),
     }
@@ -180,7 +177,7 @@ impl Tune {
             .scenarios
             .iter()
             .map(|p| {
-                Scenario::load(&dir.join(p), &[])
+                crate::formats::load(&dir.join(p), &[])
                     .map_err(|e| StudyError(format!("{file}: `scenarios`: {e}")))
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -188,7 +185,7 @@ impl Tune {
     }
 
     /// Checks a parsed tune file against its loaded scenarios.
-    pub fn build(tf: TuneFile, scenarios: Vec<Scenario>, file: &str) -> Result<Tune, StudyError> {
+    pub fn build(tf: TuneFile, scenarios: Vec<Loop>, file: &str) -> Result<Tune, StudyError> {
         Self::build_under(tf, scenarios, file, "")
     }
 
@@ -197,7 +194,7 @@ impl Tune {
     /// error names the key as it is written there (`tuning.budget`).
     pub fn build_under(
         tf: TuneFile,
-        scenarios: Vec<Scenario>,
+        scenarios: Vec<Loop>,
         file: &str,
         section: &str,
     ) -> Result<Tune, StudyError> {
@@ -216,10 +213,10 @@ impl Tune {
                 &format!("scenarios[{i}]"),
                 format!(
                     "`{}` is on a {} axis, `{}` on a {} one: the scores of one tune share one unit",
-                    scenarios[i].name,
-                    scenarios[i].plant.axis().name(),
-                    scenarios[0].name,
-                    scenarios[0].plant.axis().name()
+                    scenarios[i].name(),
+                    scenarios[i].axis().name(),
+                    scenarios[0].name(),
+                    scenarios[0].axis().name()
                 ),
             )
         })?;
@@ -274,7 +271,7 @@ impl Tune {
         let kind_name = tf
             .controller
             .clone()
-            .unwrap_or_else(|| scenarios[0].controller.kind().to_string());
+            .unwrap_or_else(|| scenarios[0].controller().kind().to_string());
         let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == kind_name) else {
             return Err(bad(
                 "controller",
@@ -367,7 +364,7 @@ impl Tune {
         let mut work = crate::limits::Batch::default();
         let per: f64 = scenarios
             .iter()
-            .map(|s| crate::limits::run_evaluations(s) + crate::limits::RUN_OVERHEAD)
+            .map(|s| crate::limits::run_evaluations(s.scenario()) + crate::limits::RUN_OVERHEAD)
             .sum::<f64>()
             * tf.draws as f64;
         let runs = (scenarios.len() as u64 * tf.draws) as f64;
@@ -382,7 +379,8 @@ impl Tune {
                 tf.draws
             ),
         );
-        work.check("tune").map_err(|(k, r)| bad(&k, r))?;
+        work.check("tune")
+            .map_err(|e| bad(&e.key, e.reason.to_string()))?;
         let tables = scenarios
             .iter()
             .map(|s| s.table().map_err(|e| StudyError(format!("{file}: {e}"))))
@@ -404,7 +402,7 @@ impl Tune {
                     // A refused parameter value inside its range is a
                     // result (+∞), an unknown key is not.
                     if not_a_result(&e.reason) {
-                        return Err(bad(&e.key, e.reason));
+                        return Err(bad(&e.key, e.reason.to_string()));
                     }
                 }
             }
@@ -434,10 +432,11 @@ pub(crate) fn numeric(v: &toml::Value) -> Result<(), &'static str> {
 /// Whether a refusal of a trial value is the key's fault (unknown, unused,
 /// or not a number at all) rather than a result (a value the controller
 /// refuses inside its range, scored +∞).
-pub(crate) fn not_a_result(reason: &str) -> bool {
-    reason.contains("unknown field")
-        || reason.contains("not used by")
-        || reason.contains("invalid type")
+pub(crate) fn not_a_result(reason: &Reason) -> bool {
+    match reason {
+        Reason::Serde(r) => r.contains("unknown field") || r.contains("invalid type"),
+        r => r.to_string().contains("not used by"),
+    }
 }
 
 impl ParamRange {

@@ -3,7 +3,7 @@
 
 use super::{Objective, Scale, Tune};
 use crate::metrics::Metrics;
-use crate::scenario::{Scenario, Setup};
+use crate::scenario::Loop;
 
 impl Tune {
     /// The overrides of one evaluation of `values`: one list per
@@ -37,9 +37,9 @@ impl Tune {
         &self,
         run: usize,
         sets: &[(String, toml::Value)],
-    ) -> Result<(Scenario, Setup), crate::scenario::ScenarioError> {
+    ) -> Result<Loop, crate::scenario::ScenarioError> {
         let i = run / self.file.draws as usize;
-        self.scenarios[i].with_values_built_on(self.tables[i].clone(), sets)
+        self.scenarios[i].with_values_on(self.tables[i].clone(), sets)
     }
 
     /// The parameter values of a point of the search space.
@@ -66,7 +66,7 @@ impl Tune {
             .map(|(i, sets)| {
                 self.build_run(i, sets)
                     .ok()
-                    .map(|(_, setup)| crate::run::run_setup(&setup, &mut |_| {}).1)
+                    .map(|lp| crate::run::run_metrics(&lp, &mut |_| {}).1)
             })
             .collect()
     }

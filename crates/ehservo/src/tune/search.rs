@@ -158,7 +158,11 @@ pub fn tune_to_dir(
         .filter(|(k, _)| k != "uncertainty.seed")
         .cloned()
         .collect();
-    let (mut tuned, _) = t.build_run(0, &sets).map_err(anyhow::Error::from)?;
+    let mut tuned = t
+        .build_run(0, &sets)
+        .map_err(anyhow::Error::from)?
+        .scenario()
+        .clone();
     tuned.description = format!(
         "{} with {} tuned by `ehservo tune` ({})",
         tuned.name, t.kind, t.file.name

@@ -5,12 +5,12 @@
 
 use ehservo::analysis::{analyze, diagnostics, p_matrix, RK4_REAL_LIMIT};
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use nalgebra::Matrix3;
 
-fn scenario(set: &[&str]) -> Scenario {
+fn scenario(set: &[&str]) -> Loop {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    Scenario::parse_with("", "<test>", &set).unwrap()
+    Loop::parse_with("", "<test>", &set).unwrap()
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -391,7 +391,7 @@ fn the_sampled_verdict_matches_the_simulation() {
             "substeps {sub}: {}",
             a.closed_loop.verdict
         );
-        let c = run(&s, Keep::Nothing).unwrap().metrics.chattering.unwrap();
+        let c = run(&s, Keep::Nothing).metrics.chattering.unwrap();
         if stable {
             assert!(c < 0.1, "substeps {sub}: c[u] = {c}");
         } else {
@@ -404,9 +404,9 @@ fn the_sampled_verdict_matches_the_simulation() {
 /// and the dead zone counted directly.
 #[test]
 fn diagnostics_along_a_run() {
-    let s = Scenario::parse("").unwrap();
-    let r = run(&s, Keep::Every(1)).unwrap();
-    let d = diagnostics(&s, &r.trace).unwrap();
+    let s = Loop::parse("").unwrap();
+    let r = run(&s, Keep::Every(1));
+    let d = diagnostics(s.scenario(), &r.trace).unwrap();
     for v in [
         d.condition4,
         d.condition4_left,
@@ -465,7 +465,7 @@ fn diagnostics_along_a_run() {
     assert!(d.norm_e_median > 100.0 * d.right_half_limit_median);
     let text = d.to_text();
     assert!(text.contains("condition 4) holds") && text.contains("dead zone"));
-    assert!(diagnostics(&scenario(&["controller.kind=vsc"]), &r.trace).is_none());
+    assert!(diagnostics(scenario(&["controller.kind=vsc"]).scenario(), &r.trace).is_none());
 }
 
 /// The report has its sections and verdict lines.
@@ -494,7 +494,7 @@ fn text_report_sections() {
 #[test]
 fn run_to_dir_diagnostics_are_those_of_the_kept_samples() {
     let s = scenario(&["output.decimate=3", "simulation.horizon=0.5"]);
-    let full = run(&s, Keep::Every(1)).unwrap();
+    let full = run(&s, Keep::Every(1));
     let last = full.trace.last().unwrap().k;
     assert_ne!(last % 3, 0, "the last sample should be off the stride");
     let kept: Vec<_> = full
@@ -503,7 +503,7 @@ fn run_to_dir_diagnostics_are_those_of_the_kept_samples() {
         .filter(|x| x.k % 3 == 0 || x.k == last)
         .copied()
         .collect();
-    let want = serde_json::to_value(diagnostics(&s, &kept).unwrap()).unwrap();
+    let want = serde_json::to_value(diagnostics(s.scenario(), &kept).unwrap()).unwrap();
     assert_eq!(want["samples"], kept.len());
     // Two of its numbers recounted here from the samples by key: the
     // median ‖E‖ and the largest |Δ|.

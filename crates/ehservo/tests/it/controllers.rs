@@ -5,11 +5,11 @@
 #![allow(clippy::float_cmp)] // exact values set by the test are compared exactly
 
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 
-fn scenario(text: &str, set: &[&str]) -> Result<Scenario, ehservo::scenario::ScenarioError> {
+fn scenario(text: &str, set: &[&str]) -> Result<Loop, ehservo::scenario::ScenarioError> {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    Scenario::parse_with(text, "<test>", &set)
+    Loop::parse_with(text, "<test>", &set)
 }
 
 /// `kind = "pid"` alone, with its gains designed from the nominal model,
@@ -28,7 +28,7 @@ fn pid_alone_tracks_the_fig2_case_in_both_modes() {
         ],
     ] {
         let s = scenario("", &mode).unwrap();
-        let r = run(&s, Keep::Every(1)).unwrap();
+        let r = run(&s, Keep::Every(1));
         assert!(r.outcome.diverged.is_none(), "{mode:?}");
         let e = r.metrics.e_max.unwrap();
         assert!(e < 0.5, "{mode:?}: e_max {e}°");
@@ -53,7 +53,7 @@ fn pid_output_limit_and_anti_windup() {
     let i_max = |tt: Option<&str>| {
         let mut set = vec!["controller.kind=pid", "controller.u_limit=0.3"];
         set.extend(tt);
-        let r = run(&scenario("", &set).unwrap(), Keep::Every(1)).unwrap();
+        let r = run(&scenario("", &set).unwrap(), Keep::Every(1));
         assert!(r.trace.iter().all(|x| x.u.abs() <= 0.3));
         r.trace
             .iter()
@@ -90,7 +90,7 @@ fn studies_switch_kind() {
     let kind = |k: &str| ("controller.kind".to_string(), toml::Value::String(k.into()));
     let vsc = base.with_values(&[kind("vsc")]).unwrap();
     let c = vsc
-        .controller
+        .controller()
         .get::<ehservo_core::control::sliding::VscConfig>()
         .unwrap();
     assert_eq!((c.0.gamma1, c.0.bound_a), (200.0, 0.5));
@@ -101,7 +101,7 @@ fn studies_switch_kind() {
         ])
         .unwrap();
     let p = pid
-        .controller
+        .controller()
         .get::<ehservo_core::control::pid::PidConfig>()
         .unwrap();
     assert_eq!(p.kp, Some(5.0));
@@ -120,9 +120,9 @@ fn studies_switch_kind() {
 /// test checks that the page shows these lines).
 #[test]
 fn readme_simulation_snippet() -> Result<(), Box<dyn std::error::Error>> {
-    let setup = ehservo::scenario::Scenario::parse("[controller]\nkind = \"pid\"\n")?.setup()?;
+    let lp = ehservo::scenario::Loop::parse("[controller]\nkind = \"pid\"\n")?;
     let mut p_seen = 0;
-    let (outcome, metrics) = ehservo::run::run_setup(&setup, &mut |sample| {
+    let (outcome, metrics) = ehservo::run::run_metrics(&lp, &mut |sample| {
         p_seen += usize::from(sample.get("p").is_some());
     });
     assert_eq!(p_seen as u64, outcome.samples);
@@ -142,7 +142,7 @@ fn adrc_tracks_the_fig2_case() {
         vec!["controller.model_assisted=false", "simulation.step=0.001"],
     ] {
         let s = scenario(text, &set).unwrap();
-        let r = run(&s, Keep::Every(1)).unwrap();
+        let r = run(&s, Keep::Every(1));
         assert!(r.outcome.diverged.is_none(), "{set:?}");
         let e = r.metrics.e_max.unwrap();
         eprintln!("adrc {set:?}: e_max {e}°");
@@ -165,7 +165,7 @@ fn sta_tracks_the_fig2_case() {
     let text = include_str!("../../../../scenarios/league/sta-fig2.toml");
     for set in [vec![], vec!["simulation.step=0.001"]] {
         let s = scenario(text, &set).unwrap();
-        let r = run(&s, Keep::Every(1)).unwrap();
+        let r = run(&s, Keep::Every(1));
         assert!(r.outcome.diverged.is_none(), "{set:?}");
         let e = r.metrics.e_max.unwrap();
         eprintln!("sta {set:?}: e_max {e}°");
@@ -184,7 +184,7 @@ fn sta_tracks_the_fig2_case() {
 /// checks it stayed bounded.
 fn fig2(set: &[&str]) -> (f64, Vec<ehservo_sim::simulation::Sample>) {
     let s = scenario("", set).unwrap();
-    let r = run(&s, Keep::Every(1)).unwrap();
+    let r = run(&s, Keep::Every(1));
     assert!(r.outcome.diverged.is_none(), "{set:?} diverged");
     (r.metrics.e_max.unwrap(), r.trace)
 }

@@ -7,7 +7,7 @@ use ehservo::freq::measure::{self, Broadband, Input, Settings};
 use ehservo::freq::oppoint::At;
 use ehservo::freq::response::Discretisation;
 use ehservo::freq::ss::C64;
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use std::f64::consts::PI;
 
 fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
@@ -144,7 +144,7 @@ fn measured_agrees_with_computed_on_a_linear_case() {
     let base = "[load]\namplitude = 0.0\nwavenumber = 0.0\n[uncertainty]\na_bias = 0.0\nb_bias = 0.0\n[controller]\nkind = \"pid\"\n";
     for (substeps, d) in [(10, Discretisation::Zoh), (1, Discretisation::Rk4)] {
         let toml = format!("{base}[simulation]\nstep = 0.01\nsubsteps = {substeps}\n");
-        let s = Scenario::parse(&toml).unwrap();
+        let s = Loop::parse(&toml).unwrap();
         let l = ehservo::freq::linearise(&s, "linear", Some(At::Trim(0.0)), None, d).unwrap();
         let settings = Settings {
             theta0: 0.0,
@@ -279,10 +279,10 @@ fn plots_and_the_chirp_are_written() {
 /// it is no equilibrium (its drift is θ̇, θ̈, θ⃛ of the trace).
 #[test]
 fn at_a_time_is_the_runs_state() {
-    let s = Scenario::load(&common::repo().join("scenarios/paper/fig2.toml"), &[]).unwrap();
+    let s = Loop::load(&common::repo().join("scenarios/paper/fig2.toml"), &[]).unwrap();
     let l = ehservo::freq::linearise(&s, "fig2", Some(At::Time(1.37)), None, Discretisation::Zoh)
         .unwrap();
-    let r = ehservo::run::run(&s, ehservo::run::Keep::Every(1)).unwrap();
+    let r = ehservo::run::run(&s, ehservo::run::Keep::Every(1));
     let smp = r.trace.iter().find(|x| x.k == 137).unwrap();
     assert_eq!(l.point.t_s, Some(1.37));
     for i in 0..3 {

@@ -645,7 +645,7 @@ fn check_toml(b: &Block, dir: &Path) -> Result<(), String> {
         (Some(_), Some(_)) => return Err("file= and save= together".into()),
     };
     let loaded = match kind {
-        "scenario" => ehservo::scenario::Scenario::load(&file, &[])
+        "scenario" => ehservo::scenario::Loop::load(&file, &[])
             .map(|_| ())
             .map_err(|e| e.to_string()),
         "study" => ehservo::study::Plan::load(&file)

@@ -9,7 +9,7 @@
 use crate::common::repo;
 use ehservo::analysis::step::{difference, read_columns, step_metrics, StepMetrics};
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 
 fn hopsan(file: &str) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let p = repo().join("tests/data/hopsan").join(file);
@@ -21,8 +21,8 @@ fn hopsan(file: &str) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
 fn ours(set: &[&str]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let path = repo().join("scenarios/hopsan/position-servo.toml");
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let s = Scenario::load(&path, &set).unwrap();
-    let r = run(&s, Keep::Every(1)).unwrap();
+    let s = Loop::load(&path, &set).unwrap();
+    let r = run(&s, Keep::Every(1));
     assert!(r.outcome.diverged.is_none());
     (
         r.trace.iter().map(|x| x.t).collect(),

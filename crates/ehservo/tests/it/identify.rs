@@ -13,7 +13,6 @@ use ehservo::core::servo::{Load, NominalModel, ServoParams};
 use ehservo::identify::excite::{excite_to_dir, Loop, Phases, Signal, Spec};
 use ehservo::identify::fit::Status;
 use ehservo::identify::{identify, report, Options, Outcome};
-use ehservo::scenario::Scenario;
 use std::path::{Path, PathBuf};
 
 /// A 16-bit encoder's step: 2π/65536 rad.
@@ -69,7 +68,7 @@ fn multisine(duration: f64, amplitude: f64) -> Spec {
 fn experiment(dir: &Path, name: &str, spec: &Spec, set: &[String]) -> PathBuf {
     let ex = dir.join(format!("{name}-excite"));
     excite_to_dir(spec, None, set, &ex).unwrap();
-    let s = Scenario::load(&ex.join("scenario.toml"), &[]).unwrap();
+    let s = ehservo::scenario::Loop::load(&ex.join("scenario.toml"), &[]).unwrap();
     let run = dir.join(format!("{name}-run"));
     ehservo::output::run_to_dir(&run, &s, false).unwrap();
     run.join("trace.csv")
@@ -442,14 +441,14 @@ fn two_experiments_give_the_bounds_and_a_scenario_that_runs() {
     );
     let out = dir.path().join("id");
     report::write(&o, &opts, &out, false).unwrap();
-    let s = Scenario::load(&out.join("identified.toml"), &[]).unwrap();
-    let c = s.controller.to_table();
+    let s = ehservo::scenario::Loop::load(&out.join("identified.toml"), &[]).unwrap();
+    let c = s.controller().to_table();
     let ba = c.get("bound_a").and_then(|v| v.as_float()).unwrap();
     assert!(
         (ba - bounds.bound_a).abs() <= 1e-5 * bounds.bound_a.max(1e-9) + 1e-12,
         "{ba}"
     );
-    let r = ehservo::run::run(&s, ehservo::run::Keep::Every(1000)).unwrap();
+    let r = ehservo::run::run(&s, ehservo::run::Keep::Every(1000));
     assert!(r.outcome.diverged.is_none());
     for f in ["identify.json", "frf.csv", "fit.csv"] {
         let text = std::fs::read_to_string(out.join(f)).unwrap();

@@ -15,7 +15,7 @@
 //! different reading of any equation moves these values at the percent level.
 
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 
 fn close(what: &str, got: f64, want: f64, rel: f64) {
     let tol = rel * want.abs().max(1e-3);
@@ -27,8 +27,8 @@ fn close(what: &str, got: f64, want: f64, rel: f64) {
 
 #[test]
 fn fig2_sampled_trace_matches_the_independent_implementation() {
-    let s = Scenario::parse("").unwrap(); // every default = the Fig. 2 case
-    let r = run(&s, Keep::Every(1)).unwrap();
+    let s = Loop::parse("").unwrap(); // every default = the Fig. 2 case
+    let r = run(&s, Keep::Every(1));
     // (t, θ in degrees, u, σ, WᵀΦ, w_128)
     let expected = [
         (
@@ -140,8 +140,8 @@ fn fig2_other_readings_match_the_independent_implementation() {
     ];
     for (set, e_max, u_max, w_max) in cases {
         let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-        let s = Scenario::parse_with("", "<test>", &set).unwrap();
-        let m = run(&s, Keep::Nothing).unwrap().metrics;
+        let s = Loop::parse_with("", "<test>", &set).unwrap();
+        let m = run(&s, Keep::Nothing).metrics;
         close(&format!("{set:?} e_max"), m.e_max.unwrap(), e_max, 1e-8);
         close(&format!("{set:?} u_max"), m.u_max.unwrap(), u_max, 1e-8);
         close(
@@ -170,8 +170,8 @@ fn divergence_times_match_the_independent_implementation() {
         ),
     ] {
         let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-        let s = Scenario::parse_with("", "<test>", &set).unwrap();
-        let m = run(&s, Keep::Nothing).unwrap().metrics;
+        let s = Loop::parse_with("", "<test>", &set).unwrap();
+        let m = run(&s, Keep::Nothing).metrics;
         assert!(m.diverged, "{set:?}");
         assert!(
             (m.diverged_at_s.unwrap() - t).abs() < 1e-9,

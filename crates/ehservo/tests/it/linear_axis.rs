@@ -238,16 +238,16 @@ fn tune_and_league_on_a_cylinder_say_mm_and_refuse_a_mixed_set() {
 #[test]
 fn every_kind_runs_on_a_single_rod_cylinder() {
     use ehservo::run::{run, Keep};
-    use ehservo::scenario::{ControllerCfg, Scenario};
+    use ehservo::scenario::{ControllerCfg, Loop};
     let set: Vec<String> = ["simulation.horizon=2.0", "simulation.settle=0.5"]
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let base = Scenario::load(&chrono(), &set).unwrap();
+    let base = Loop::load(&chrono(), &set).unwrap();
     let e_max = |kind: &str| {
-        let mut s = base.clone();
+        let mut s = base.scenario().clone();
         s.controller = ControllerCfg::default_of(kind).unwrap();
-        run(&s, Keep::Nothing).map(|r| r.metrics)
+        Loop::new(s).map(|lp| run(&lp, Keep::Nothing).metrics)
     };
     let open = e_max("open-loop").unwrap();
     assert_eq!(open.axis.unit(), "mm");
@@ -265,7 +265,7 @@ fn every_kind_runs_on_a_single_rod_cylinder() {
                     e.contains("controller.design_pole") && e.contains("kd < 0"),
                     "{e}"
                 );
-                let own = run(&base, Keep::Nothing).unwrap().metrics;
+                let own = run(&base, Keep::Nothing).metrics;
                 println!(
                     "pid: default design refused ({e}); the scenario's P law: e_max {:?} mm",
                     own.e_max

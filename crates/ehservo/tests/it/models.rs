@@ -5,7 +5,7 @@
 use ehservo::physical::PhysicalVariation;
 use ehservo::plant::{Factors, PhysicalPlant, Plant, ThirdOrderPlant, Variation};
 use ehservo::run::{run, Keep};
-use ehservo::scenario::{PlantCfg, Scenario};
+use ehservo::scenario::PlantCfg;
 use ehservo_core::rk4::rk4_step;
 use ehservo_core::servo::{Load, ServoParams};
 
@@ -101,12 +101,14 @@ fn same_theta_open_loop_with_the_fig2_variation() {
 #[test]
 fn same_closed_loop_fig2_on_both_models() {
     // The Fig. 2 loop in continuous mode at a fine step on both plants.
-    let mut s =
-        Scenario::parse("[simulation]\nmode = \"continuous\"\nstep = 1e-4\nhorizon = 3.0\n")
-            .unwrap();
-    let third = run(&s, Keep::Every(100)).unwrap();
+    let lp = ehservo::scenario::Loop::parse(
+        "[simulation]\nmode = \"continuous\"\nstep = 1e-4\nhorizon = 3.0\n",
+    )
+    .unwrap();
+    let third = run(&lp, Keep::Every(100));
+    let mut s = lp.scenario().clone();
     s.plant = PlantCfg::default_of("physical").unwrap();
-    let phys = run(&s, Keep::Every(100)).unwrap();
+    let phys = run(&ehservo::scenario::Loop::new(s).unwrap(), Keep::Every(100));
     assert!(!third.metrics.diverged && !phys.metrics.diverged);
     let d = third
         .trace

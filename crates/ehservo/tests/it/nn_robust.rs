@@ -3,15 +3,15 @@
 //! closed loop on the paper's cases.
 
 use ehservo::run::{run, Keep, RunResult};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 
 use crate::common::repo;
 
 fn run_file(rel: &str, set: &[&str]) -> RunResult {
     let text = std::fs::read_to_string(repo().join(rel)).unwrap();
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let s = Scenario::parse_with(&text, rel, &set).unwrap();
-    run(&s, Keep::Every(1)).unwrap()
+    let s = Loop::parse_with(&text, rel, &set).unwrap();
+    run(&s, Keep::Every(1))
 }
 
 /// ‖W‖ at the logged sample nearest `t`.
@@ -102,10 +102,10 @@ fn sigma_mod_stays_bounded_where_eta0_drifts() {
 #[test]
 fn weight_law_key_is_checked() {
     let text = "[controller]\nkind = \"nn-robust\"\nweight_law = \"leaky\"\n";
-    let e = Scenario::parse_with(text, "<test>", &[]).unwrap_err();
+    let e = Loop::parse_with(text, "<test>", &[]).unwrap_err();
     assert_eq!(e.key, "controller.weight_law");
     assert!(e.reason.contains("sigma-mod"), "{e}");
-    let e = Scenario::parse_with(
+    let e = Loop::parse_with(
         "[controller]\nkind = \"nn-robust\"\nbound_a = 1\n",
         "<test>",
         &[],

@@ -9,7 +9,7 @@ use super::common::{ehservo, repo};
 use ehservo::pil::session::Session;
 use ehservo::pil::transport::{InProcess, Inject, Transport};
 use ehservo::pil::{self, Options, Target};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use ehservo_wire::frame::{self, MAX_FRAME};
 use ehservo_wire::msg::{FloatType, ToBoard};
 use std::io::{Read, Write};
@@ -17,9 +17,9 @@ use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-fn fig2(set: &[&str]) -> Scenario {
+fn fig2(set: &[&str]) -> Loop {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    Scenario::load(&repo().join("scenarios/paper/fig2.toml"), &set).unwrap()
+    Loop::load(&repo().join("scenarios/paper/fig2.toml"), &set).unwrap()
 }
 
 fn trace(dir: &Path) -> String {
@@ -62,7 +62,7 @@ fn the_f32_run_is_the_f64_run_to_f32_accuracy() {
         Options::in_process(FloatType::F32),
     )
     .unwrap();
-    let r64 = ehservo::run::run(&s, ehservo::run::Keep::Nothing).unwrap();
+    let r64 = ehservo::run::run(&s, ehservo::run::Keep::Nothing);
     let (a, b) = (r32.metrics.e_max.unwrap(), r64.metrics.e_max.unwrap());
     assert!(((a - b) / b).abs() < 1e-4, "f32 {a} vs f64 {b}");
     assert_ne!(a.to_bits(), b.to_bits(), "f32 is not the f64 run");
@@ -215,8 +215,7 @@ impl Transport for OtherScenario {
 #[test]
 fn handshake_mismatches_are_refused_and_named() {
     let s = fig2(&[]);
-    let setup = s.setup().unwrap();
-    let h = pil::hello(&s, &setup, FloatType::F32).unwrap();
+    let h = pil::hello(&s, FloatType::F32).unwrap();
     let open = |t: Box<dyn Transport>| {
         Session::open(
             t,
@@ -237,7 +236,10 @@ fn handshake_mismatches_are_refused_and_named() {
     assert_eq!(open(Box::new(InProcess::new())), None);
     // Another scenario's fingerprint differs.
     let other = fig2(&["controller.gamma1=200"]);
-    assert_ne!(pil::scenario_hash(&other), pil::scenario_hash(&s));
+    assert_ne!(
+        pil::scenario_hash(other.scenario()),
+        pil::scenario_hash(s.scenario())
+    );
 }
 
 #[test]
@@ -325,9 +327,9 @@ fn pil_on_qemu_is_the_host_f32_run_to_the_bit() {
             vec!["simulation.horizon=0.5".to_string()],
         ),
     ] {
-        let s = Scenario::load(&repo().join(file), &set).unwrap();
-        let host = d.path().join(format!("{}-host", s.name));
-        let board = d.path().join(format!("{}-board", s.name));
+        let s = Loop::load(&repo().join(file), &set).unwrap();
+        let host = d.path().join(format!("{}-host", s.name()));
+        let board = d.path().join(format!("{}-board", s.name()));
         pil::run_to_dir(&host, &s, false, Options::in_process(FloatType::F32)).unwrap();
         let opts = Options {
             target: qemu_target(&fw),
@@ -387,8 +389,8 @@ fn other_kinds_in_f64_and_f32_on_qemu_are_the_host_run_to_the_bit() {
         ("scenarios/league/sta-fig2.toml", FloatType::F64, &short[..]),
     ] {
         let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-        let s = Scenario::load(&repo().join(file), &set).unwrap();
-        let kind = s.controller.kind();
+        let s = Loop::load(&repo().join(file), &set).unwrap();
+        let kind = s.controller().kind();
         let host = d.path().join(format!("{kind}-host"));
         let board = d.path().join(format!("{kind}-board"));
         pil::run_to_dir(&host, &s, false, Options::in_process(float)).unwrap();

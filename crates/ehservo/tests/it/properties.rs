@@ -3,7 +3,7 @@
 
 use ehservo::output::summary;
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use proptest::prelude::*;
 
 const KEYS: [&str; 24] = [
@@ -66,13 +66,12 @@ proptest! {
         // Keep runs short.
         overrides.insert(0, "simulation.horizon=0.5".into());
         overrides.insert(1, "simulation.settle=0.1".into());
-        match Scenario::parse_with("", "prop.toml", &overrides) {
-            Err(e) => prop_assert!(!e.reason.is_empty()),
+        match Loop::parse_with("", "prop.toml", &overrides) {
+            Err(e) => prop_assert!(!e.reason.to_string().is_empty()),
             Ok(s) => {
-                prop_assert!(s.validate().is_ok());
-                let steps = s.sim_config().steps.saturating_mul(s.simulation.substeps as u64);
+                let steps = s.sim().steps.saturating_mul(s.sim().substeps as u64);
                 if steps <= 20_000 {
-                    let r = run(&s, Keep::Every(1)).unwrap();
+                    let r = run(&s, Keep::Every(1));
                     for smp in &r.trace {
                         prop_assert!(smp.u.is_finite() && smp.x.iter().all(|v| v.is_finite()));
                         prop_assert!(smp.values.iter().all(|v| v.is_finite()));
@@ -90,16 +89,21 @@ proptest! {
 /// release-vs-debug case is in .ci/run).
 #[test]
 fn summaries_are_deterministic() {
-    let s = Scenario::parse(
+    let s = Loop::parse(
         "[uncertainty]\na_bias = 0.5\na_random = 0.5\nb_bias = 0.25\nb_random = 0.25\nseed = 9\n",
     )
     .unwrap();
-    let a = serde_json::to_string(&summary(&s, &run(&s, Keep::Nothing).unwrap())).unwrap();
-    let b = serde_json::to_string(&summary(&s, &run(&s, Keep::Nothing).unwrap())).unwrap();
+    let a = serde_json::to_string(&summary(&s, &run(&s, Keep::Nothing))).unwrap();
+    let b = serde_json::to_string(&summary(&s, &run(&s, Keep::Nothing))).unwrap();
     assert_eq!(a, b);
     // And a different seed gives a different result (the seed is used).
-    let s2 = Scenario::parse_with(&s.to_toml(), "x", &["uncertainty.seed=10".into()]).unwrap();
-    let c = serde_json::to_string(&summary(&s2, &run(&s2, Keep::Nothing).unwrap())).unwrap();
+    let s2 = Loop::parse_with(
+        &s.scenario().to_toml(),
+        "x",
+        &["uncertainty.seed=10".into()],
+    )
+    .unwrap();
+    let c = serde_json::to_string(&summary(&s2, &run(&s2, Keep::Nothing))).unwrap();
     assert_ne!(a, c);
 }
 
@@ -149,13 +153,13 @@ proptest! {
         }
         overrides.push("simulation.horizon=0.2".into());
         overrides.push("simulation.settle=0.1".into());
-        let Ok(s) = Scenario::parse_with("", "prop.toml", &overrides) else {
+        let Ok(s) = Loop::parse_with("", "prop.toml", &overrides) else {
             return Ok(());
         };
         let (tx, rx) = std::sync::mpsc::channel();
         std::thread::spawn(move || {
             let a = ehservo::analysis::analyze(&s);
-            let r = run(&s, Keep::Every(1)).unwrap();
+            let r = run(&s, Keep::Every(1));
             let json = serde_json::to_string(&summary(&s, &r)).unwrap();
             tx.send((a.open_loop_poles, json)).ok();
         });

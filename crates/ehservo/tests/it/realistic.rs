@@ -5,10 +5,10 @@
 #![allow(clippy::float_cmp)] // exact equality is the point of several checks
 
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::{Loop, Scenario};
 
-fn parse(text: &str) -> Scenario {
-    Scenario::parse_with(text, "<test>", &[]).unwrap()
+fn parse(text: &str) -> Loop {
+    Loop::parse_with(text, "<test>", &[]).unwrap()
 }
 
 /// The loop at 1 ms with a 150 Hz valve (ωn·h/substeps = 0.23).
@@ -24,7 +24,7 @@ fn the_loop_sees_the_configured_noise() {
     let s = parse(&format!(
         "{LOOP}[sensor]\nnoise = [1e-4, 0.0, 0.0]\nseed = 11\n"
     ));
-    let r = run(&s, Keep::Every(1)).unwrap();
+    let r = run(&s, Keep::Every(1));
     assert!(r.outcome.diverged.is_none());
     let d: Vec<f64> = r.trace.iter().map(|x| x.x_ctrl[0] - x.x[0]).collect();
     let n = d.len() as f64;
@@ -37,7 +37,7 @@ fn the_loop_sees_the_configured_noise() {
         .iter()
         .all(|x| x.x_ctrl[1] == x.x[1] && x.x_ctrl[2] == x.x[2]));
     // The same seed gives the same bits, another seed other noise.
-    let again = run(&s, Keep::Every(1)).unwrap();
+    let again = run(&s, Keep::Every(1));
     assert!(r
         .trace
         .iter()
@@ -46,7 +46,7 @@ fn the_loop_sees_the_configured_noise() {
     let other = parse(&format!(
         "{LOOP}[sensor]\nnoise = [1e-4, 0.0, 0.0]\nseed = 12\n"
     ));
-    let o = run(&other, Keep::Every(1)).unwrap();
+    let o = run(&other, Keep::Every(1));
     assert!(r
         .trace
         .iter()
@@ -63,7 +63,7 @@ fn the_encoder_quantises_to_its_counts() {
         "{LOOP}[sensor]\nmeasured = [\"theta\"]\nresolution = [{q:e}, 0.0, 0.0]\n\
          [estimator]\nkind = \"levant\"\nlipschitz = 40.0\n"
     ));
-    let r = run(&s, Keep::Every(1)).unwrap();
+    let r = run(&s, Keep::Every(1));
     assert!(r.outcome.diverged.is_none());
     for x in &r.trace {
         let counts = x.x_ctrl[0] / q;
@@ -101,7 +101,7 @@ fn estimators_in_the_loop_track_the_true_rate() {
         let s = parse(&format!(
             "{LOOP}{plant}[sensor]\nmeasured = [\"theta\"]\n[estimator]\n{est}\n"
         ));
-        let r = run(&s, Keep::Every(1)).unwrap();
+        let r = run(&s, Keep::Every(1));
         assert!(r.outcome.diverged.is_none(), "{est}");
         // θ̇ peaks at 5°·2π = 0.548 rad/s.
         let worst = r
@@ -125,15 +125,18 @@ fn estimators_in_the_loop_track_the_true_rate() {
 /// loop stays bounded.
 #[test]
 fn delays_of_whole_samples() {
-    let s = parse(&format!("{LOOP}[sensor]\ndelay = 3\n"));
-    let s = Scenario {
+    let s = parse(&format!("{LOOP}[sensor]\ndelay = 3\n"))
+        .scenario()
+        .clone();
+    let s = Loop::new(Scenario {
         simulation: ehservo::scenario::SimulationCfg {
             computation_delay: true,
             ..s.simulation
         },
         ..s
-    };
-    let r = run(&s, Keep::Every(1)).unwrap();
+    })
+    .unwrap();
+    let r = run(&s, Keep::Every(1));
     for k in 3..r.trace.len() {
         assert_eq!(r.trace[k].x_ctrl, r.trace[k - 3].x, "k = {k}");
     }

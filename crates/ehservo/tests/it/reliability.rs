@@ -179,7 +179,7 @@ fn non_finite(text: &str) -> bool {
 /// never a silent non-finite number.
 #[test]
 fn every_numeric_key_at_its_extremes_is_a_result_or_bad_input() {
-    use ehservo::scenario::Scenario;
+    use ehservo::scenario::Loop;
     let floats = ["1e308", "-1e308", "5e-324", "-5e-324", "0.0"];
     let ints = ["-1", "0", "4294967295", "9223372036854775807"];
     let tmp = tempfile::tempdir().unwrap();
@@ -191,7 +191,7 @@ fn every_numeric_key_at_its_extremes_is_a_result_or_bad_input() {
             "simulation.settle=0.1".into(),
         ];
         let s0 =
-            Scenario::parse_with(&base, "<base>", &short).unwrap_or_else(|e| panic!("{base}: {e}"));
+            Loop::parse_with(&base, "<base>", &short).unwrap_or_else(|e| panic!("{base}: {e}"));
         let table = s0.table().unwrap();
         let mut leaves = Vec::new();
         numeric_leaves("", &table, &mut leaves);
@@ -213,7 +213,7 @@ fn every_numeric_key_at_its_extremes_is_a_result_or_bad_input() {
                 let what = format!("{} with {key} = {x}", base.replace('\n', " "));
                 let out = tmp.path().join(format!("o{cases}"));
                 let r = std::panic::catch_unwind(|| {
-                    let s = Scenario::parse_with(&base, "<base>", &sets)?;
+                    let s = Loop::parse_with(&base, "<base>", &sets)?;
                     ehservo::output::run_to_dir(&out, &s, false)?;
                     // What `ehservo analyze` prints of it, too.
                     Ok::<_, anyhow::Error>(ehservo::analysis::analyze(&s).to_text())

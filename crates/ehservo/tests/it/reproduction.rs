@@ -11,33 +11,26 @@
 use ehservo::metrics::Metrics;
 use ehservo::reproduce::derived::CaseMetrics;
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use std::path::Path;
 
-fn paper(file: &str, set: &[&str]) -> Scenario {
+fn paper(file: &str, set: &[&str]) -> Loop {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../scenarios/paper")
         .join(file);
-    Scenario::load(&p, &set).unwrap()
+    Loop::load(&p, &set).unwrap()
 }
 
 fn metrics(file: &str, set: &[&str]) -> Metrics {
-    run(&paper(file, set), Keep::Nothing).unwrap().metrics
+    run(&paper(file, set), Keep::Nothing).metrics
 }
 
 fn case(file: &str, set: &[&str]) -> CaseMetrics {
     let s = paper(file, set);
-    let r = run(&s, Keep::Every(1)).unwrap();
+    let r = run(&s, Keep::Every(1));
     let net = r.metrics.w_norm_max.is_some();
-    CaseMetrics::from_trace(
-        r.metrics,
-        &r.trace,
-        s.simulation.settle,
-        s.simulation.horizon,
-        1.0,
-        net,
-    )
+    CaseMetrics::from_trace(r.metrics, &r.trace, s.settle(), s.horizon(), 1.0, net)
 }
 
 fn within(what: &str, v: Option<f64>, want: f64, rel: f64) {
@@ -377,8 +370,8 @@ fn the_fig2_run_violates_a5_and_leaves_remark_6s_set() {
     // measured 327 along this run (P8): far above Wmax = 4, so the band is
     // loose — anything over 100 shows the assumption fails.
     let s = paper("fig2.toml", &[]);
-    let r = run(&s, Keep::Every(1)).unwrap();
-    let d = ehservo::analysis::diagnostics(&s, &r.trace).unwrap();
+    let r = run(&s, Keep::Every(1));
+    let d = ehservo::analysis::diagnostics(s.scenario(), &r.trace).unwrap();
     let w = &d.weights;
     assert!(!w.a5_holds);
     assert!(w.w_bar_required > 100.0, "{}", w.w_bar_required);

@@ -4,13 +4,13 @@
 
 use ehservo::plant::{Plant, ThirdOrderPlant, UncertaintySpec, Varying};
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use ehservo_core::prelude::*;
 
 #[test]
 fn sampled_mode_equals_the_core_fixed_rate_loop() {
-    let s = Scenario::parse("[simulation]\nhorizon = 2.0\nsubsteps = 4\n").unwrap();
-    let sim = run(&s, Keep::Every(1)).unwrap();
+    let s = Loop::parse("[simulation]\nhorizon = 2.0\nsubsteps = 4\n").unwrap();
+    let sim = run(&s, Keep::Every(1));
 
     let params = ServoParams::paper();
     let plant = ThirdOrderPlant::new(params, Load::paper());

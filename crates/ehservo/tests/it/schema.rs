@@ -155,7 +155,7 @@ fn shipped_files_carry_their_schema_line_and_validate() {
         // And the types read it as that format.
         match f {
             Format::Scenario => {
-                Scenario::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+                ehservo::scenario::Loop::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
             }
             Format::Study => {
                 toml::from_str::<ehservo::study::Study>(&text).unwrap();

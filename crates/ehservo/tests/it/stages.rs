@@ -2,11 +2,11 @@
 //! `[sensor]` and `[fault]`.
 
 use ehservo::run::{run, Keep};
-use ehservo::scenario::Scenario;
+use ehservo::scenario::Loop;
 use std::process::Command;
 
-fn parse(text: &str) -> Result<Scenario, ehservo::scenario::ScenarioError> {
-    Scenario::parse_with(text, "<test>", &[])
+fn parse(text: &str) -> Result<Loop, ehservo::scenario::ScenarioError> {
+    Loop::parse_with(text, "<test>", &[])
 }
 
 /// A valve that saturates at 0.5 V and lags by 20 ms: the plant sees the
@@ -21,7 +21,7 @@ fn actuator_from_a_scenario_in_both_modes() {
              [actuator]\nlimit = 0.5\ntime_constant = 0.02\n"
         ))
         .unwrap();
-        let r = run(&s, Keep::Every(1)).unwrap();
+        let r = run(&s, Keep::Every(1));
         assert!(r.outcome.diverged.is_none(), "{mode}");
         assert!(r.trace.iter().all(|x| x.u_plant.abs() <= 0.5 + 1e-12));
         assert!(
@@ -65,13 +65,12 @@ fn actuator_and_sensor_keys_are_validated() {
 /// θ stays the true, unquantised angle.
 #[test]
 fn a_quantised_sensor_changes_what_the_controller_sees() {
-    let exact = run(&parse("").unwrap(), Keep::Every(1)).unwrap();
+    let exact = run(&parse("").unwrap(), Keep::Every(1));
     let q = 2.0 * std::f64::consts::PI / 1024.0;
     let coarse = run(
         &parse(&format!("[sensor]\nresolution = [{q}, 0.0, 0.0]\n")).unwrap(),
         Keep::Every(1),
-    )
-    .unwrap();
+    );
     assert!(coarse.outcome.diverged.is_none());
     assert_ne!(
         exact.metrics.e_max, coarse.metrics.e_max,

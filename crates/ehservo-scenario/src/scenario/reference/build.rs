@@ -72,13 +72,13 @@ impl ReferenceCfg {
                 let f1 = positive("f1_hz", required(kind, "f1_hz", self.f1_hz)?)?;
                 let d = positive("duration", required(kind, "duration", self.duration)?)?;
                 let c = Chirp::try_new(mm(a), f0, f1, d)
-                    .map_err(|e| ("reference".to_string(), format!("{}: {}", e.name, e.reason)))?;
+                    .map_err(|e| KeyError::new("reference", format!("{}: {}", e.name, e.reason)))?;
                 Ok(AnyReference::Chirp(c))
             }
             ReferenceKind::Multisine => {
                 let comps = self.components(Axis::Linear)?;
                 let m = Multisine::try_new(&comps)
-                    .map_err(|e| ("reference.components".to_string(), e.to_string()))?;
+                    .map_err(|e| KeyError::new("reference.components", e.to_string()))?;
                 Ok(AnyReference::Multisine(m))
             }
             ReferenceKind::Csv => {
@@ -91,7 +91,7 @@ impl ReferenceCfg {
                     _ => PathBuf::from(file),
                 };
                 let knots = read_csv_on(&path, Axis::Linear)
-                    .map_err(|r| ("reference.file".to_string(), r))?;
+                    .map_err(|r| KeyError::new("reference.file", r))?;
                 Table::reference(knots, tau)
             }
         }
@@ -238,7 +238,7 @@ impl ReferenceCfg {
                 let f1 = positive("f1_hz", required(kind, "f1_hz", self.f1_hz)?)?;
                 let d = positive("duration", required(kind, "duration", self.duration)?)?;
                 let c = Chirp::try_new(a * DR, f0, f1, d)
-                    .map_err(|e| ("reference".to_string(), format!("{}: {}", e.name, e.reason)))?;
+                    .map_err(|e| KeyError::new("reference", format!("{}: {}", e.name, e.reason)))?;
                 Ok(AnyReference::Chirp(c))
             }
             ReferenceKind::Multisine => {
@@ -248,7 +248,7 @@ impl ReferenceCfg {
                     comps.iter().map(|c| c.amplitude.abs()).sum::<f64>(),
                 )?;
                 let m = Multisine::try_new(&comps)
-                    .map_err(|e| ("reference.components".to_string(), e.to_string()))?;
+                    .map_err(|e| KeyError::new("reference.components", e.to_string()))?;
                 Ok(AnyReference::Multisine(m))
             }
             ReferenceKind::Csv => {
@@ -260,9 +260,12 @@ impl ReferenceCfg {
                     Some(d) if Path::new(file).is_relative() => d.join(file),
                     _ => PathBuf::from(file),
                 };
-                let knots = read_csv(&path).map_err(|r| ("reference.file".to_string(), r))?;
+                let knots = read_csv(&path).map_err(|r| KeyError::new("reference.file", r))?;
                 let peak = knots.iter().map(|k| k.v.abs()).fold(0.0, f64::max);
-                within("file", peak).map_err(|(k, r)| (k, format!("{}: {r}", path.display())))?;
+                within("file", peak).map_err(|e| {
+                    let r = format!("{}: {}", path.display(), e.reason);
+                    KeyError::new(e.key, r)
+                })?;
                 Table::reference(knots, tau)
             }
         }

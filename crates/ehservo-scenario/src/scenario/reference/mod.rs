@@ -39,6 +39,7 @@ use ehservo_core::reference::{
     Chirp, Component, Knot, LagState, Multisine, Prefiltered, Reference, Sine, MAX_COMPONENTS,
 };
 use ehservo_sim::axis::Axis;
+use ehservo_sim::error::{KeyError, Reason};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -269,27 +270,19 @@ impl Default for ReferenceCfg {
     }
 }
 
-/// A checked error: key path and reason.
-type Bad = (String, String);
+/// A checked error: the key (under `reference.`) and the reason.
+type Bad = KeyError;
 
-fn bad<T>(key: &str, reason: impl Into<String>) -> Result<T, Bad> {
-    Err((format!("reference.{key}"), reason.into()))
+fn bad<T>(key: &str, reason: impl Into<Reason>) -> Result<T, Bad> {
+    Err(KeyError::new(format!("reference.{key}"), reason))
 }
 
 fn finite(key: &str, v: f64) -> Result<f64, Bad> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        bad(key, format!("must be finite (got {v:?})"))
-    }
+    ehservo_sim::error::finite(key, v).map_err(|e| e.under("reference"))
 }
 
 fn positive(key: &str, v: f64) -> Result<f64, Bad> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        bad(key, format!("must be finite and > 0 (got {v:?})"))
-    }
+    ehservo_sim::error::positive(key, v).map_err(|e| e.under("reference"))
 }
 
 fn required(kind: ReferenceKind, key: &str, v: Option<f64>) -> Result<f64, Bad> {
@@ -366,7 +359,7 @@ impl ReferenceCfg {
     }
 
     /// The sine's or square's frequency (Hz), or the default.
-    fn frequency(&self) -> f64 {
+    pub(crate) fn frequency(&self) -> f64 {
         self.frequency_hz.unwrap_or(DEFAULT_FREQUENCY_HZ)
     }
 
@@ -512,15 +505,18 @@ mod tests {
         let e = cfg("kind = \"step\"\nfrequency_hz = 2\nprefilter_tau = 0.02")
             .build(10.0, 1.0, None)
             .unwrap_err();
-        assert_eq!(e.0, "reference.frequency_hz");
-        assert!(e.1.contains("not used by kind `step`"), "{e:?}");
+        assert_eq!(e.key, "reference.frequency_hz");
+        assert!(
+            e.reason.to_string().contains("not used by kind `step`"),
+            "{e:?}"
+        );
         let e = cfg("kind = \"step\"").build(10.0, 1.0, None).unwrap_err();
-        assert_eq!(e.0, "reference.prefilter_tau");
-        assert!(e.1.contains("required"), "{e:?}");
+        assert_eq!(e.key, "reference.prefilter_tau");
+        assert!(e.reason.to_string().contains("required"), "{e:?}");
         let e = cfg("kind = \"ramp\"\nslope_deg_per_s = 10\nprefilter_tau = 0.02")
             .build(10.0, 1.0, None)
             .unwrap_err();
-        assert!(e.1.contains("theta_limit"), "{e:?}");
+        assert!(e.reason.to_string().contains("theta_limit"), "{e:?}");
         assert!(toml::from_str::<ReferenceCfg>("kind = \"trapezoid\"").is_err());
     }
 
@@ -630,6 +626,6 @@ mod tests {
         let e = cfg("kind = \"multisine\"\ncomponents = []")
             .build(10.0, 1.0, None)
             .unwrap_err();
-        assert_eq!(e.0, "reference.components");
+        assert_eq!(e.key, "reference.components");
     }
 }

@@ -123,8 +123,8 @@ impl Table {
             for w in knots.windows(2) {
                 let dt = w[1].t - w[0].t;
                 if dt > 0.0 && !(w[1].v / dt - w[0].v / dt).is_finite() {
-                    return Err((
-                        "reference".into(),
+                    return Err(KeyError::new(
+                        "reference",
                         format!(
                             "the reference changes by more than a double can hold per second at t = {}",
                             w[1].t
@@ -136,7 +136,7 @@ impl Table {
         }
         let mut states = vec![[0.0; 4]; knots.len()];
         Prefiltered::fill_states(&knots, tau, &mut states)
-            .map_err(|e| ("reference".to_string(), e.to_string()))?;
+            .map_err(|e| KeyError::new("reference", e.to_string()))?;
         Ok(AnyReference::Table(Arc::new(Table { knots, states, tau })))
     }
 

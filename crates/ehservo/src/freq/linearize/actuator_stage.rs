@@ -4,19 +4,9 @@
 //! the trim's inversion the operating point uses.
 
 use super::{Jacobian, Kink, Linearize, Point, Side, AT_KINK};
-use crate::actuator::{second_order_bandwidth_ratio, Actuator, ActuatorConfig};
+use crate::actuator::{Actuator, ActuatorConfig, Dynamics as Spool};
 use crate::freq::ss::Quantity;
 use ehservo_core::error::ParamError;
-
-/// The spool's dynamics, as `Actuator::try_new` derives them from
-/// `[actuator]` (the same formulas; the tests hold this stage's
-/// derivatives to the `Actuator`'s own).
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Spool {
-    None,
-    First { tau: f64 },
-    Second { wn2: f64, two_zeta_wn: f64 },
-}
 
 /// The actuator stage: command (V) → saturation → spool → dead band and
 /// null bias → the plant's input (V). Its states are the spool's: none,
@@ -40,34 +30,22 @@ pub struct ActuatorStage {
 }
 
 impl ActuatorStage {
-    /// The stage of `[actuator]` (validated as `Actuator::try_new` does).
-    pub fn new(c: &ActuatorConfig) -> Result<Self, ParamError> {
-        let act = Actuator::try_new(c)?;
-        let spool = match (c.time_constant, c.bandwidth_hz) {
-            (Some(tau), _) => Spool::First { tau },
-            (None, Some(f)) => {
-                let wb = 2.0 * std::f64::consts::PI * f;
-                if c.order.unwrap_or(1) == 1 {
-                    Spool::First { tau: 1.0 / wb }
-                } else {
-                    let zeta = c.damping.unwrap_or(0.7);
-                    let wn = wb / second_order_bandwidth_ratio(zeta);
-                    Spool::Second {
-                        wn2: wn * wn,
-                        two_zeta_wn: 2.0 * zeta * wn,
-                    }
-                }
-            }
-            (None, None) => Spool::None,
-        };
-        Ok(Self {
-            act,
-            limit: c.limit.unwrap_or(f64::INFINITY),
-            rate: c.rate_limit.unwrap_or(f64::INFINITY),
-            spool,
-            dead_band: c.dead_band.unwrap_or(0.0),
-            null_bias: c.null_bias.unwrap_or(0.0),
-        })
+    /// The stage of the simulator's actuator (its spool dynamics as
+    /// `Actuator::try_new` derived them from `[actuator]`).
+    pub fn new(act: &Actuator) -> Self {
+        Self {
+            act: *act,
+            limit: act.limit(),
+            rate: act.rate_limit(),
+            spool: act.dynamics(),
+            dead_band: act.dead_band(),
+            null_bias: act.null_bias(),
+        }
+    }
+
+    /// The stage of `[actuator]`, validated as `Actuator::try_new` does.
+    pub fn of_config(c: &ActuatorConfig) -> Result<Self, ParamError> {
+        Actuator::try_new(c).map(|a| Self::new(&a))
     }
 
     /// The simulator's stage.

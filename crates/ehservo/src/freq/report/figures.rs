@@ -4,7 +4,7 @@
 
 use super::{db, unwrap, MeasuredSet};
 use crate::freq::measure::Measured;
-use crate::freq::response::{Loop, Responses};
+use crate::freq::response::{LoopModel, Responses};
 use crate::freq::ss::C64;
 use crate::plot::{color, ensure_font, png_file, FAMILY};
 use anyhow::{anyhow, Result};
@@ -173,7 +173,7 @@ where
 
 pub(super) fn bode(
     path: &Path,
-    lp: &Loop,
+    lp: &LoopModel,
     rs: &[Responses],
     f: &[f64],
     summary: &Value,
@@ -338,7 +338,7 @@ pub(super) fn nyquist(path: &Path, rs: &[Responses], summary: &Value) -> Result<
 pub(super) fn measured_plot(
     path: &Path,
     sets: &[MeasuredSet],
-    lp: Option<&Loop>,
+    lp: Option<&LoopModel>,
     name: &str,
 ) -> Result<()> {
     let mut panels = Vec::new();

@@ -8,11 +8,11 @@ use super::measured::{measured_bandwidth, measured_margins};
 use super::{db, unwrap, FreqOptions, FreqSummary, MeasuredSet};
 use crate::freq::margins::{self, Margins};
 use crate::freq::measure::{Measured, Settings};
-use crate::freq::response::{Loop, Responses, CURVES};
+use crate::freq::response::{LoopModel, Responses, CURVES};
 use crate::freq::ss::C64;
 use crate::freq::{linearisation_json, Linearised};
 use crate::output::Staging;
-use crate::scenario::{Scenario, Setup};
+use crate::scenario::Loop;
 use anyhow::{Context, Result};
 use serde_json::json;
 use std::f64::consts::PI;
@@ -29,8 +29,7 @@ fn cell(v: Option<f64>) -> String {
 
 #[allow(clippy::too_many_arguments)]
 pub(super) fn write(
-    s: &Scenario,
-    setup: &Setup,
+    setup: &Loop,
     o: &FreqOptions,
     computed: &std::result::Result<Linearised, String>,
     sets: &[MeasuredSet],
@@ -38,10 +37,11 @@ pub(super) fn write(
     settings: Settings,
     stage: Staging,
 ) -> Result<FreqSummary> {
+    let s = setup.scenario();
     let dirp = stage.path().to_path_buf();
     let mut files = Vec::new();
     let mut text = String::new();
-    let h = setup.sim.step;
+    let h = setup.sim().step;
     let freqs: Vec<f64> = (0..o.points)
         .map(|i| o.f_min * (f_max / o.f_min).powf(i as f64 / (o.points - 1) as f64))
         .collect();
@@ -49,7 +49,7 @@ pub(super) fn write(
         "scenario": s.name,
         "ehservo": env!("CARGO_PKG_VERSION"),
         "controller": s.controller.kind(),
-        "mode": setup.sim.mode.as_str(),
+        "mode": setup.sim().mode.as_str(),
         "dt_s": h,
         "nyquist_Hz": 0.5 / h,
         "grid": {"f_min_Hz": o.f_min, "f_max_Hz": f_max, "points": o.points},
@@ -61,7 +61,7 @@ pub(super) fn write(
         Ok(l) => {
             let lp = &l.lp;
             lp_opt = Some(lp);
-            let lj = linearisation_json(s, l);
+            let lj = linearisation_json(l);
             let path = dirp.join("linearization.json");
             std::fs::write(&path, serde_json::to_string_pretty(&lj)? + "\n")
                 .with_context(|| format!("writing {}", path.display()))?;
@@ -302,7 +302,7 @@ fn write_response_csv(path: &Path, rs: &[Responses], freqs: &[f64]) -> Result<()
     std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))
 }
 
-fn write_measured_csv(path: &Path, set: &MeasuredSet, lp: Option<&Loop>) -> Result<()> {
+fn write_measured_csv(path: &Path, set: &MeasuredSet, lp: Option<&LoopModel>) -> Result<()> {
     let head = [
         "f_Hz",
         "track_gain_dB",

@@ -16,7 +16,7 @@
 
 use crate::output::{a_variation, b_convention, b_size};
 use crate::plot::Figure;
-use crate::scenario::Scenario;
+use crate::scenario::Loop;
 use ehservo_sim::plant::UncertaintySpec;
 use std::collections::BTreeMap;
 
@@ -34,20 +34,20 @@ pub struct FigureContext<'a> {
     /// The reading (manifest entry).
     pub reading: &'a Reading,
     /// The scenario of every case, under that reading.
-    pub scenarios: BTreeMap<String, &'a Scenario>,
+    pub scenarios: BTreeMap<String, &'a Loop>,
 }
 
 impl FigureContext<'_> {
     /// The footer of a figure made from `cases`: the reading, then the b
     /// variation (per case where the cases differ) and its convention.
     fn footer(&self, cases: &[&str]) -> String {
-        let found: Vec<(&str, &Scenario)> = cases
+        let found: Vec<(&str, &Loop)> = cases
             .iter()
             .filter_map(|c| self.scenarios.get(*c).map(|s| (*c, *s)))
             .collect();
         // The converged level each case was run at.
         let level = per_case(&found, |s| {
-            let sim = &s.simulation;
+            let sim = &s.scenario().simulation;
             match sim.mode {
                 ehservo_sim::simulation::Mode::Sampled => format!(
                     "sampled every {} s, {} RK4 sub-step{}",
@@ -60,10 +60,10 @@ impl FigureContext<'_> {
                 }
             }
         });
-        let b = per_case(&found, |s| b_size(&s.uncertainty_spec()));
+        let b = per_case(&found, |s| b_size(&s.stages().uncertainty));
         let mut conventions: Vec<String> = Vec::new();
         for (_, s) in &found {
-            let conv = b_convention(&s.uncertainty_spec());
+            let conv = b_convention(&s.stages().uncertainty);
             if !conventions.contains(&conv) {
                 conventions.push(conv);
             }
@@ -77,7 +77,7 @@ impl FigureContext<'_> {
     }
 
     fn uncertainty(&self, case: &str) -> Option<UncertaintySpec> {
-        self.scenarios.get(case).map(|s| s.uncertainty_spec())
+        self.scenarios.get(case).map(|s| s.stages().uncertainty)
     }
 
     /// The size of a case's b variation, as captions state it (empty if
@@ -102,7 +102,7 @@ impl FigureContext<'_> {
     fn period(&self, case: &str) -> f64 {
         self.scenarios
             .get(case)
-            .map(|s| s.reference.base_frequency_hz(s.simulation.horizon))
+            .map(|s| s.scenario().reference.base_frequency_hz(s.horizon()))
             .filter(|f| *f > 0.0)
             .map_or(1.0, |f| 1.0 / f)
     }
@@ -110,7 +110,7 @@ impl FigureContext<'_> {
 
 /// `text` of every case: the one text when all cases share it, else
 /// "a, b: text; c: other text".
-fn per_case(cases: &[(&str, &Scenario)], text: impl Fn(&Scenario) -> String) -> String {
+fn per_case(cases: &[(&str, &Loop)], text: impl Fn(&Loop) -> String) -> String {
     let mut groups: Vec<(String, Vec<&str>)> = Vec::new();
     for (c, s) in cases {
         let t = text(s);
