@@ -407,7 +407,7 @@ fn sweep<'py>(
     out: Option<PathBuf>,
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
     check_threads(threads)?;
-    let plan = Plan::load(&path).map_err(|e| study_error(py, e.0))?;
+    let plan = Plan::load(&path).map_err(|e| study_error(py, e.to_string()))?;
     // The rows and the columns made of them, asked for before any run: a
     // study too large for the memory there raises MemoryError up front
     // rather than aborting the interpreter when the rows are collected.
@@ -511,7 +511,7 @@ fn tune(
     plot: bool,
 ) -> PyResult<String> {
     check_threads(threads)?;
-    let t = ehservo::tune::Tune::load(&path).map_err(|e| study_error(py, e.0))?;
+    let t = ehservo::tune::Tune::load(&path).map_err(|e| study_error(py, e.to_string()))?;
     let r = interruptible(py, || -> anyhow::Result<String> {
         let hidden = indicatif::ProgressBar::hidden();
         let r = match &out {
@@ -538,7 +538,7 @@ fn league(
     plot: bool,
 ) -> PyResult<String> {
     check_threads(threads)?;
-    let l = ehservo::league::League::load(&path).map_err(|e| study_error(py, e.0))?;
+    let l = ehservo::league::League::load(&path).map_err(|e| study_error(py, e.to_string()))?;
     let r = interruptible(py, || -> anyhow::Result<String> {
         let hidden = indicatif::ProgressBar::hidden();
         let r = match &out {

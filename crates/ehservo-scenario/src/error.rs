@@ -1,7 +1,7 @@
 //! Errors by kind. Input the user can fix is one of three types, one per
 //! layer that reads input: [`InputError`] (a study, a tune or league file,
 //! a manifest, a shard, a flag, an input file that is missing or
-//! unreadable; the study's `StudyError` is this type under another name),
+//! unreadable),
 //! the scenario's structured [`ScenarioError`](crate::scenario::ScenarioError)
 //! (file, key, line and column, reason), and the `no_std` core's
 //! [`ParamError`](ehservo_core::error::ParamError) (a law's parameters,
@@ -12,25 +12,82 @@
 //! found in the error's chain, never the place it was raised: bad input 2,
 //! anything else 1.
 
-use std::fmt;
+use ehservo_sim::error::Reason;
 
-/// Input the user can fix, with the file, key and reason in its message.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct InputError(pub String);
+/// Input the user can fix, other than a scenario: a study, tune, league
+/// or manifest file's key, such a file as a whole, or a command line's
+/// flag. Every variant is bad input (exit code 2).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InputError {
+    /// A key of an input file.
+    #[error("{file}{}: `{key}`: {reason}", at(*.line_col))]
+    Key {
+        /// The file.
+        file: String,
+        /// 1-based line and column of the key, when known.
+        line_col: Option<(usize, usize)>,
+        /// The key path in it (`tuning.budget`, `axis[0].values`).
+        key: String,
+        /// Why.
+        reason: Reason,
+    },
+    /// An input file as a whole (unreadable, not TOML, a base scenario that
+    /// does not build).
+    #[error("{file}{}: {reason}", at(*.line_col))]
+    File {
+        /// The file.
+        file: String,
+        /// 1-based line and column, when known.
+        line_col: Option<(usize, usize)>,
+        /// Why.
+        reason: Reason,
+    },
+    /// A command-line request: the sentence names the flag and its value.
+    #[error("{0}")]
+    Request(String),
+}
 
-impl fmt::Display for InputError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
+/// `:line:column` or nothing.
+fn at(line_col: Option<(usize, usize)>) -> String {
+    line_col
+        .map(|(l, c)| format!(":{l}:{c}"))
+        .unwrap_or_default()
+}
+
+impl InputError {
+    /// Key `key` of `file` refused for `reason`.
+    pub fn key(file: impl Into<String>, key: impl Into<String>, reason: impl Into<Reason>) -> Self {
+        Self::Key {
+            file: file.into(),
+            line_col: None,
+            key: key.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// `file` refused as a whole for `reason`.
+    pub fn file(file: impl Into<String>, reason: impl Into<Reason>) -> Self {
+        Self::File {
+            file: file.into(),
+            line_col: None,
+            reason: reason.into(),
+        }
+    }
+
+    /// The key at fault, if one is.
+    pub fn key_path(&self) -> Option<&str> {
+        match self {
+            Self::Key { key, .. } => Some(key),
+            _ => None,
+        }
     }
 }
 
-impl std::error::Error for InputError {}
-
-/// `Err(InputError(format!(...)))` as an `anyhow::Error`.
+/// `Err(InputError::Request(format!(...)))` as an `anyhow::Error`.
 #[macro_export]
 macro_rules! bad_input {
     ($($arg:tt)*) => {
-        return Err(anyhow::Error::from($crate::error::InputError(format!($($arg)*))))
+        return Err(anyhow::Error::from($crate::error::InputError::Request(format!($($arg)*))))
     };
 }
 
@@ -61,7 +118,7 @@ mod tests {
     fn the_kind_decides_the_code_wherever_it_was_raised() {
         let io: anyhow::Error = std::io::Error::other("disk full").into();
         assert_eq!(exit_code(&io), 1);
-        let bad = anyhow::Error::from(InputError("shard 2 of 3 missing".into()));
+        let bad = anyhow::Error::from(InputError::file("merge.toml", "shard 2 of 3 missing"));
         assert_eq!(exit_code(&bad), 2);
         // Context added on the way up does not change the kind.
         let wrapped = Err::<(), _>(bad).context("merging").unwrap_err();

@@ -255,17 +255,34 @@ pub fn token(kind: FmuKind, scenario_toml: &str) -> String {
     )
 }
 
+/// An instantiation token that is not this scenario's: the token given
+/// and the two it could have been.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "the instantiation token {given:?} is not {:?} or {:?}: resources/scenario.toml is not the file this FMU was exported with",
+    expected[0],
+    expected[1]
+)]
+pub struct TokenError {
+    /// The token the importer passed.
+    pub given: String,
+    /// The controller FMU's and the closed loop's tokens of the scenario.
+    pub expected: [String; 2],
+}
+
 /// The kind a token names, if it is one of ours for exactly this scenario
 /// text; otherwise why not.
-pub fn check_token(token_text: &str, scenario_toml: &str) -> Result<FmuKind, String> {
+pub fn check_token(token_text: &str, scenario_toml: &str) -> Result<FmuKind, TokenError> {
     for kind in [FmuKind::Controller, FmuKind::ClosedLoop] {
         if token_text == token(kind, scenario_toml) {
             return Ok(kind);
         }
     }
-    Err(format!(
-        "the instantiation token {token_text:?} is not {:?} or {:?}: resources/scenario.toml is not the file this FMU was exported with",
-        token(FmuKind::Controller, scenario_toml),
-        token(FmuKind::ClosedLoop, scenario_toml)
-    ))
+    Err(TokenError {
+        given: token_text.to_string(),
+        expected: [
+            token(FmuKind::Controller, scenario_toml),
+            token(FmuKind::ClosedLoop, scenario_toml),
+        ],
+    })
 }

@@ -9,9 +9,43 @@ use std::path::Path;
 /// scenario, study or manifest.
 pub const MAX_INPUT_BYTES: u64 = 1 << 20;
 
+/// Why an input file was refused; its message reads after the file's
+/// name ("… scenario.toml is not a regular file").
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ReadError {
+    /// The system could not read it.
+    #[error("cannot be read: {0}")]
+    Io(String),
+    /// A directory, a device, a pipe.
+    #[error("is not a regular file")]
+    NotRegular,
+    /// Larger than the bound.
+    #[error("is {size} bytes; an input file is at most {max} bytes")]
+    TooLarge {
+        /// Its size (bytes).
+        size: u64,
+        /// The bound (bytes).
+        max: u64,
+    },
+    /// It grew beyond the bound while it was read.
+    #[error("is larger than {max} bytes")]
+    Grew {
+        /// The bound (bytes).
+        max: u64,
+    },
+    /// Not UTF-8.
+    #[error("is not UTF-8 text: {0}")]
+    NotUtf8(String),
+}
+
 /// The text of `path`, refused (with the reason) when it is not a regular
 /// file, is larger than [`MAX_INPUT_BYTES`], or is not UTF-8.
-pub fn read_text(path: &Path) -> Result<String, String> {
+///
+/// ```
+/// use ehservo_scenario::input::{read_text, ReadError};
+/// assert_eq!(read_text(std::path::Path::new("/")), Err(ReadError::NotRegular));
+/// ```
+pub fn read_text(path: &Path) -> Result<String, ReadError> {
     read_text_at_most(path, MAX_INPUT_BYTES)
 }
 
@@ -21,26 +55,26 @@ pub const MAX_DATA_BYTES: u64 = 256 << 20;
 
 /// [`read_text`] with another bound (a logged data file is larger than a
 /// scenario).
-pub fn read_text_at_most(path: &Path, limit: u64) -> Result<String, String> {
+pub fn read_text_at_most(path: &Path, limit: u64) -> Result<String, ReadError> {
     let max = limit;
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot be read: {e}"))?;
+    let meta = std::fs::metadata(path).map_err(|e| ReadError::Io(e.to_string()))?;
     if !meta.is_file() {
-        return Err("is not a regular file".into());
+        return Err(ReadError::NotRegular);
     }
     if meta.len() > max {
-        return Err(format!(
-            "is {} bytes; an input file is at most {max} bytes",
-            meta.len()
-        ));
+        return Err(ReadError::TooLarge {
+            size: meta.len(),
+            max,
+        });
     }
     let mut bytes = Vec::new();
     std::fs::File::open(path)
         .and_then(|f| f.take(max + 1).read_to_end(&mut bytes))
-        .map_err(|e| format!("cannot be read: {e}"))?;
+        .map_err(|e| ReadError::Io(e.to_string()))?;
     if bytes.len() as u64 > max {
-        return Err(format!("is larger than {max} bytes"));
+        return Err(ReadError::Grew { max });
     }
-    String::from_utf8(bytes).map_err(|e| format!("is not UTF-8 text: {e}"))
+    String::from_utf8(bytes).map_err(|e| ReadError::NotUtf8(e.to_string()))
 }
 
 #[cfg(test)]
@@ -49,17 +83,25 @@ mod tests {
 
     #[test]
     fn devices_directories_and_huge_files_are_refused() {
-        assert!(read_text(Path::new("/dev/zero"))
-            .unwrap_err()
-            .contains("regular"));
-        assert!(read_text(Path::new("/")).unwrap_err().contains("regular"));
+        assert_eq!(
+            read_text(Path::new("/dev/zero")),
+            Err(ReadError::NotRegular)
+        );
+        assert_eq!(read_text(Path::new("/")), Err(ReadError::NotRegular));
         let dir = tempfile::tempdir().unwrap();
         let big = dir.path().join("big.toml");
         std::fs::write(&big, vec![b'#'; (MAX_INPUT_BYTES + 1) as usize]).unwrap();
-        assert!(read_text(&big).unwrap_err().contains("at most"));
+        assert_eq!(
+            read_text(&big),
+            Err(ReadError::TooLarge {
+                size: MAX_INPUT_BYTES + 1,
+                max: MAX_INPUT_BYTES
+            })
+        );
+        assert!(read_text(&big).unwrap_err().to_string().contains("at most"));
         let bin = dir.path().join("bin.toml");
         std::fs::write(&bin, [0xff, 0xfe]).unwrap();
-        assert!(read_text(&bin).unwrap_err().contains("UTF-8"));
+        assert!(matches!(read_text(&bin), Err(ReadError::NotUtf8(_))));
         let ok = dir.path().join("ok.toml");
         std::fs::write(&ok, "name = \"x\"\n").unwrap();
         assert_eq!(read_text(&ok).unwrap(), "name = \"x\"\n");

@@ -35,7 +35,7 @@ fn hopsan(name: &'static str, file: &str, pressure: bool) -> Result<Trace> {
     if pressure {
         cols.push("p_s_Pa");
     }
-    let c = read_columns(&p, &cols).map_err(anyhow::Error::msg)?;
+    let c = read_columns(&p, &cols)?;
     Ok(Trace {
         name,
         t: c[0].clone(),

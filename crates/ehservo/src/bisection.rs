@@ -7,6 +7,8 @@
 //! [`check_tolerance`] refuses it as bad input, and [`bisect`] stops anyway
 //! when the midpoint equals an end or after [`MAX_HALVINGS`] halvings.
 
+use crate::scenario::Reason;
+
 /// Most halvings a bisection makes: a bracket of doubles is at most 2¹⁰²⁴
 /// wide and its ends are adjacent once it is 2⁻¹⁰⁷⁴ wide, so 2100 halvings
 /// (> 1024 + 1074) always reach adjacent ends.
@@ -26,25 +28,25 @@ pub fn ulp(x: f64) -> f64 {
 /// Whether bisecting [lo, hi] (finite, lo < hi) to `tol` can end by the
 /// tolerance: `tol` finite, > 0, below hi − lo, and at least twice the
 /// spacing of doubles at the bracket's larger end. The error is the reason.
-pub fn check_tolerance(lo: f64, hi: f64, tol: f64) -> Result<(), String> {
+pub fn check_tolerance(lo: f64, hi: f64, tol: f64) -> Result<(), Reason> {
     let span = hi - lo;
     if !span.is_finite() {
-        return Err(format!(
+        return Err(Reason::Other(format!(
             "the bracket [{lo:e}, {hi:e}] is wider than the largest double: narrow it"
-        ));
+        )));
     }
     if !(tol.is_finite() && tol > 0.0 && tol < span) {
-        return Err(format!(
+        return Err(Reason::Other(format!(
             "must be > 0 and below high − low = {span} (got {tol:?})"
-        ));
+        )));
     }
     let spacing = 2.0 * ulp(lo.abs().max(hi.abs()));
     if tol < spacing {
-        return Err(format!(
+        return Err(Reason::Other(format!(
             "{tol:e} is below the spacing of doubles at the bracket (2·ulp({:e}) = {spacing:e}): \
              the bisection could never reach it",
             lo.abs().max(hi.abs())
-        ));
+        )));
     }
     Ok(())
 }

@@ -49,7 +49,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
         // Bounded as every input file is (a regular file, ≤ 1 MiB).
         let toml_text = ehservo_scenario::input::read_text(&path)
             .map_err(|e| fail(format!("reading {}: {e}", path.display())))?;
-        let kind = check_token(&token, &toml_text).map_err(fail)?;
+        let kind = check_token(&token, &toml_text).map_err(|e| fail(e.to_string()))?;
         let scenario = Loop::load(&path, &[]).map_err(|e| fail(e.to_string()))?;
         let (body, h) = build(kind, &scenario).map_err(fail)?;
         Ok(Box::new(Instance {

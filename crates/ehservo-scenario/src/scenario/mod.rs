@@ -28,7 +28,8 @@ pub use ehservo_sim::error::{KeyError, Reason};
 pub use overrides::{apply_override, line_col, parse_value, set_path};
 pub use plants::{AnyPlant, PlantCfg, PlantVisit, DEFAULT_MODEL};
 pub use reference::{
-    read_csv, AnyReference, ComponentCfg, ReferenceCfg, ReferenceKind, Table, DEFAULT_AMPLITUDE_DEG,
+    read_csv, AnyReference, ComponentCfg, CsvError, ReferenceCfg, ReferenceKind, Table,
+    DEFAULT_AMPLITUDE_DEG,
 };
 pub use registry::{ControllerCfg, ControllerConfig, Visit, DEFAULT_KIND};
 pub use sections::{

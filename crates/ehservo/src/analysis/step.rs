@@ -26,6 +26,7 @@
 //!   period (mean cycle length), the amplitude (half the mean peak-to-peak)
 //!   and the offset m − target.
 
+use crate::scenario::CsvError;
 use serde::Serialize;
 
 /// The metrics of one step.
@@ -214,13 +215,25 @@ pub fn difference(ta: &[f64], ya: &[f64], tb: &[f64], yb: &[f64]) -> (f64, f64) 
 
 /// Named columns of a CSV file with one header row, as numbers (a bounded
 /// read; the error names the file, the line and the column).
-pub fn read_columns(path: &std::path::Path, names: &[&str]) -> Result<Vec<Vec<f64>>, String> {
-    let text = crate::input::read_text_at_most(path, crate::input::MAX_DATA_BYTES)
-        .map_err(|r| format!("{}: {r}", path.display()))?;
+pub fn read_columns(path: &std::path::Path, names: &[&str]) -> Result<Vec<Vec<f64>>, CsvError> {
+    let file = path.display().to_string();
+    let text =
+        crate::input::read_text_at_most(path, crate::input::MAX_DATA_BYTES).map_err(|source| {
+            CsvError::Read {
+                file: file.clone(),
+                source,
+            }
+        })?;
+    let fail = |line: Option<usize>, reason: String| CsvError::Content {
+        file: file.clone(),
+        line,
+        row: None,
+        reason,
+    };
     let mut lines = text.lines();
     let header: Vec<&str> = lines
         .next()
-        .ok_or_else(|| format!("{}: empty", path.display()))?
+        .ok_or_else(|| fail(None, "empty".into()))?
         .split(',')
         .map(str::trim)
         .collect();
@@ -230,7 +243,7 @@ pub fn read_columns(path: &std::path::Path, names: &[&str]) -> Result<Vec<Vec<f6
             header
                 .iter()
                 .position(|h| h == n)
-                .ok_or_else(|| format!("{}: no column `{n}`", path.display()))
+                .ok_or_else(|| fail(None, format!("no column `{n}`")))
         })
         .collect::<Result<_, _>>()?;
     let mut out = vec![Vec::new(); names.len()];
@@ -240,14 +253,10 @@ pub fn read_columns(path: &std::path::Path, names: &[&str]) -> Result<Vec<Vec<f6
         }
         let f: Vec<&str> = line.split(',').map(str::trim).collect();
         for (c, &j) in idx.iter().enumerate() {
-            let v: f64 = f.get(j).and_then(|s| s.parse().ok()).ok_or_else(|| {
-                format!(
-                    "{}: line {}, column {}: not a number",
-                    path.display(),
-                    i + 2,
-                    names[c]
-                )
-            })?;
+            let v: f64 = f
+                .get(j)
+                .and_then(|s| s.parse().ok())
+                .ok_or_else(|| fail(Some(i + 2), format!("column {}: not a number", names[c])))?;
             out[c].push(v);
         }
     }

@@ -195,7 +195,7 @@ pub(super) fn identify(a: IdentifyArgs, w: &mut impl Write) -> Result<()> {
             crate::bad_input!("--fix {f}: expected KEY=VALUE");
         };
         let v: f64 = v.trim().parse().map_err(|_| {
-            crate::error::InputError(format!("--fix {f}: `{}` is not a number", v.trim()))
+            crate::error::InputError::Request(format!("--fix {f}: `{}` is not a number", v.trim()))
         })?;
         fix.push((k.trim().to_string(), v));
     }

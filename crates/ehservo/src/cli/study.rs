@@ -131,7 +131,7 @@ pub(super) fn sweep(a: SweepArgs, w: &mut impl Write) -> Result<()> {
     let shard = match shard {
         Some(s) => Some(
             crate::study::parse_shard(&s)
-                .map_err(|e| crate::error::InputError(format!("--shard: {e}")))?,
+                .map_err(|e| crate::error::InputError::Request(format!("--shard: {e}")))?,
         ),
         None => None,
     };

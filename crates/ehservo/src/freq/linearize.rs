@@ -713,6 +713,6 @@ mod tests {
         .unwrap();
         let (_, u) = st.invert(0.1).unwrap();
         assert!((u - 0.14).abs() < 1e-15);
-        assert_eq!(st.invert(0.2).unwrap_err().0, "actuator.limit");
+        assert_eq!(st.invert(0.2).unwrap_err().key, "actuator.limit");
     }
 }

@@ -75,14 +75,14 @@ pub fn linearise(
         Some(At::Time(_)) => "--at",
         _ => "--trim",
     };
-    let plant = LinPlant::of(setup).map_err(|(k, r)| bad(file, &k, r))?;
+    let plant = LinPlant::of(setup).map_err(|e| bad(file, &e.key, e.reason.to_string()))?;
     let act = ActuatorStage::new(&setup.stages().actuator);
     let at = at.unwrap_or_else(|| default_at(setup));
     let point = match at {
         At::Trim(theta0) => oppoint::trim(setup, &plant, &act, theta0),
         At::Time(t) => oppoint::at_time(setup, &plant, &act, t),
     }
-    .map_err(|(k, r)| bad(file, &k, r))?;
+    .map_err(|e| bad(file, &e.key, e.reason.to_string()))?;
     let lp = LoopModel::new(
         setup,
         &plant,
@@ -91,7 +91,7 @@ pub fn linearise(
         side.unwrap_or(Side::Plus),
         discretisation,
     )
-    .map_err(|(k, r)| bad(file, &k, r))?;
+    .map_err(|e| bad(file, &e.key, e.reason.to_string()))?;
     if !lp.kinks.is_empty() && side.is_none() {
         let chain = Chain {
             first: &act,

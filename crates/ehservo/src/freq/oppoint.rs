@@ -26,7 +26,7 @@
 
 use super::linearize::{ActuatorStage, Linearize, PlantState, Point, Side};
 use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant, UncertaintySignal, Variation};
-use crate::scenario::{self, ControllerConfig, Loop, LoopPlant, LoopVisit, Typed};
+use crate::scenario::{self, ControllerConfig, KeyError, Loop, LoopPlant, LoopVisit, Typed};
 use crate::simulation::{Mode, Simulation, Stop};
 use crate::third_order::varied;
 use crate::uncertainty::{Draw, Factors};
@@ -65,12 +65,12 @@ pub enum LinPlant {
 impl LinPlant {
     /// The scenario's plant at its variation's bias; an error (key,
     /// reason) for a plant without a [`Linearize`] implementation.
-    pub fn of(setup: &Loop) -> Result<Self, (String, String)> {
+    pub fn of(setup: &Loop) -> Result<Self, KeyError> {
         Self::with_factors(setup, &bias(setup).1)
     }
 
     /// The scenario's plant with the physical factors `f`.
-    pub fn with_factors(setup: &Loop, f: &Factors) -> Result<Self, (String, String)> {
+    pub fn with_factors(setup: &Loop, f: &Factors) -> Result<Self, KeyError> {
         let (p, l) = if *f == Factors::ONE {
             (setup.model().params, setup.model().load)
         } else {
@@ -80,8 +80,8 @@ impl LinPlant {
             scenario::AnyPlant::ThirdOrder(_) => Ok(LinPlant::Third(ThirdOrderPlant::new(p, l))),
             scenario::AnyPlant::Physical(_) => Ok(LinPlant::Physical(PhysicalPlant::new(p, l))),
             // Any other registered plant (a new one need not be named here).
-            other => Err((
-                "plant.model".into(),
+            other => Err(KeyError::new(
+                "plant.model",
                 format!(
                     "\"{}\" is not linearised yet (no ehservo::freq::Linearize for it): the measured responses (--measure) work on it, the computed ones do not",
                     other.model()
@@ -181,7 +181,7 @@ pub fn trim_plant(
     theta0: f64,
     v: Variation,
     key: &str,
-) -> Result<(Vec<f64>, f64, usize), (String, String)> {
+) -> Result<(Vec<f64>, f64, usize), KeyError> {
     let names = plant.states();
     let n = names.len();
     let mut scale = plant.scales();
@@ -249,8 +249,8 @@ pub fn trim_plant(
             u: z[n],
             v,
         });
-        (
-            key.to_string(),
+        KeyError::new(
+            key,
             format!(
                 "no trim point at θ = {:.6}°: the residual {what} does not vanish ({why}; the plant's input there {:.6} V){}",
                 theta0 / DR,
@@ -329,12 +329,12 @@ pub fn trim(
     plant: &LinPlant,
     actuator: &ActuatorStage,
     theta0: f64,
-) -> Result<OperatingPoint, (String, String)> {
+) -> Result<OperatingPoint, KeyError> {
     let (v, factors) = bias(setup);
     let (x, p, it) = trim_plant(plant.lin(), theta0, v, "--trim")?;
     let (xa, u) = actuator
         .invert(p)
-        .map_err(|(k, r)| ("--trim".to_string(), format!("{r} ({k})")))?;
+        .map_err(|e| KeyError::new("--trim", format!("{} ({})", e.reason, e.key)))?;
     let mut drift = vec![0.0; x.len()];
     plant.lin().eval(&Point { x: &x, u: p, v }, &mut drift);
     Ok(OperatingPoint {
@@ -359,11 +359,11 @@ pub fn at_time(
     plant: &LinPlant,
     actuator: &ActuatorStage,
     t: f64,
-) -> Result<OperatingPoint, (String, String)> {
+) -> Result<OperatingPoint, KeyError> {
     let h = setup.sim().step;
     if !(t.is_finite() && t >= 0.0 && t <= setup.horizon() * (1.0 + 1e-12)) {
-        return Err((
-            "--at".into(),
+        return Err(KeyError::new(
+            "--at",
             format!(
                 "{t}: must be a time within the run, 0 to simulation.horizon = {} s",
                 setup.horizon()
@@ -432,7 +432,7 @@ struct RunTo {
 }
 
 impl LoopVisit for RunTo {
-    type Out = Result<Recorded, (String, String)>;
+    type Out = Result<Recorded, KeyError>;
     fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
         let s = t.lp;
         record(t.simulation(), s, self.k)
@@ -443,7 +443,7 @@ fn record<P: Plant, C: ehservo_core::control::Controller>(
     mut sim: Simulation<P, C, scenario::AnyReference>,
     s: &Loop,
     k: u64,
-) -> Result<Recorded, (String, String)> {
+) -> Result<Recorded, KeyError> {
     sim.log_states(true);
     let mut commands = Vec::with_capacity(k as usize + 1);
     loop {
@@ -462,8 +462,8 @@ fn record<P: Plant, C: ehservo_core::control::Controller>(
                     Some(Stop::Diverged(d)) => format!("the run was unbounded at t = {} s", d.t),
                     _ => "the run ended".into(),
                 };
-                return Err((
-                    "--at".into(),
+                return Err(KeyError::new(
+                    "--at",
                     format!("{when}, before t = {} s", k as f64 * s.sim().step),
                 ));
             }
@@ -530,7 +530,8 @@ mod tests {
             friction: None,
         };
         let plant = ThirdOrderPlant::new(ServoParams::paper(), load);
-        let (k, r) = trim_plant(&plant, 1.0, Variation::NONE, "--trim").unwrap_err();
+        let e = trim_plant(&plant, 1.0, Variation::NONE, "--trim").unwrap_err();
+        let (k, r) = (e.key, e.reason.to_string());
         assert_eq!(k, "--trim");
         assert!(r.contains("d(theta_ddot)/dt"), "{r}");
     }

@@ -236,7 +236,7 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
     }
     // The computed part, where the plant is linearised.
     let computed = match super::oppoint::LinPlant::of(setup) {
-        Err((_, why)) => Err(why),
+        Err(e) => Err(e.reason.to_string()),
         Ok(_) => Ok(super::linearise(
             setup,
             file,

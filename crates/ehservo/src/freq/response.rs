@@ -30,7 +30,7 @@ use super::controllers::{controller_model, observer_model, ControllerModel};
 use super::linearize::{ActuatorStage, Chain, Delay, Kink, Linearize, Point, Side};
 use super::oppoint::{LinPlant, OperatingPoint};
 use super::ss::{Quantity, StateSpace, C64};
-use crate::scenario::Loop;
+use crate::scenario::{KeyError, Loop};
 use crate::simulation::Mode;
 use ehservo_sim::estimator::AnyEstimator;
 
@@ -152,7 +152,7 @@ impl LoopModel {
         op: &OperatingPoint,
         side: Side,
         discretisation: Discretisation,
-    ) -> Result<LoopModel, (String, String)> {
+    ) -> Result<LoopModel, KeyError> {
         let h = setup.sim().step;
         let v = op.variation();
         let chain = Chain {
@@ -195,8 +195,8 @@ impl LoopModel {
             side,
         );
         if !g.is_finite() {
-            return Err((
-                "--side".into(),
+            return Err(KeyError::new(
+                "--side",
                 format!(
                     "the {} one-sided model is not finite there ({})",
                     side.as_str(),
@@ -215,7 +215,7 @@ impl LoopModel {
                     Discretisation::Zoh => g.zoh(h),
                     Discretisation::Rk4 => g.rk4_map(h, setup.sim().substeps),
                 }
-                .map_err(|e| ("plant".to_string(), e.to_string()))?,
+                .map_err(|e| KeyError::new("plant", e.to_string()))?,
             )
         } else {
             None
@@ -229,7 +229,7 @@ impl LoopModel {
         let controller = match controller_model(setup.controller(), setup.design()) {
             None => None,
             Some(r) => Some(r.map_err(|e| {
-                (
+                KeyError::new(
                     format!("controller.{}", e.name),
                     format!("{} (got {:?})", e.reason, e.value),
                 )
@@ -265,10 +265,10 @@ impl LoopModel {
                         .series(gd)
                         .and_then(|m| m.series(&sens_m))
                         .and_then(|m| m.series(c))
-                        .map_err(|e| ("loop".to_string(), e.0))?,
+                        .map_err(|e| KeyError::new("loop", e.0))?,
                 )
             }
-            (Some(c), None) => Some(g.series(c).map_err(|e| ("loop".to_string(), e.0))?),
+            (Some(c), None) => Some(g.series(c).map_err(|e| KeyError::new("loop", e.0))?),
             _ => None,
         };
         let observer = match &setup.stages().estimator {

@@ -190,7 +190,7 @@ impl Experiment {
 }
 
 fn bad(msg: String) -> anyhow::Error {
-    anyhow::Error::from(InputError(msg))
+    anyhow::Error::from(InputError::Request(msg))
 }
 
 /// Reading options beside the column map.

@@ -141,7 +141,7 @@ const TAPS: &[(u32, &[u32])] = &[
 ];
 
 fn bad(msg: String) -> anyhow::Error {
-    anyhow::Error::from(InputError(msg))
+    anyhow::Error::from(InputError::Request(msg))
 }
 
 /// The designed signal and what describes it.

@@ -187,7 +187,7 @@ pub struct Outcome {
 }
 
 fn bad(msg: String) -> anyhow::Error {
-    anyhow::Error::from(InputError(msg))
+    anyhow::Error::from(InputError::Request(msg))
 }
 
 /// The keys of the linear model.

@@ -14,7 +14,11 @@ use std::path::Path;
 
 /// The scenario of case `c` with `[controller]` = `table`, at draw seed
 /// `seed`.
-pub(super) fn build_with(c: &Case, table: &toml::Table, seed: Option<u64>) -> Result<Loop, String> {
+pub(super) fn build_with(
+    c: &Case,
+    table: &toml::Table,
+    seed: Option<u64>,
+) -> Result<Loop, crate::scenario::ScenarioError> {
     let mut tab = c.table.clone();
     tab.insert("controller".into(), toml::Value::Table(table.clone()));
     let sets: Vec<(String, toml::Value)> = seed
@@ -26,9 +30,7 @@ pub(super) fn build_with(c: &Case, table: &toml::Table, seed: Option<u64>) -> Re
         })
         .into_iter()
         .collect();
-    c.scenario
-        .with_values_on(tab, &sets)
-        .map_err(|e| e.to_string())
+    c.scenario.with_values_on(tab, &sets)
 }
 
 /// One run of the league.
@@ -164,7 +166,7 @@ pub fn play(
                         draw: d,
                         seed: case.seeds[d].unwrap_or(case.scenario.scenario().uncertainty.seed),
                         metrics: None,
-                        refused: Some(reason),
+                        refused: Some(reason.to_string()),
                         energy: None,
                     },
                     Ok(lp) => {

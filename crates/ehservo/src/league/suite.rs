@@ -3,8 +3,8 @@
 //! scenarios loaded and its tunes built, with the work it asks for.
 
 use super::{build_with, Margin};
+use crate::error::InputError;
 use crate::scenario::{ControllerCfg, Loop};
-use crate::study::StudyError;
 use crate::tune::{Objective, Penalty, Tune, TuneFile};
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
@@ -208,7 +208,7 @@ pub const MAX_DRAWS: u64 = 10_000;
 
 impl League {
     /// Reads and checks a suite file and the scenarios it names.
-    pub fn load(path: &Path) -> Result<League, StudyError> {
+    pub fn load(path: &Path) -> Result<League, InputError> {
         let file = path.display().to_string();
         let mut sf: SuiteFile = crate::study::load_toml(path, "suite")?;
         if sf.name.is_empty() {
@@ -218,7 +218,7 @@ impl League {
                 .unwrap_or_else(|| "league".into());
         }
         let dir = path.parent().unwrap_or(Path::new("."));
-        let bad = |key: &str, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+        let bad = |key: &str, reason: String| InputError::key(&file, key, reason);
         if sf.controller.is_empty() {
             return Err(bad(
                 "controller",
@@ -404,7 +404,7 @@ impl League {
                     ));
                 }
                 crate::bisection::check_tolerance(m.low, m.high, m.tolerance)
-                    .map_err(|r| bad("margin.tolerance", r))?;
+                    .map_err(|r| bad("margin.tolerance", r.to_string()))?;
                 if !(m.scale.is_finite() && m.scale != 0.0) {
                     return Err(bad(
                         "margin.scale",
@@ -420,8 +420,20 @@ impl League {
                         ),
                     ));
                 }
-                let scenario = load("margin.file", &m.scenario, &m.set)
-                    .map_err(|e| StudyError(e.0.replace("`margin.file`", "`margin.scenario`")))?;
+                let scenario = load("margin.file", &m.scenario, &m.set).map_err(|e| match e {
+                    InputError::Key {
+                        file,
+                        line_col,
+                        key,
+                        reason,
+                    } => InputError::Key {
+                        file,
+                        line_col,
+                        key: key.replace("margin.file", "margin.scenario"),
+                        reason,
+                    },
+                    other => other,
+                })?;
                 // The limit's key says its unit: the one of the scenario's axis.
                 let (own, other) = match scenario.axis() {
                     crate::axis::Axis::Rotary => {
@@ -643,8 +655,8 @@ fn tune_for(
     table: &toml::Table,
     dir: &Path,
     file: &str,
-) -> Result<Tune, StudyError> {
-    let bad = |key: &str, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+) -> Result<Tune, InputError> {
+    let bad = |key: &str, reason: String| InputError::key(file, key, reason);
     let scenarios = t
         .scenarios
         .iter()

@@ -242,7 +242,7 @@ fn open_transport(opts: &Options) -> Result<(Box<dyn Transport>, Option<qemu::Qe
         }
         Target::Port { path, baud } => {
             let p = transport::Serial::open(path, *baud)
-                .map_err(|e| crate::error::InputError(format!("--port {path}: {e}")))?;
+                .map_err(|e| crate::error::InputError::Request(format!("--port {path}: {e}")))?;
             Ok((with_faults(Box::new(p), None), None))
         }
         Target::Connect(addr) => {
@@ -263,16 +263,15 @@ fn open_transport(opts: &Options) -> Result<(Box<dyn Transport>, Option<qemu::Qe
                 ),
             };
             // This process listens unless it is told where to connect.
-            let listener =
-                match to {
-                    Some(_) => None,
-                    None => {
-                        let addr = listen.as_deref().unwrap_or("127.0.0.1:0");
-                        Some(TcpListener::bind(addr).map_err(|e| {
-                            crate::error::InputError(format!("--listen {addr}: {e}"))
-                        })?)
-                    }
-                };
+            let listener = match to {
+                Some(_) => None,
+                None => {
+                    let addr = listen.as_deref().unwrap_or("127.0.0.1:0");
+                    Some(TcpListener::bind(addr).map_err(|e| {
+                        crate::error::InputError::Request(format!("--listen {addr}: {e}"))
+                    })?)
+                }
+            };
             let spec = match (serial, &listener) {
                 (Some(s), _) => s.clone(),
                 (None, Some(l)) => format!("tcp:{},nodelay=on", l.local_addr()?),
@@ -406,7 +405,7 @@ impl RunHooks for Hooks {
             FloatType::F64 => AnyLaw::<f64>::build(&h).map(|l| Shadow::F64(Box::new(l))),
         }
         .map_err(|e| {
-            crate::error::InputError(format!(
+            crate::error::InputError::Request(format!(
                 "`controller.{}`: {} (in {})",
                 e.name,
                 e.reason,

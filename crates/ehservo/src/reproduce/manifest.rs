@@ -147,30 +147,38 @@ pub const MAX_SEEDS: u32 = 1000;
 impl Manifest {
     /// Reads and checks a manifest.
     pub fn load(path: &Path) -> Result<Manifest> {
-        let bad = |m: String| crate::error::InputError(format!("{}{m}", path.display()));
-        let text = crate::input::read_text(path).map_err(|r| bad(format!(": the manifest {r}")))?;
+        use crate::error::InputError;
+        let file = path.display().to_string();
+        let text = crate::input::read_text(path)
+            .map_err(|r| InputError::file(&file, format!("the manifest {r}")))?;
         // One line: where, the key, and toml's message without its snippet.
         let at = |span: Option<std::ops::Range<usize>>| {
             span.map(|s| crate::scenario::line_col(&text, s.start))
-                .map(|(l, c)| format!(":{l}:{c}"))
-                .unwrap_or_default()
         };
         let first = |m: &str| m.lines().next().unwrap_or("").trim().to_string();
-        let de = toml::Deserializer::parse(&text)
-            .map_err(|e| bad(format!("{}: {}", at(e.span()), first(e.message()))))?;
+        let de = toml::Deserializer::parse(&text).map_err(|e| InputError::File {
+            file: file.clone(),
+            line_col: at(e.span()),
+            reason: first(e.message()).into(),
+        })?;
         let m: Manifest = serde_path_to_error::deserialize(de).map_err(|e| {
             let key = e.path().to_string();
             let inner = e.into_inner();
-            let key = if key == "." || key == "?" {
-                String::new()
+            let (line_col, reason) = (at(inner.span()), first(inner.message()).into());
+            if key == "." || key == "?" {
+                InputError::File {
+                    file: file.clone(),
+                    line_col,
+                    reason,
+                }
             } else {
-                format!(" `{key}`:")
-            };
-            bad(format!(
-                "{}:{key} {}",
-                at(inner.span()),
-                first(inner.message())
-            ))
+                InputError::Key {
+                    file: file.clone(),
+                    line_col,
+                    key,
+                    reason,
+                }
+            }
         })?;
         m.check()
             .with_context(|| format!("checking {}", path.display()))?;

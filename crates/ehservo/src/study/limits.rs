@@ -25,7 +25,7 @@ const WORK_KEYS: [&str; 5] = [
 pub fn check_study(
     plan: &super::Plan,
     range: std::ops::Range<u64>,
-) -> Result<(), super::StudyError> {
+) -> Result<(), crate::error::InputError> {
     let mut keys: Vec<String> = plan.axes.iter().flat_map(|(a, _)| a.keys()).collect();
     if let Some(mc) = &plan.study.monte_carlo {
         keys.extend(mc.draw.iter().map(|d| d.key.clone()));
@@ -63,12 +63,15 @@ pub fn check_study(
     } else {
         "axis"
     };
-    Err(super::StudyError(format!(
-        "{}: `{key}`: {runs} runs of about {:.2e} evaluations each are {total:.2e} evaluations, more than the limit of {MAX_BATCH_WORK:.0e} for one sweep (about {:.0} core-hours): split it with --shard K/N (each shard is counted alone) or ask for less",
-        plan.file,
-        total / runs.max(1.0) - RUN_OVERHEAD,
-        MAX_BATCH_WORK * 0.3e-6 / 3600.0
-    )))
+    Err(crate::error::InputError::key(
+        &plan.file,
+        key,
+        format!(
+            "{runs} runs of about {:.2e} evaluations each are {total:.2e} evaluations, more than the limit of {MAX_BATCH_WORK:.0e} for one sweep (about {:.0} core-hours): split it with --shard K/N (each shard is counted alone) or ask for less",
+            total / runs.max(1.0) - RUN_OVERHEAD,
+            MAX_BATCH_WORK * 0.3e-6 / 3600.0
+        ),
+    ))
 }
 
 /// Sets one of [`WORK_KEYS`] on `s` from a study's value, if it reads as one.
@@ -112,7 +115,7 @@ mod tests {
         let f = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../tests/bad-input-study/31-work-beyond-limit.toml");
         let plan = super::super::Plan::load(&f).unwrap();
-        let e = check_study(&plan, 0..plan.runs).unwrap_err().0;
+        let e = check_study(&plan, 0..plan.runs).unwrap_err().to_string();
         assert!(e.contains("2.00e13 evaluations"), "{e}");
         assert!(check_study(&plan, plan.shard_range(0, 40)).is_ok());
     }

@@ -182,14 +182,14 @@ fn shard_rows(d: &Path, r: &StudyRecord) -> Result<Vec<csv::StringRecord>> {
         .from_reader(&bytes[..]);
     let mut rows = rd.records();
     let bad_csv = |e: csv::Error| {
-        anyhow::Error::from(InputError(format!(
+        anyhow::Error::from(InputError::Request(format!(
             "{shown}: {}: truncated or corrupted",
             e.to_string().lines().next().unwrap_or_default()
         )))
     };
     let h = rows
         .next()
-        .ok_or_else(|| anyhow!(InputError(format!("{shown}: no header"))))?
+        .ok_or_else(|| anyhow!(InputError::file(&shown, "no header")))?
         .map_err(bad_csv)?;
     if h.iter().ne(head.iter()) {
         crate::bad_input!(

@@ -48,6 +48,4 @@ pub use merge::{check_shard, index_list, merge, missing, Missing};
 pub use plan::{derive_seed, parse_shard, Plan};
 pub use results::{as_f64, results_csv, StudyRecord, METRIC_COLUMNS};
 pub(crate) use schema::load_toml;
-pub use schema::{
-    value, Axis, AxisValues, Dist, Draw, MonteCarlo, Scale, Study, StudyError, MAX_RUNS,
-};
+pub use schema::{value, Axis, AxisValues, Dist, Draw, MonteCarlo, Scale, Study, MAX_RUNS};

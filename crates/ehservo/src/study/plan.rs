@@ -3,6 +3,7 @@
 
 use super::schema::{Axis, Dist, Draw, Study};
 use crate::scenario::Loop;
+use crate::scenario::Reason;
 
 /// SplitMix64: the seed of run `i` of a study with seed `seed`.
 pub fn derive_seed(seed: u64, i: u64) -> u64 {
@@ -153,7 +154,7 @@ pub(super) fn shard_range(runs: u64, k: u64, n: u64) -> std::ops::Range<u64> {
 }
 
 /// Parses `K/N` (0 ≤ K < N).
-pub fn parse_shard(s: &str) -> Result<(u64, u64), String> {
+pub fn parse_shard(s: &str) -> Result<(u64, u64), Reason> {
     let (k, n) = s.split_once('/').ok_or("expected K/N, e.g. 0/4")?;
     let k: u64 = k
         .trim()
@@ -164,7 +165,9 @@ pub fn parse_shard(s: &str) -> Result<(u64, u64), String> {
         .parse()
         .map_err(|_| format!("N in {s} is not a whole number"))?;
     if n == 0 || k >= n {
-        return Err(format!("need 0 ≤ K < N (got {k}/{n}); K counts from 0"));
+        return Err(Reason::Other(format!(
+            "need 0 ≤ K < N (got {k}/{n}); K counts from 0"
+        )));
     }
     Ok((k, n))
 }

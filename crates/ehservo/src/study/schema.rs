@@ -2,6 +2,7 @@
 //! that turn it into a [`Plan`].
 
 use super::Plan;
+use crate::scenario::Reason;
 use crate::scenario::{parse_value, Loop, ScenarioError};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -201,7 +202,7 @@ impl Axis {
     /// range that is not finite, whose width `to − from` overflows, or
     /// whose count exceeds [`MAX_RUNS`] is an error, so nothing is ever
     /// allocated or indexed from an overflowed count.
-    pub fn count(&self) -> Result<u64, String> {
+    pub fn count(&self) -> Result<u64, Reason> {
         match &self.values {
             AxisValues::List(v) => {
                 if v.is_empty() {
@@ -216,46 +217,48 @@ impl Axis {
                     && *step > 0.0
                     && to >= from)
                 {
-                    return Err(format!(
+                    return Err(Reason::Other(format!(
                         "needs finite from ≤ to and step > 0 (got {from:?}, {to:?}, {step:?})"
-                    ));
+                    )));
                 }
                 let width = to - from;
                 if !width.is_finite() {
-                    return Err(format!(
+                    return Err(Reason::Other(format!(
                         "the width to − from = {to:?} − {from:?} overflows a float"
-                    ));
+                    )));
                 }
                 // The count as a float first: a huge quotient must not
                 // saturate (or wrap) an integer. (Never NaN: width ≥ 0 and
                 // step > 0 are finite; ∞ is caught here.)
                 let q = (width / step + 1e-9).floor();
                 if q >= MAX_RUNS as f64 {
-                    return Err(format!(
+                    return Err(Reason::Other(format!(
                         "from {from:?} to {to:?} by {step:?} is more than {MAX_RUNS} values (the run limit)"
-                    ));
+                    )));
                 }
                 Ok(q as u64 + 1)
             }
             AxisValues::Count { from, to, n, scale } => {
                 if *n < 2 || !from.is_finite() || !to.is_finite() {
-                    return Err(format!("needs finite from, to and n ≥ 2 (got n = {n})"));
+                    return Err(Reason::Other(format!(
+                        "needs finite from, to and n ≥ 2 (got n = {n})"
+                    )));
                 }
                 if u64::from(*n) > MAX_RUNS {
-                    return Err(format!(
+                    return Err(Reason::Other(format!(
                         "n = {n} values is more than {MAX_RUNS} (the run limit)"
-                    ));
+                    )));
                 }
                 match scale {
                     Scale::Log if *from <= 0.0 || *to <= 0.0 => {
-                        return Err(format!(
+                        return Err(Reason::Other(format!(
                             "a log scale needs from, to > 0 (got {from:?}, {to:?})"
-                        ))
+                        )))
                     }
                     Scale::Linear if !(to - from).is_finite() => {
-                        return Err(format!(
+                        return Err(Reason::Other(format!(
                             "the width to − from = {to:?} − {from:?} overflows a float"
-                        ))
+                        )))
                     }
                     _ => {}
                 }
@@ -266,7 +269,7 @@ impl Axis {
 
     /// The values, expanded (after [`Axis::count`] has bounded their
     /// number); every number among them is finite.
-    pub fn expand(&self) -> Result<Vec<toml::Value>, String> {
+    pub fn expand(&self) -> Result<Vec<toml::Value>, Reason> {
         let n = self.count()?;
         let vals: Vec<toml::Value> = match &self.values {
             AxisValues::List(v) => v.clone(),
@@ -295,7 +298,10 @@ impl Axis {
                 .collect(),
         };
         if let Some((k, v)) = vals.iter().enumerate().find(|(_, v)| !all_finite(v)) {
-            return Err(format!("value {k} ({}) is not a finite number", show(v)));
+            return Err(Reason::Other(format!(
+                "value {k} ({}) is not a finite number",
+                show(v)
+            )));
         }
         Ok(vals)
     }
@@ -384,10 +390,7 @@ impl Draw {
     }
 }
 
-/// A study file could not be used: file, key, reason (exit code 2). It is
-/// the one kind of bad input, [`InputError`](crate::error::InputError),
-/// under the name the study's code reads best with.
-pub use crate::error::InputError as StudyError;
+use crate::error::InputError;
 
 /// Reads a TOML input file (a study, a tune file) into `T`; a failure is
 /// one line: the file, the line and column when TOML knows them, the key
@@ -395,15 +398,23 @@ pub use crate::error::InputError as StudyError;
 pub(crate) fn load_toml<T: serde::de::DeserializeOwned>(
     path: &Path,
     what: &str,
-) -> Result<T, StudyError> {
+) -> Result<T, InputError> {
     let file = path.display().to_string();
-    let bad = |key: &str, lc: Option<(usize, usize)>, reason: String| {
-        let at = lc.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
-        StudyError(if key.is_empty() {
-            format!("{file}{at}: {reason}")
+    let bad = |key: &str, line_col: Option<(usize, usize)>, reason: String| {
+        if key.is_empty() {
+            InputError::File {
+                file: file.clone(),
+                line_col,
+                reason: reason.into(),
+            }
         } else {
-            format!("{file}{at}: `{key}`: {reason}")
-        })
+            InputError::Key {
+                file: file.clone(),
+                line_col,
+                key: key.to_string(),
+                reason: reason.into(),
+            }
+        }
     };
     let text =
         crate::input::read_text(path).map_err(|r| bad("", None, format!("the {what} file {r}")))?;
@@ -436,17 +447,17 @@ pub(crate) fn load_toml<T: serde::de::DeserializeOwned>(
 
 impl Plan {
     /// Reads and checks a study file (and its base scenario).
-    pub fn load(path: &Path) -> Result<Plan, StudyError> {
+    pub fn load(path: &Path) -> Result<Plan, InputError> {
         let file = path.display().to_string();
         let study: Study = load_toml(path, "study")?;
         let base_path = path.parent().unwrap_or(Path::new(".")).join(&study.base);
         let base = crate::formats::load(&base_path, &study.set)
-            .map_err(|e: ScenarioError| StudyError(format!("{file}: base: {e}")))?;
+            .map_err(|e: ScenarioError| InputError::file(&file, format!("base: {e}")))?;
         Self::build(study, base, &file)
     }
 
-    pub(super) fn build(study: Study, base: Loop, file: &str) -> Result<Plan, StudyError> {
-        let bad = |key: String, reason: String| StudyError(format!("{file}: `{key}`: {reason}"));
+    pub(super) fn build(study: Study, base: Loop, file: &str) -> Result<Plan, InputError> {
+        let bad = |key: String, reason: String| InputError::key(file, key, reason);
 
         // First the size, from the ranges alone: every axis's count and
         // their product with the replicates, in checked arithmetic, against
@@ -456,7 +467,10 @@ impl Plan {
             if a.keys().is_empty() {
                 return Err(bad(format!("axis[{i}]"), "needs `key` or `keys`".into()));
             }
-            counts.push(a.count().map_err(|r| bad(format!("axis[{i}].values"), r))?);
+            counts.push(
+                a.count()
+                    .map_err(|r| bad(format!("axis[{i}].values"), r.to_string()))?,
+            );
         }
         let replicates = match &study.monte_carlo {
             Some(mc) if mc.runs == 0 => {
@@ -550,7 +564,7 @@ impl Plan {
         for (i, a) in study.axis.iter().enumerate() {
             let vals = a
                 .expand()
-                .map_err(|r| bad(format!("axis[{i}].values"), r))?;
+                .map_err(|r| bad(format!("axis[{i}].values"), r.to_string()))?;
             let probe: Vec<&toml::Value> = match a.values {
                 AxisValues::List(_) => vals.iter().collect(),
                 _ => vec![&vals[0], &vals[vals.len() - 1]],
@@ -572,7 +586,7 @@ impl Plan {
             .enumerate()
         {
             d.check()
-                .map_err(|r| bad(format!("monte_carlo.draw[{j}]"), r))?;
+                .map_err(|r| bad(format!("monte_carlo.draw[{j}]"), r.to_string()))?;
             for v in d.probes() {
                 base.with_values(&[(d.key.clone(), v.clone())])
                     .map_err(|e| {
@@ -624,10 +638,13 @@ values = [-1.0]
         )
         .unwrap();
         let e = Plan::build(study, Loop::parse("").unwrap(), "t.toml").unwrap_err();
-        assert!(e.0.contains("axis[0]") && e.0.contains("gamma1"), "{e}");
+        assert!(
+            e.to_string().contains("axis[0]") && e.to_string().contains("gamma1"),
+            "{e}"
+        );
     }
 
-    fn build(text: &str) -> Result<Plan, StudyError> {
+    fn build(text: &str) -> Result<Plan, InputError> {
         let study: Study = toml::from_str(text).unwrap();
         Plan::build(study, Loop::parse("").unwrap(), "t.toml")
     }
@@ -689,7 +706,7 @@ values = { from = 0.0, to = 1.0, n = 2000 }
 "#,
         )
         .unwrap_err();
-        assert!(e.0.contains("2000 × 2000 × 2000 values"), "{e}");
+        assert!(e.to_string().contains("2000 × 2000 × 2000 values"), "{e}");
         // Replicates that take a grid within the limit over it.
         let e = build(
             r#"name = "t"
@@ -702,7 +719,7 @@ runs = 4294967295
 "#,
         )
         .unwrap_err();
-        assert!(e.0.contains("`monte_carlo.runs`"), "{e}");
+        assert!(e.to_string().contains("`monte_carlo.runs`"), "{e}");
     }
 
     #[test]
@@ -739,7 +756,7 @@ runs = 4294967295
             ))
             .unwrap_err();
             assert!(
-                e.0.contains("monte_carlo.draw[0]") && e.0.contains(needle),
+                e.to_string().contains("monte_carlo.draw[0]") && e.to_string().contains(needle),
                 "{needle}: {e}"
             );
         }

@@ -2,8 +2,8 @@
 //! and [`Tune`], the file checked against its scenarios and the kind's
 //! tunables.
 
+use crate::error::InputError;
 use crate::scenario::{ControllerCfg, Loop, Reason};
-use crate::study::StudyError;
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -163,7 +163,7 @@ impl crate::scenario::Visit for Tunables {
 
 impl Tune {
     /// Reads and checks a tune file and its scenarios.
-    pub fn load(path: &Path) -> Result<Tune, StudyError> {
+    pub fn load(path: &Path) -> Result<Tune, InputError> {
         let file = path.display().to_string();
         let mut tf: TuneFile = crate::study::load_toml(path, "tune")?;
         if tf.name.is_empty() {
@@ -178,14 +178,14 @@ impl Tune {
             .iter()
             .map(|p| {
                 crate::formats::load(&dir.join(p), &[])
-                    .map_err(|e| StudyError(format!("{file}: `scenarios`: {e}")))
+                    .map_err(|e| InputError::key(&file, "scenarios", e.to_string()))
             })
             .collect::<Result<Vec<_>, _>>()?;
         Self::build(tf, scenarios, &file)
     }
 
     /// Checks a parsed tune file against its loaded scenarios.
-    pub fn build(tf: TuneFile, scenarios: Vec<Loop>, file: &str) -> Result<Tune, StudyError> {
+    pub fn build(tf: TuneFile, scenarios: Vec<Loop>, file: &str) -> Result<Tune, InputError> {
         Self::build_under(tf, scenarios, file, "")
     }
 
@@ -197,10 +197,10 @@ impl Tune {
         scenarios: Vec<Loop>,
         file: &str,
         section: &str,
-    ) -> Result<Tune, StudyError> {
+    ) -> Result<Tune, InputError> {
         let dot = if section.is_empty() { "" } else { "." };
         let bad = |key: &str, reason: String| {
-            StudyError(format!("{file}: `{section}{dot}{key}`: {reason}"))
+            InputError::key(file, format!("{section}{dot}{key}"), reason)
         };
         if scenarios.is_empty() {
             return Err(bad(
@@ -383,7 +383,7 @@ impl Tune {
             .map_err(|e| bad(&e.key, e.reason.to_string()))?;
         let tables = scenarios
             .iter()
-            .map(|s| s.table().map_err(|e| StudyError(format!("{file}: {e}"))))
+            .map(|s| s.table().map_err(|e| InputError::file(file, e.to_string())))
             .collect::<Result<Vec<_>, _>>()?;
         let t = Tune {
             file: tf,

@@ -91,7 +91,7 @@ impl ReferenceCfg {
                     _ => PathBuf::from(file),
                 };
                 let knots = read_csv_on(&path, Axis::Linear)
-                    .map_err(|r| KeyError::new("reference.file", r))?;
+                    .map_err(|e| KeyError::new("reference.file", e.to_string()))?;
                 Table::reference(knots, tau)
             }
         }
@@ -260,7 +260,8 @@ impl ReferenceCfg {
                     Some(d) if Path::new(file).is_relative() => d.join(file),
                     _ => PathBuf::from(file),
                 };
-                let knots = read_csv(&path).map_err(|r| KeyError::new("reference.file", r))?;
+                let knots =
+                    read_csv(&path).map_err(|e| KeyError::new("reference.file", e.to_string()))?;
                 let peak = knots.iter().map(|k| k.v.abs()).fold(0.0, f64::max);
                 within("file", peak).map_err(|e| {
                     let r = format!("{}: {}", path.display(), e.reason);

@@ -48,7 +48,7 @@ mod build;
 mod table;
 mod trajectory;
 
-pub use table::{read_csv, read_csv_on, Table};
+pub use table::{read_csv, read_csv_on, CsvError, Table};
 pub use trajectory::AnyReference;
 
 /// Amplitude (deg) of a kind that has one, when not given.
@@ -585,7 +585,7 @@ mod tests {
         let check = |body: &str, want: &str| {
             let p = dir.path().join("r.csv");
             std::fs::write(&p, body).unwrap();
-            let e = read_csv(&p).unwrap_err();
+            let e = read_csv(&p).unwrap_err().to_string();
             assert!(e.contains(want), "{e}");
         };
         check("t,theta_deg\n0,1\n", "single data row");
@@ -602,9 +602,15 @@ mod tests {
         check("t,theta_deg\n0,1\n0.5,inf\n", "column theta_deg");
         check("t,theta_deg\n0,1\n0.5,x\n", "cannot read `x`");
         check("t,theta_deg\n0,1\n0.5\n", "expected 2 columns");
-        assert!(read_csv(&dir.path().join("nope.csv"))
-            .unwrap_err()
-            .contains("cannot be read"));
+        let e = read_csv(&dir.path().join("nope.csv")).unwrap_err();
+        assert!(matches!(
+            e,
+            CsvError::Read {
+                source: crate::input::ReadError::Io(_),
+                ..
+            }
+        ));
+        assert!(e.to_string().contains("cannot be read"), "{e}");
     }
 
     #[test]

@@ -7,6 +7,7 @@ use super::{Jacobian, Kink, Linearize, Point, Side, AT_KINK};
 use crate::actuator::{Actuator, ActuatorConfig, Dynamics as Spool};
 use crate::freq::ss::Quantity;
 use ehservo_core::error::ParamError;
+use ehservo_sim::error::KeyError;
 
 /// The actuator stage: command (V) → saturation → spool → dead band and
 /// null bias → the plant's input (V). Its states are the spool's: none,
@@ -110,15 +111,15 @@ impl ActuatorStage {
     /// The steady state that delivers the plant input `p`: the spool at
     /// rest where the dead band and null bias give `p`, the command that
     /// holds it there. An error names the key that makes it impossible.
-    pub fn invert(&self, p: f64) -> Result<(Vec<f64>, f64), (String, String)> {
+    pub fn invert(&self, p: f64) -> Result<(Vec<f64>, f64), KeyError> {
         let v = if p == 0.0 {
             0.0 - self.null_bias
         } else {
             p + self.dead_band * p.signum() - self.null_bias
         };
         if v.abs() > self.limit {
-            return Err((
-                "actuator.limit".into(),
+            return Err(KeyError::new(
+                "actuator.limit",
                 format!(
                     "the trim needs a spool at {v:.6} V (the plant's input {p:.6} V), beyond the saturation ±{} V",
                     self.limit
