@@ -53,18 +53,24 @@ pub fn varied(p: &ServoParams, load: &Load, f: &Factors) -> (ServoParams, Load) 
 #[derive(Debug, Clone, Copy)]
 pub struct ThirdOrderPlant {
     model: NominalModel,
-    /// The true model when a physical bias makes it differ from the
-    /// nominal one.
-    truth: Option<NominalModel>,
+    /// The true model: the nominal one, unless a physical bias makes it
+    /// differ (`biased`). Held whole rather than as an `Option` beside the
+    /// nominal model, so that the derivative reads its coefficients at
+    /// fixed places instead of picking one of two models at every stage.
+    truth: NominalModel,
+    /// Whether `truth` differs from `model` (a physical bias).
+    biased: bool,
 }
 
 impl ThirdOrderPlant {
     /// From validated physical parameters and load: the plant is its
     /// nominal model (the variation, if any, is the paper's form).
     pub fn new(params: ServoParams, load: Load) -> Self {
+        let model = NominalModel::new(params, load);
         Self {
-            model: NominalModel::new(params, load),
-            truth: None,
+            model,
+            truth: model,
+            biased: false,
         }
     }
 
@@ -73,7 +79,8 @@ impl ThirdOrderPlant {
         let mut p = Self::new(params, load);
         if *f != Factors::ONE {
             let (tp, tl) = varied(&params, &load, f);
-            p.truth = Some(NominalModel::new(tp, tl));
+            p.truth = NominalModel::new(tp, tl);
+            p.biased = true;
         }
         p
     }
@@ -81,7 +88,7 @@ impl ThirdOrderPlant {
     /// The model the plant's derivative is: the true one.
     #[inline(always)]
     fn truth(&self) -> &NominalModel {
-        self.truth.as_ref().unwrap_or(&self.model)
+        &self.truth
     }
 
     /// b(x, s) and d(x) of the true model: picked from what was prepared
@@ -120,13 +127,12 @@ impl ThirdOrderPlant {
         b: f64,
         d: f64,
     ) -> f64 {
-        match &self.truth {
-            None => lumped(x, u_eq, b_bar, v, b, d),
-            Some(t) => {
-                let (at, an) = (t.coeffs.as_array(), self.model.coeffs.as_array());
-                let da = core::array::from_fn(|i| at[i] + v.da[i] - an[i]);
-                lumped(x, u_eq, b_bar, &Variation { da, ..*v }, b, d)
-            }
+        if self.biased {
+            let (at, an) = (self.truth.coeffs.as_array(), self.model.coeffs.as_array());
+            let da = core::array::from_fn(|i| at[i] + v.da[i] - an[i]);
+            lumped(x, u_eq, b_bar, &Variation { da, ..*v }, b, d)
+        } else {
+            lumped(x, u_eq, b_bar, v, b, d)
         }
     }
 }
