@@ -637,8 +637,9 @@ impl<T: Real> NominalModel<T> {
         let mut tl = l.amplitude * sin_kt;
         let mut tl_rate = l.amplitude * l.wavenumber * cos_kt * x[1];
         if let Some(f) = &l.friction {
-            tl += f.torque(x[1]);
-            tl_rate += f.slope(x[1]) * x[2];
+            let (torque, rate) = friction_terms(f, x);
+            tl += torque;
+            tl_rate += rate;
         }
         // Self::load_pressure and ::d.
         let pl = (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + tl) / p.dm;
@@ -652,6 +653,17 @@ impl<T: Real> NominalModel<T> {
         self.d_per_torque * self.load.torque(x[0], x[1])
             + self.load.torque_rate(x[0], x[1], x[2]) / self.params.jt
     }
+}
+
+/// The friction's terms of [`Load::torque`] and [`Load::torque_rate`] at
+/// `x`, out of line (the same operations): the paper's load has none, and
+/// inlined into [`NominalModel::b_and_d`] their exponentials made every
+/// plant derivative carry their spills and callee-saved registers, and
+/// too large to inline into the RK4 stages.
+#[cold]
+#[inline(never)]
+fn friction_terms<T: Real>(f: &Friction<T>, x: &[T; 3]) -> (T, T) {
+    (f.torque(x[1]), f.slope(x[1]) * x[2])
 }
 
 /// `b(x, ±1)` and `d(x)` at one state ([`NominalModel::b_and_d_both`]).

@@ -157,8 +157,10 @@ impl Plant for ThirdOrderPlant {
     }
 
     /// `b` and `d` at x in one evaluation ([`NominalModel::b_and_d`]): one
-    /// `sincos` per stage instead of two sines and a cosine.
-    #[inline]
+    /// `sincos` per stage instead of two sines and a cosine. Whole in the
+    /// caller's stage, where what depends on `u` alone (its sign, the
+    /// valve direction's supply term) is shared by a step's stages.
+    #[inline(always)]
     fn deriv(&self, _t: f64, x: &[f64; 3], u: f64, v: &Variation, dx: &mut [f64; 3]) {
         let (b, d) = self.truth().b_and_d(x, sgn(u));
         self.deriv_with(x, u, v, b, d, dx);
