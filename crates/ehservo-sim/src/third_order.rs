@@ -93,7 +93,10 @@ impl ThirdOrderPlant {
 
     /// b(x, s) and d(x) of the true model: picked from what was prepared
     /// at x, if anything, else evaluated (the same bits either way).
-    #[inline]
+    /// Always inlined: the pick is a few instructions, and left to LLVM
+    /// it had become a call of its own at every sample's lumped
+    /// uncertainty.
+    #[inline(always)]
     fn b_and_d(&self, prepared: Option<&BothDirections>, x: &[f64; 3], s: f64) -> (f64, f64) {
         let m = self.truth();
         match prepared {
