@@ -432,10 +432,6 @@ pub struct NominalModel<T: Real = f64> {
     /// sgn(xv)·(Pl − p_off))/ρ)`; 0 for the paper's servo (see
     /// [`NominalModel::with_offset`]).
     offset: T,
-    /// `Ps + p_off` and `Ps − p_off`: the root's constant part for each
-    /// valve direction (both `Ps`, the same value, without an offset).
-    ps_up: T,
-    ps_down: T,
 }
 
 impl<T: Real> NominalModel<T> {
@@ -449,8 +445,6 @@ impl<T: Real> NominalModel<T> {
             b_per_kg: params.b_per_kg(),
             d_per_torque: params.d_per_torque(),
             offset: T::ZERO,
-            ps_up: params.ps,
-            ps_down: params.ps,
         }
     }
 
@@ -463,8 +457,6 @@ impl<T: Real> NominalModel<T> {
     pub fn with_offset(params: ServoParams<T>, load: Load<T>, offset: T) -> Self {
         let mut m = Self::new(params, load);
         m.offset = offset;
-        m.ps_up = params.ps + offset;
-        m.ps_down = params.ps - offset;
         m
     }
 
@@ -484,19 +476,15 @@ impl<T: Real> NominalModel<T> {
     }
 
     /// Kg of (2) with this model's offset: [`ServoParams::flow_gain`] with
-    /// the direction's `Ps ± offset` (without an offset the same
-    /// operations on the same values, so the same bits).
+    /// the direction's `Ps + s·p_off`, which for a sign s is exactly
+    /// `Ps + p_off`, `Ps − p_off` or `Ps` (a product by ±1 or 0 is exact;
+    /// without an offset the same operations on the same values, so the
+    /// same bits). Found by arithmetic, not by comparing s twice and
+    /// picking one of three stored values at every evaluation.
     #[inline(always)]
     fn flow_gain(&self, pl: T, s: T) -> (T, bool) {
-        let ps = if s > T::ZERO {
-            self.ps_up
-        } else if s < T::ZERO {
-            self.ps_down
-        } else {
-            self.params.ps
-        };
         let p = &self.params;
-        let arg = ps - s * pl;
+        let arg = (p.ps + s * self.offset) - s * pl;
         if arg >= T::ZERO {
             (p.cd * p.ag * sqrt(arg / p.rho), false)
         } else {
@@ -637,8 +625,9 @@ impl<T: Real> NominalModel<T> {
         let mut tl = l.amplitude * sin_kt;
         let mut tl_rate = l.amplitude * l.wavenumber * cos_kt * x[1];
         if let Some(f) = &l.friction {
-            tl += f.torque(x[1]);
-            tl_rate += f.slope(x[1]) * x[2];
+            let (torque, rate) = friction_terms(f, x);
+            tl += torque;
+            tl_rate += rate;
         }
         // Self::load_pressure and ::d.
         let pl = (p.jt * x[2] + p.bm * x[1] + p.g * x[0] + tl) / p.dm;
@@ -652,6 +641,17 @@ impl<T: Real> NominalModel<T> {
         self.d_per_torque * self.load.torque(x[0], x[1])
             + self.load.torque_rate(x[0], x[1], x[2]) / self.params.jt
     }
+}
+
+/// The friction's terms of [`Load::torque`] and [`Load::torque_rate`] at
+/// `x`, out of line (the same operations): the paper's load has none, and
+/// inlined into [`NominalModel::b_and_d`] their exponentials made every
+/// plant derivative carry their spills and callee-saved registers, and
+/// too large to inline into the RK4 stages.
+#[cold]
+#[inline(never)]
+fn friction_terms<T: Real>(f: &Friction<T>, x: &[T; 3]) -> (T, T) {
+    (f.torque(x[1]), f.slope(x[1]) * x[2])
 }
 
 /// `b(x, ±1)` and `d(x)` at one state ([`NominalModel::b_and_d_both`]).

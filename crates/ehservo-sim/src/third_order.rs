@@ -54,18 +54,24 @@ pub fn varied(p: &ServoParams, load: &Load, f: &Factors) -> (ServoParams, Load) 
 #[derive(Debug, Clone, Copy)]
 pub struct ThirdOrderPlant {
     model: NominalModel,
-    /// The true model when a physical bias makes it differ from the
-    /// nominal one.
-    truth: Option<NominalModel>,
+    /// The true model: the nominal one, unless a physical bias makes it
+    /// differ (`biased`). Held whole rather than as an `Option` beside the
+    /// nominal model, so that the derivative reads its coefficients at
+    /// fixed places instead of picking one of two models at every stage.
+    truth: NominalModel,
+    /// Whether `truth` differs from `model` (a physical bias).
+    biased: bool,
 }
 
 impl ThirdOrderPlant {
     /// From validated physical parameters and load: the plant is its
     /// nominal model (the variation, if any, is the paper's form).
     pub fn new(params: ServoParams, load: Load) -> Self {
+        let model = NominalModel::new(params, load);
         Self {
-            model: NominalModel::new(params, load),
-            truth: None,
+            model,
+            truth: model,
+            biased: false,
         }
     }
 
@@ -74,7 +80,8 @@ impl ThirdOrderPlant {
         let mut p = Self::new(params, load);
         if *f != Factors::ONE {
             let (tp, tl) = varied(&params, &load, f);
-            p.truth = Some(NominalModel::new(tp, tl));
+            p.truth = NominalModel::new(tp, tl);
+            p.biased = true;
         }
         p
     }
@@ -82,12 +89,15 @@ impl ThirdOrderPlant {
     /// The model the plant's derivative is: the true one.
     #[inline(always)]
     fn truth(&self) -> &NominalModel {
-        self.truth.as_ref().unwrap_or(&self.model)
+        &self.truth
     }
 
     /// b(x, s) and d(x) of the true model: picked from what was prepared
     /// at x, if anything, else evaluated (the same bits either way).
-    #[inline]
+    /// Always inlined: the pick is a few instructions, and left to LLVM
+    /// it had become a call of its own at every sample's lumped
+    /// uncertainty.
+    #[inline(always)]
     fn b_and_d(&self, prepared: Option<&BothDirections>, x: &[f64; 3], s: f64) -> (f64, f64) {
         let m = self.truth();
         match prepared {
@@ -121,13 +131,12 @@ impl ThirdOrderPlant {
         b: f64,
         d: f64,
     ) -> f64 {
-        match &self.truth {
-            None => lumped(x, u_eq, b_bar, v, b, d),
-            Some(t) => {
-                let (at, an) = (t.coeffs.as_array(), self.model.coeffs.as_array());
-                let da = core::array::from_fn(|i| at[i] + v.da[i] - an[i]);
-                lumped(x, u_eq, b_bar, &Variation { da, ..*v }, b, d)
-            }
+        if self.biased {
+            let (at, an) = (self.truth.coeffs.as_array(), self.model.coeffs.as_array());
+            let da = core::array::from_fn(|i| at[i] + v.da[i] - an[i]);
+            lumped(x, u_eq, b_bar, &Variation { da, ..*v }, b, d)
+        } else {
+            lumped(x, u_eq, b_bar, v, b, d)
         }
     }
 }
@@ -152,8 +161,10 @@ impl Plant for ThirdOrderPlant {
     }
 
     /// `b` and `d` at x in one evaluation ([`NominalModel::b_and_d`]): one
-    /// `sincos` per stage instead of two sines and a cosine.
-    #[inline]
+    /// `sincos` per stage instead of two sines and a cosine. Whole in the
+    /// caller's stage, where what depends on `u` alone (its sign, the
+    /// valve direction's supply term) is shared by a step's stages.
+    #[inline(always)]
     fn deriv(&self, _t: f64, x: &[f64; 3], u: f64, v: &Variation, dx: &mut [f64; 3]) {
         let (b, d) = self.truth().b_and_d(x, sgn(u));
         self.deriv_with(x, u, v, b, d, dx);

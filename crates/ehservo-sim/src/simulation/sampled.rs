@@ -181,8 +181,13 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 // initial state, plus h/6·0): the step integrates
                 // the plant's state alone. The same bits, and no
                 // plant+valve state whose copies the stages would
-                // reload across store boundaries.
+                // reload across store boundaries. The derivative is
+                // inlined into the stages, which then share what depends
+                // on the held input alone (the third-order plant's sign
+                // and supply term): left to LLVM, it was a call at every
+                // stage that made them again.
                 Some(u_plant) => stage_step(
+                    #[inline(always)]
                     |tt: f64, s: &P::State, ds: &mut P::State| {
                         plant.deriv(tt, s, u_plant, &v, ds);
                     },
