@@ -60,6 +60,26 @@ pub enum ForceCfg {
 }
 
 /// The validated force signal.
+///
+/// ```
+/// use ehservo_sim::force::{Force, ForceCfg};
+///
+/// // 50 N + 100 N·sin(2π·2t + 90°), as `[plant.load.force]`.
+/// let cfg: ForceCfg = toml::from_str(
+///     "kind = \"sine\"\namplitude = 100.0\nfrequency_hz = 2.0\nphase_deg = 90.0\noffset = 50.0",
+/// )
+/// .unwrap();
+/// let f = Force::try_new(&cfg, None).unwrap();
+/// // t = 0: F = 50 + 100·sin 90° = 150 N at its peak, so Ḟ = 100·4π·cos 90° = 0.
+/// let (force, rate) = f.at(0.0);
+/// assert!((force - 150.0).abs() < 1e-12 && rate.abs() < 1e-9);
+/// // The nominal model knows the constant part only: the offset.
+/// assert_eq!(f.static_part(), 50.0);
+/// // A step of 1 kN at 0.5 s.
+/// let cfg = ForceCfg::Step { value: 1e3, initial: 0.0, start: 0.5 };
+/// let step = Force::try_new(&cfg, None).unwrap();
+/// assert_eq!((step.at(0.49).0, step.at(0.5).0), (0.0, 1e3));
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub enum Force {
     /// None.
