@@ -413,6 +413,12 @@ pub fn sgn<T: Real>(v: T) -> T {
 }
 
 /// The saturation `sat(v) = v` for `|v| ≤ 1`, else `sgn(v)` (Remark 2).
+///
+/// ```
+/// use ehservo_core::math::sat;
+///
+/// assert_eq!([sat(-3.0), sat(0.25), sat(7.0)], [-1.0, 0.25, 1.0]);
+/// ```
 #[inline]
 pub fn sat<T: Real>(v: T) -> T {
     v.clamp(-T::ONE, T::ONE)
@@ -452,6 +458,14 @@ pub fn tanh<T: Real>(v: T) -> T {
 /// partial sums (entry i into sum i mod 4), so the additions do not wait on
 /// each other; the result may differ from a left-to-right sum in the last
 /// bit.
+///
+/// ```
+/// use ehservo_core::math::norm;
+///
+/// // 3-4-5, and 1 in each of 16 entries: √16 = 4.
+/// assert_eq!(norm(&[3.0, 4.0]), 5.0);
+/// assert_eq!(norm(&[1.0f32; 16]), 4.0);
+/// ```
 #[inline]
 pub fn norm<T: Real>(v: &[T]) -> T {
     let mut lane = [T::ZERO; 4];

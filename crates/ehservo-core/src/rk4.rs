@@ -200,6 +200,18 @@ pub fn rk4_step<T: Real, S: OdeState<T>, F: FnMut(T, &S, &mut S)>(mut f: F, t: T
 
 /// One RK4 step when the first stage `k1 = f(t, y)` is already known (the
 /// simulator evaluates it together with the logged control law).
+///
+/// ```
+/// use ehservo_core::rk4::{rk4_step, rk4_step_with_k1};
+///
+/// // The same step as `rk4_step`, its first stage computed beforehand.
+/// let f = |_t: f64, y: &[f64; 2], dy: &mut [f64; 2]| *dy = [y[1], -y[0]];
+/// let (mut a, mut b) = ([1.0, 0.0], [1.0, 0.0]);
+/// rk4_step(f, 0.0, &mut a, 0.1);
+/// let k1 = [b[1], -b[0]];
+/// rk4_step_with_k1(f, 0.0, &mut b, &k1, 0.1);
+/// assert_eq!(a, b);
+/// ```
 #[inline]
 pub fn rk4_step_with_k1<T: Real, S: OdeState<T>, F: FnMut(T, &S, &mut S)>(
     mut f: F,

@@ -118,6 +118,10 @@ pub struct Cylinder {
 }
 
 /// The cylinder plant.
+///
+/// Built from `[plant] model = "cylinder"`'s tables by
+/// [`CylinderCfg`]'s [`build`](crate::plant::PlantConfig::build), whose
+/// example evaluates its derivative.
 #[derive(Debug, Clone)]
 pub struct CylinderPlant {
     c: Cylinder,

@@ -220,6 +220,19 @@ impl Force {
 
 /// The rows of a force table (`t_s,force_N`), strictly increasing in time.
 /// The error names the file, the line and the column.
+///
+/// ```
+/// use ehservo_sim::force::{read_table, Force, ForceCfg};
+///
+/// let path = std::env::temp_dir().join(format!("ehservo-force-doc-{}.csv", std::process::id()));
+/// std::fs::write(&path, "t_s,force_N\n0.0,0.0\n1.0,200.0\n").unwrap();
+/// assert_eq!(read_table(&path).unwrap(), [(0.0, 0.0), (1.0, 200.0)]);
+/// // As `kind = "csv"`: linear between rows, so 100 N at 0.5 s, rising 200 N/s.
+/// let cfg = ForceCfg::Csv { file: path.to_string_lossy().into_owned() };
+/// let f = Force::try_new(&cfg, None).unwrap();
+/// assert_eq!(f.at(0.5), (100.0, 200.0));
+/// std::fs::remove_file(&path).unwrap();
+/// ```
 pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, String> {
     let name = path.display();
     let meta = std::fs::metadata(path).map_err(|e| format!("the force file {name}: {e}"))?;

@@ -31,6 +31,20 @@ pub(crate) const LOAD_PRESSURE: [Signal; 1] = [Signal::new(
 /// The paper's parameters varied by the physical factors `f`: Jt by mass,
 /// βe by bulk modulus, Kce by leakage, Ps by supply pressure; the load's
 /// amplitude by load and its friction forces by friction.
+///
+/// ```
+/// use ehservo_sim::core::servo::{Load, ServoParams};
+/// use ehservo_sim::plant::Factors;
+/// use ehservo_sim::third_order::varied;
+///
+/// // `mass = { bias = 1.0 }`: twice the inertia, so a3 = Bm/Jt + 4βe·Kce/Vt
+/// // loses half its first term.
+/// let p = ServoParams::paper();
+/// let (q, _) = varied(&p, &Load::paper(), &Factors { mass: 2.0, ..Factors::ONE });
+/// assert_eq!(q.jt, 2.0 * p.jt);
+/// let (a3p, a3q) = (p.coefficients().a3, q.coefficients().a3);
+/// assert!((a3p - a3q - p.bm / (2.0 * p.jt)).abs() < 1e-9);
+/// ```
 pub fn varied(p: &ServoParams, load: &Load, f: &Factors) -> (ServoParams, Load) {
     let p = ServoParams {
         jt: p.jt * f.mass,
