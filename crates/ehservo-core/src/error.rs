@@ -7,6 +7,28 @@ use crate::math::Real;
 /// A parameter rejected at construction. `Copy`, allocation-free, and it
 /// names the parameter and the reason, so that a board can report it and a
 /// scenario loader can map it back to its key.
+///
+/// ```
+/// use ehservo_core::control::Config;
+/// use ehservo_core::control::pid::PidConfig;
+/// use ehservo_core::prelude::*;
+///
+/// let design = Design {
+///     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+///     surface: SwitchingSurface::paper(),
+///     dt: 0.01,
+/// };
+/// // `kind = "pid"` with `kp = -1`: refused at construction, by name.
+/// let err = PidConfig { kp: Some(-1.0), ..PidConfig::default() }
+///     .build(&design)
+///     .unwrap_err();
+/// assert_eq!(err.name, "kp");
+/// assert_eq!(err.value, -1.0);
+/// assert_eq!(err.to_string(), "kp: must be finite and >= 0 (got -1.0)");
+/// // It converts with `?` to a boxed error, on a board's `core` as on a host.
+/// let boxed: Box<dyn core::error::Error> = err.into();
+/// assert!(boxed.to_string().starts_with("kp"));
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ParamError {
     /// The parameter's name (as in the paper, e.g. `"gamma1"`).

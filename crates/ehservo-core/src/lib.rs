@@ -9,7 +9,7 @@
 //! | module | what it holds | paper |
 //! |---|---|---|
 //! | [`servo`] | physical parameters (SI) → coefficients `a1, a2, a3`, the state-dependent gain `b` and load term `d`; the load `Tl` | (1)–(9) |
-//! | [`reference`] | the desired trajectory and its first three derivatives `z` | A3, §IV |
+//! | [`reference`](mod@reference) | the desired trajectory and its first three derivatives `z` | A3, §IV |
 //! | [`surface`] | the switching surface `σ`, the error vector `E`, design from poles | (10), (15)–(16) |
 //! | [`rbf`] | the modified radial-basis vector `Φ(x, z)` (130 entries) | (20) |
 //! | [`control`] | the [`Controller`](control::Controller) trait and every law, each a kind with its [`Config`](control::Config): the paper's traditional VSC (`vsc`, `vsc-sat`) and NNBVSC (`nnvsc`), the NNBVSC with a classical robust weight law (`nn-robust`), and the baselines PID (`pid`), super-twisting (`sta`), ADRC (`adrc`), adaptive robust control (`arc`), adaptive backstepping (`backstepping`) and the open loop of an identification experiment (`open-loop`) | (11)–(14), (23)–(34) |
@@ -25,21 +25,44 @@
 //! small `Copy` error naming the parameter; the control step itself is
 //! infallible.
 //!
+//! The paper's Fig. 2 controller in a few lines: the NNBVSC (`kind =
+//! "nnvsc"`, every key at its Fig. 2 value) designed on the paper's servo,
+//! stepped at 100 Hz against the reference `5°·sin(2πt)`:
+//!
 //! ```
 //! use ehservo_core::prelude::*;
 //!
-//! let servo = ServoParams::paper();
-//! let c = servo.coefficients();
-//! assert!((c.a2 - 13000.2711).abs() < 1e-3);
+//! // What the controller is told of the plant: the paper's servo and load.
+//! let model = NominalModel::new(ServoParams::paper(), Load::paper());
+//! // ā2 as the paper prints it in Section IV.
+//! assert!((model.coeffs.a2 - 13000.2711).abs() < 1e-3);
+//! let design = Design { model, surface: SwitchingSurface::paper(), dt: 0.01 };
 //!
-//! let model = NominalModel::new(servo, Load::paper());
-//! let surface = SwitchingSurface::from_poles([-20.0, -30.0, -40.0]).unwrap();
-//! let nn = NnVsc::try_new(model, surface, NnVscParams::paper(), Rbf::paper()).unwrap();
-//! let mut ctl = SampledController::new(nn, 0.01).unwrap();
+//! let nn = NnVscConfig::default().build(&design)?;
+//! let mut ctl = SampledController::new(nn, design.dt)?;
 //! let reference = Sine::paper();
-//! let out = ctl.step(0.0, [0.0, 0.0, 0.0], reference.z(0.0));
-//! assert!(out.u.is_finite());
+//! for k in 0..5 {
+//!     let t = k as f64 * design.dt;
+//!     // The plant held at rest: x = (θ, θ̇, θ̈) = 0.
+//!     let out = ctl.step(t, [0.0; 3], reference.z(t));
+//!     assert!(out.u.is_finite());
+//!     if k == 0 {
+//!         // σ = ë + p1·ė + p2·e + p3·∫e (10) with e = ë = ∫e = 0 at t = 0
+//!         // and ė = θ̇d(0) = A·ω: σ = 90·(5π/180)·2π.
+//!         let sigma = 90.0 * (5.0 * std::f64::consts::PI / 180.0) * 2.0 * std::f64::consts::PI;
+//!         assert!((out.sigma - sigma).abs() < 1e-9);
+//!         // The error grows (ė > 0): the command pushes forward.
+//!         assert!(out.u > 0.0);
+//!     }
+//! }
+//! // The weights learned from the first samples (W(0) = 0).
+//! assert!(ctl.state().w.iter().any(|&w| w != 0.0));
+//! # Ok::<(), ParamError>(())
 //! ```
+//!
+//! Around a plant: [`onboard::Fig2Loop`] closes the same loop on the
+//! plant (8) with Fig. 2's uncertainty, as a board runs it; the simulator
+//! with its actuator, sensors and metrics is the crate `ehservo-sim`.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 
 pub mod control;

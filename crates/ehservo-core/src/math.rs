@@ -38,6 +38,17 @@ mod sealed {
 /// Constants in the laws are written `T::of(2.0)`: exact for f64 (so f64
 /// results are bit for bit those of plain f64 code), rounded to nearest for
 /// f32.
+///
+/// ```
+/// use ehservo_core::math::{sat, Real};
+///
+/// // One generic function for the host's f64 and the board's f32.
+/// fn boundary_layer<T: Real>(sigma: T, mu: T) -> T {
+///     T::of(2.0) * sat(sigma / mu)
+/// }
+/// assert_eq!(boundary_layer(0.5f64, 1.0), 1.0); // inside the layer: 2·0.5
+/// assert_eq!(boundary_layer(-3.0f32, 1.0), -2.0); // outside: 2·sgn
+/// ```
 pub trait Real:
     sealed::Sealed
     + Copy
@@ -384,6 +395,12 @@ pub fn sin_cos_f32(x: f32) -> (f32, f32) {
 }
 
 /// The paper's `sgn`: −1, 0 or +1 (`sgn(0) = 0`, and `sgn(NaN) = 0`).
+///
+/// ```
+/// use ehservo_core::math::sgn;
+///
+/// assert_eq!([sgn(-2.5), sgn(0.0), sgn(f64::NAN), sgn(1e-300)], [-1.0, 0.0, 0.0, 1.0]);
+/// ```
 #[inline]
 pub fn sgn<T: Real>(v: T) -> T {
     if v > T::ZERO {
@@ -396,6 +413,12 @@ pub fn sgn<T: Real>(v: T) -> T {
 }
 
 /// The saturation `sat(v) = v` for `|v| ≤ 1`, else `sgn(v)` (Remark 2).
+///
+/// ```
+/// use ehservo_core::math::sat;
+///
+/// assert_eq!([sat(-3.0), sat(0.25), sat(7.0)], [-1.0, 0.25, 1.0]);
+/// ```
 #[inline]
 pub fn sat<T: Real>(v: T) -> T {
     v.clamp(-T::ONE, T::ONE)
@@ -435,6 +458,14 @@ pub fn tanh<T: Real>(v: T) -> T {
 /// partial sums (entry i into sum i mod 4), so the additions do not wait on
 /// each other; the result may differ from a left-to-right sum in the last
 /// bit.
+///
+/// ```
+/// use ehservo_core::math::norm;
+///
+/// // 3-4-5, and 1 in each of 16 entries: √16 = 4.
+/// assert_eq!(norm(&[3.0, 4.0]), 5.0);
+/// assert_eq!(norm(&[1.0f32; 16]), 4.0);
+/// ```
 #[inline]
 pub fn norm<T: Real>(v: &[T]) -> T {
     let mut lane = [T::ZERO; 4];
@@ -453,6 +484,12 @@ pub fn norm<T: Real>(v: &[T]) -> T {
 }
 
 /// Degrees to radians, `dr = π/180` in the paper.
+///
+/// ```
+/// use ehservo_core::math::DR;
+///
+/// assert!((180.0 * DR - std::f64::consts::PI).abs() < 1e-15);
+/// ```
 pub const DR: f64 = core::f64::consts::PI / 180.0;
 
 #[cfg(test)]

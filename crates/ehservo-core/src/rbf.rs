@@ -30,6 +30,23 @@ pub const N_PHI: usize = 1 + N_KERNELS + 4;
 pub const N_LEVELS: usize = 5;
 
 /// The network's fixed configuration.
+///
+/// ```
+/// use ehservo_core::rbf::{Rbf, N_PHI};
+///
+/// let rbf = Rbf::paper();
+/// let z = [0.1, 0.2, 0.3, 0.4];
+/// let mut phi = [0.0; N_PHI];
+/// rbf.phi(&[0.0; 3], &z, &mut phi);
+/// // Φ = [1, φ1 … φ125, z]: the bias, then the kernels, then the reference.
+/// assert_eq!(phi[0], 1.0);
+/// assert_eq!(phi[126..], z);
+/// // x = 0 sits on the grid's centre (0, 0, 0), kernel j = 25·2 + 5·2 + 2 = 62,
+/// // so φ = exp(0) = 1 there; its neighbour (0, 0, 0.5) is exp(−0.5²/δ²) = e⁻¹.
+/// assert_eq!(rbf.centre(62), [0.0; 3]);
+/// assert!((phi[1 + 62] - 1.0).abs() < 1e-15);
+/// assert!((phi[1 + 63] - (-1f64).exp()).abs() < 1e-15);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rbf<T = f64> {
     levels: [T; N_LEVELS],

@@ -8,12 +8,35 @@ use crate::error::{positive, ParamError};
 use crate::math::{Real, DR};
 
 /// A trajectory known with its first three derivatives.
+///
+/// ```
+/// use ehservo_core::reference::{Reference, Sine};
+///
+/// // Any reference, by its z(t): here the peak |θ⃛d| over one period.
+/// fn peak_jerk(r: &impl Reference, period: f64) -> f64 {
+///     (0..1000).map(|k| r.z(k as f64 * period / 1000.0)[3].abs()).fold(0.0, f64::max)
+/// }
+/// // 5°·sin(2πt): max |θ⃛d| = A·ω³ = (5π/180)·(2π)³ ≈ 21.6 rad/s³, at t = 0.
+/// let a_w3 = 5f64.to_radians() * (2.0 * std::f64::consts::PI).powi(3);
+/// assert!((peak_jerk(&Sine::paper(), 1.0) - a_w3).abs() < 1e-9 * a_w3);
+/// ```
 pub trait Reference<T = f64> {
     /// `z(t) = [θd, θ̇d, θ̈d, θ⃛d]` (rad, rad/s, rad/s², rad/s³).
     fn z(&self, t: T) -> [T; 4];
 }
 
 /// `θd(t) = A·sin(ω·t)`, differentiated analytically.
+///
+/// ```
+/// use ehservo_core::reference::{Reference, Sine};
+///
+/// let r = Sine::paper(); // 5°·sin(2πt)
+/// let (a, w) = (5f64.to_radians(), 2.0 * std::f64::consts::PI);
+/// // A quarter period: θd at its peak, θ̇d = 0, θ̈d = −Aω².
+/// let z = r.z(0.25);
+/// assert!((z[0] - a).abs() < 1e-15 && z[1].abs() < 1e-12);
+/// assert!((z[2] + a * w * w).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sine<T = f64> {
     /// Amplitude A (rad).
@@ -69,6 +92,21 @@ impl<T: Real> Reference<T> for Sine<T> {
 /// θ⃛d = A(−cos φ·φ̇³ − 3 sin φ·φ̇·φ̈). φ̈ = 2π(f1 − f0)/T inside the sweep
 /// and 0 outside, so θ̈d steps by −A·cos φ(T)·2π(f1 − f0)/T at t = T (and
 /// θ⃛d is not defined there): keep the horizon within the sweep to avoid it.
+///
+/// ```
+/// use ehservo_core::reference::{Chirp, Reference};
+///
+/// // 1 → 5 Hz over 4 s, amplitude 0.01 rad.
+/// let c = Chirp::try_new(0.01, 1.0, 5.0, 4.0)?;
+/// // Half way, the frequency is half way: (1 + 5)/2 = 3 Hz.
+/// assert!((c.frequency_at(2.0) - 3.0).abs() < 1e-12);
+/// // At t = 0: θd = 0 and θ̇d = A·2πf0.
+/// let z = c.z(0.0);
+/// assert_eq!(z[0], 0.0);
+/// assert!((z[1] - 0.01 * 2.0 * std::f64::consts::PI).abs() < 1e-15);
+/// assert_eq!(Chirp::try_new(0.01, 0.0, 5.0, 4.0).unwrap_err().name, "f0");
+/// # Ok::<(), ehservo_core::error::ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Chirp {
     /// Amplitude A (rad).
@@ -158,6 +196,24 @@ pub struct Component {
 
 /// `θd(t) = Σ A_i·sin(ω_i·t + p_i)`, up to [`MAX_COMPONENTS`] terms, in a
 /// fixed array; each term differentiated analytically (as [`Sine`]).
+///
+/// ```
+/// use ehservo_core::reference::{Component, Multisine, Reference};
+///
+/// // 1 Hz and 3 Hz, the second a quarter turn ahead.
+/// let half_pi = std::f64::consts::FRAC_PI_2;
+/// let m = Multisine::try_new(&[
+///     Component { amplitude: 0.02, frequency: 1.0, phase: 0.0 },
+///     Component { amplitude: 0.01, frequency: 3.0, phase: half_pi },
+/// ])?;
+/// // t = 0: θd = 0.02·sin 0 + 0.01·sin(π/2) = 0.01,
+/// // θ̇d = 0.02·2π·cos 0 + 0.01·6π·cos(π/2) = 0.04π.
+/// let z = m.z(0.0);
+/// assert!((z[0] - 0.01).abs() < 1e-15);
+/// assert!((z[1] - 0.04 * std::f64::consts::PI).abs() < 1e-15);
+/// assert_eq!(Multisine::try_new(&[]).unwrap_err().name, "components");
+/// # Ok::<(), ehservo_core::error::ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Multisine {
     comps: [Component; MAX_COMPONENTS],
@@ -255,6 +311,26 @@ pub const PREFILTER_ORDER: usize = 4;
 /// (the ramp-following parts cancel in the differences, which keeps them
 /// accurate far from a knot). Since the impulse response is positive,
 /// |θd| ≤ max |v_i|.
+///
+/// ```
+/// use ehservo_core::reference::{Knot, LagState, Prefiltered, Reference};
+///
+/// // A unit step at t = 0 (two knots at the same time), τ = 0.1 s.
+/// let knots = [Knot { t: 0.0, v: 0.0 }, Knot { t: 0.0, v: 1.0 }];
+/// let mut states = [LagState::default(); 2];
+/// Prefiltered::fill_states(&knots, 0.1, &mut states)?;
+/// let r = Prefiltered::new(&knots, &states, 0.1)?;
+/// // The step response of 1/(τs + 1)⁴ (an Erlang distribution's CDF), σ = t/τ:
+/// // θd = 1 − e^{−σ}(1 + σ + σ²/2 + σ³/6), θ̇d = e^{−σ}σ³/(6τ).
+/// for t in [0.05, 0.1, 0.4] {
+///     let s: f64 = t / 0.1;
+///     let e = (-s).exp();
+///     let z = r.z(t);
+///     assert!((z[0] - (1.0 - e * (1.0 + s + s * s / 2.0 + s.powi(3) / 6.0))).abs() < 1e-12);
+///     assert!((z[1] - e * s.powi(3) / 0.6).abs() < 1e-10);
+/// }
+/// # Ok::<(), ehservo_core::error::ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy)]
 pub struct Prefiltered<'a> {
     knots: &'a [Knot],

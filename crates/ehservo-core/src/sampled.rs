@@ -81,6 +81,16 @@ impl<T: Real> Default for FaultPolicy<T> {
 
 impl<T: Real> FaultPolicy<T> {
     /// Checks the limits (positive; infinity allowed).
+    ///
+    /// ```
+    /// use ehservo_core::sampled::{FaultPolicy, Limits};
+    ///
+    /// assert!(FaultPolicy::<f64>::default().validate().is_ok());
+    /// // A valve range of zero is no valve.
+    /// let limits = Limits { u: 0.0, ..Limits::NONE };
+    /// let policy = FaultPolicy { limits, ..FaultPolicy::default() };
+    /// assert_eq!(policy.validate().unwrap_err().name, "limits.u");
+    /// ```
     pub fn validate(&self) -> Result<(), ParamError> {
         for &l in &self.limits.x {
             if l.is_nan() || l <= T::ZERO {
@@ -140,6 +150,34 @@ impl<T: Real> Sampling<T> {
 
 /// A controller with its state, a fixed sample period and a fault policy.
 ///
+/// ```
+/// # use ehservo_core::control::pid::PidConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// // A PI law: kp = 2 V/rad, ki = 3 V/(rad·s), no derivative, no feedforward.
+/// let pi = PidConfig {
+///     kp: Some(2.0),
+///     ki: Some(3.0),
+///     kd: Some(0.0),
+///     feedforward: false,
+///     ..PidConfig::default()
+/// }
+/// .build(&design)?;
+/// let mut ctl = SampledController::new(pi, 0.01)?;
+/// // θd = 0.05, θ = 0.03: e = 0.02 at every tick.
+/// let (x, z) = ([0.03, 0.0, 0.0], [0.05, 0.0, 0.0, 0.0]);
+/// // Tick 0: I = 0, u = kp·e = 0.04; then I ← I + dt·ki·e = 0.0006.
+/// assert!((ctl.step(0.0, x, z).u - 0.04).abs() < 1e-12);
+/// assert!((ctl.state()[0] - 0.0006).abs() < 1e-15);
+/// // Tick 1: u = 0.04 + 0.0006.
+/// assert!((ctl.step(0.01, x, z).u - 0.0406).abs() < 1e-12);
+/// # Ok::<(), ParamError>(())
+/// ```
+///
 /// The state is double-buffered: the law writes ξ + dt·ξ̇ into the spare
 /// buffer, checking that every component is finite
 /// ([`Controller::law_euler`]), and a good step makes it the current state
@@ -184,6 +222,44 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
     }
 
     /// As [`SampledController::new`] with a fault policy.
+    ///
+    /// ```
+    /// use ehservo_core::control::flags;
+    /// # use ehservo_core::control::pid::PidConfig;
+    /// # use ehservo_core::prelude::*;
+    /// # let design = Design {
+    /// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+    /// #     surface: SwitchingSurface::paper(),
+    /// #     dt: 0.01,
+    /// # };
+    /// // A PI law: kp = 2 V/rad, ki = 3 V/(rad·s), no derivative, no feedforward.
+    /// let pi = PidConfig {
+    ///     kp: Some(2.0),
+    ///     ki: Some(3.0),
+    ///     kd: Some(0.0),
+    ///     feedforward: false,
+    ///     ..PidConfig::default()
+    /// }
+    /// .build(&design)?;
+    /// // A valve range of ±0.03 V, and θ beyond 1 rad is a sensor fault.
+    /// let policy = FaultPolicy {
+    ///     safe: SafeCommand::HoldLast,
+    ///     limits: Limits { x: [1.0, 100.0, 1e4], u: 0.03 },
+    /// };
+    /// let mut ctl = SampledController::with_policy(pi, 0.01, policy)?;
+    /// let z = [0.05, 0.0, 0.0, 0.0];
+    /// // kp·e = 0.04 V is beyond the range: clamped, and said so.
+    /// let out = ctl.step(0.0, [0.03, 0.0, 0.0], z);
+    /// assert_eq!(out.u, 0.03);
+    /// assert_ne!(out.flags & flags::SATURATED, 0);
+    /// // A NaN from the sensor: the last good command, the state untouched.
+    /// let before = *ctl.state();
+    /// let out = ctl.step(0.01, [f64::NAN, 0.0, 0.0], z);
+    /// assert_eq!((out.u, out.flags), (0.03, flags::MEASUREMENT_FAULT));
+    /// assert_eq!(*ctl.state(), before);
+    /// assert_eq!((ctl.fault_count(), ctl.saturation_count()), (1, 1));
+    /// # Ok::<(), ParamError>(())
+    /// ```
     pub fn with_policy(ctrl: C, dt: T, policy: FaultPolicy<T>) -> Result<Self, ParamError> {
         Sampling::try_new(dt, policy).map(|s| Self::sampled(ctrl, s))
     }

@@ -33,6 +33,18 @@ use crate::error::{non_negative, positive, ParamError};
 use crate::math::{cos, exp, sgn, sin, sqrt, tanh, Real};
 
 /// Physical parameters of the servo (eqs. 1–6), SI units throughout.
+///
+/// ```
+/// use ehservo_core::servo::ServoParams;
+///
+/// let p = ServoParams::paper();
+/// assert!(p.validate().is_ok());
+/// // Section IV's supply pressure, 13.795 MPa, in Pa.
+/// assert!((p.ps - 13.795e6).abs() < 1e-6);
+/// // A volume of zero is no servo: the error names the parameter.
+/// let bad = ServoParams { vt: 0.0, ..p };
+/// assert_eq!(bad.validate().unwrap_err().name, "Vt");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -186,6 +198,25 @@ impl<T: Real> ServoParams<T> {
     }
 
     /// The coefficients a1, a2, a3 of (9).
+    ///
+    /// ```
+    /// use ehservo_core::servo::ServoParams;
+    ///
+    /// let p = ServoParams::paper();
+    /// let c = p.coefficients();
+    /// // (9) written out, with k = 4βe/(Vt·Jt).
+    /// let k = 4.0 * p.beta_e / (p.vt * p.jt);
+    /// let a1 = k * p.kce * p.g;
+    /// let a2 = p.g / p.jt + k * p.dm * p.dm + k * p.kce * p.bm;
+    /// let a3 = p.bm / p.jt + 4.0 * p.beta_e * p.kce / p.vt;
+    /// for (got, want) in c.as_array().into_iter().zip([a1, a2, a3]) {
+    ///     assert!((got - want).abs() <= 1e-12 * want);
+    /// }
+    /// // And the values the paper prints in Section IV.
+    /// assert!((c.a1 - 0.39982).abs() < 1e-5);
+    /// assert!((c.a2 - 13000.2711).abs() < 1e-3);
+    /// assert!((c.a3 - 169.98043).abs() < 1e-4);
+    /// ```
     pub fn coefficients(&self) -> Coefficients<T> {
         let four = T::of(4.0);
         let k = four * self.beta_e / (self.vt * self.jt);
@@ -199,6 +230,18 @@ impl<T: Real> ServoParams<T> {
     /// Servovalve flow gain Kg of (2) for load pressure `pl` and valve
     /// direction `s = sgn(xv)`. Returns `(Kg, clamped)`, `clamped` when the
     /// root's argument was negative and set to 0.
+    ///
+    /// ```
+    /// use ehservo_core::servo::ServoParams;
+    ///
+    /// let p = ServoParams::paper();
+    /// // At Pl = 0, (2) is Cd·Ag·√(Ps/ρ).
+    /// let (kg, clamped) = p.flow_gain(0.0, 1.0);
+    /// assert!(!clamped);
+    /// assert!((kg - p.cd * p.ag * (p.ps / p.rho).sqrt()).abs() <= 1e-15 * kg);
+    /// // A load pressure above Ps: no flow in that direction, flagged.
+    /// assert_eq!(p.flow_gain(2.0 * p.ps, 1.0), (0.0, true));
+    /// ```
     #[inline]
     pub fn flow_gain(&self, pl: T, s: T) -> (T, bool) {
         let arg = self.ps - s * pl;
@@ -241,7 +284,7 @@ impl<T: Real> Coefficients<T> {
 }
 
 /// Coulomb, Stribeck and viscous friction on the motor shaft, one of the
-/// load components the paper names (refs. [6], [7]):
+/// load components the paper names (refs. \[6\], \[7\]):
 ///
 /// ```text
 /// Tf(v) = tanh(v/v0)·[Tc + (Ts − Tc)·exp(−(v/vs)²)] + Bv·v
@@ -250,6 +293,20 @@ impl<T: Real> Coefficients<T> {
 /// `sgn(v)` is regularised as `tanh(v/v0)` with a small velocity `v0`
 /// (`smoothing`), because the third-order model needs `Ṫl` and a true sign
 /// has an impulse for a derivative.
+///
+/// ```
+/// use ehservo_core::servo::Friction;
+///
+/// // The defaults: Tc = 0.2, Ts = 0.3 N·m, vs = 0.05, v0 = 0.005 rad/s.
+/// let f: Friction = Friction::default();
+/// assert!(f.validate().is_ok());
+/// // At rest: no torque (tanh 0 = 0).
+/// assert_eq!(f.torque(0.0), 0.0);
+/// // At 1 rad/s ≫ vs, v0: tanh(200) = 1 and exp(−400) = 0, so Tf = Tc.
+/// assert!((f.torque(1.0) - 0.2).abs() < 1e-12);
+/// // Odd in v.
+/// assert_eq!(f.torque(-1.0), -f.torque(1.0));
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -330,6 +387,17 @@ impl<T: Real> Friction<T> {
 
 /// The load torque `Tl(θ, θ̇) = A·sin(k·θ) [+ friction(θ̇)]` (N·m).
 /// The paper's load is `2·sin(4θ)`.
+///
+/// ```
+/// use ehservo_core::servo::Load;
+///
+/// let load = Load::paper();
+/// // 2·sin(4·π/8) = 2·sin(π/2) = 2 N·m.
+/// let th = std::f64::consts::PI / 8.0;
+/// assert!((load.torque(th, 0.0) - 2.0).abs() < 1e-12);
+/// // dTl/dt = A·k·cos(kθ)·θ̇ = 2·4·1·0.5 = 4 N·m/s at θ = 0, θ̇ = 0.5 rad/s.
+/// assert!((load.torque_rate(0.0, 0.5, 0.0) - 4.0).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -418,6 +486,26 @@ impl<T: Real> Load<T> {
 /// What the controller knows of the plant: the nominal parameters, the
 /// coefficients ā_i, and the load model. It evaluates the nominal gain
 /// `b̄(t)` and load term `d(t)` at a measured state (SPEC §2).
+///
+/// ```
+/// use ehservo_core::servo::{Load, NominalModel, ServoParams};
+///
+/// let p = ServoParams::paper();
+/// let m = NominalModel::try_new(p, Load::paper())?;
+/// // b of (9) at Pl = 0, 4βe·Dm·Kv·Cd·Ag·√(Ps/ρ)/(Vt·Jt): the paper's ≈ 17 912.
+/// let b0 = 4.0 * p.beta_e * p.dm * p.kv * p.cd * p.ag * (p.ps / p.rho).sqrt() / (p.vt * p.jt);
+/// assert!((m.b_at_rest() - b0).abs() <= 1e-12 * b0);
+/// assert!((b0 - 17_912.0).abs() < 1.0);
+/// // At rest the load term d of (9) vanishes (Tl = 0 and dTl/dt = 0).
+/// assert_eq!(m.d(&[0.0; 3]), 0.0);
+/// // θ̈ = 100 rad/s² takes Pl = Jt·θ̈/Dm (4): the valve passes less flow
+/// // with the load than against it, b₊/b₋ = √((Ps − Pl)/(Ps + Pl)) by (2).
+/// let pl = p.jt * 100.0 / p.dm;
+/// let (up, _) = m.b(&[0.0, 0.0, 100.0], 1.0);
+/// let (down, _) = m.b(&[0.0, 0.0, 100.0], -1.0);
+/// assert!((up / down - ((p.ps - pl) / (p.ps + pl)).sqrt()).abs() < 1e-12);
+/// # Ok::<(), ehservo_core::error::ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NominalModel<T: Real = f64> {
     /// Physical parameters.

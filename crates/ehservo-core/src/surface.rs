@@ -13,6 +13,19 @@ use crate::error::ParamError;
 use crate::math::Real;
 
 /// The coefficients p1, p2, p3 of (10), checked to give a stable surface.
+///
+/// ```
+/// use ehservo_core::surface::SwitchingSurface;
+///
+/// let s = SwitchingSurface::paper();
+/// // σ by hand for x = (0.01, 0.2, 3), z = (0.02, 0.1, 1, 0), ∫e = 0.001:
+/// // e = 0.01, ė = −0.1, ë = −2, so
+/// // σ = −2 + 90·(−0.1) + 2600·0.01 + 24000·0.001 = −2 − 9 + 26 + 24 = 39.
+/// let st = s.evaluate(&[0.01, 0.2, 3.0], &[0.02, 0.1, 1.0, 0.0], 0.001);
+/// assert!((st.sigma - 39.0).abs() < 1e-12);
+/// // ‖E‖ = ‖(∫e, e, ė)‖ = √(1e-6 + 1e-4 + 1e-2).
+/// assert!((st.norm_e - (1e-6f64 + 1e-4 + 1e-2).sqrt()).abs() < 1e-15);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SwitchingSurface<T = f64> {
     p: [T; 3],
@@ -51,6 +64,14 @@ impl<T: Real> SwitchingSurface<T> {
     /// From coefficients; rejects a surface whose error dynamics
     /// `s³ + p1 s² + p2 s + p3` are not Hurwitz (Routh: p1, p2, p3 > 0 and
     /// p1·p2 > p3).
+    ///
+    /// ```
+    /// use ehservo_core::surface::SwitchingSurface;
+    ///
+    /// assert!(SwitchingSurface::try_new([90.0, 2600.0, 24000.0]).is_ok());
+    /// // s³ + s² + s + 2: p1·p2 = 1 < p3 = 2, a root in the right half-plane.
+    /// assert_eq!(SwitchingSurface::try_new([1.0, 1.0, 2.0]).unwrap_err().name, "p");
+    /// ```
     pub fn try_new(p: [T; 3]) -> Result<Self, ParamError> {
         for (i, name) in ["p1", "p2", "p3"].iter().enumerate() {
             if !p[i].is_finite() || p[i] <= T::ZERO {
@@ -74,6 +95,20 @@ impl<T: Real> SwitchingSurface<T> {
     /// From three real poles, all strictly in the left half-plane:
     /// (s − r1)(s − r2)(s − r3) = s³ + p1 s² + p2 s + p3 with
     /// p1 = −(r1 + r2 + r3), p2 = r1r2 + r1r3 + r2r3, p3 = −r1r2r3.
+    ///
+    /// ```
+    /// use ehservo_core::surface::SwitchingSurface;
+    ///
+    /// let s = SwitchingSurface::from_poles([-20.0, -30.0, -40.0])?;
+    /// // (s + 20)(s + 30)(s + 40) expanded: 20 + 30 + 40 = 90,
+    /// // 20·30 + 20·40 + 30·40 = 600 + 800 + 1200 = 2600, 20·30·40 = 24000.
+    /// assert_eq!(s.p(), [90.0, 2600.0, 24000.0]);
+    /// assert_eq!(s, SwitchingSurface::paper());
+    /// // A pole in the right half-plane is refused, and named.
+    /// let err = SwitchingSurface::from_poles([-20.0, 30.0, -40.0]).unwrap_err();
+    /// assert_eq!((err.name, err.value), ("poles", 30.0));
+    /// # Ok::<(), ehservo_core::error::ParamError>(())
+    /// ```
     pub fn from_poles(poles: [T; 3]) -> Result<Self, ParamError> {
         for &r in &poles {
             if !r.is_finite() || r >= T::ZERO {

@@ -94,6 +94,27 @@ pub enum Dynamics {
 }
 
 /// The validated stage.
+///
+/// ```
+/// use ehservo_sim::actuator::{Actuator, ActuatorConfig};
+///
+/// // A ±10 V valve with a 10-ms spool lag and a 0.5-V overlap, as `[actuator]`.
+/// let cfg: ActuatorConfig = toml::from_str("limit = 10.0\ntime_constant = 0.01\ndead_band = 0.5")
+///     .unwrap();
+/// let act = Actuator::try_new(&cfg)?;
+/// assert_eq!(act.saturate(12.0), 10.0);
+/// // From rest under 12 V: v̇ = (u_c − v)/τ = (10 − 0)/0.01 = 1000 V/s.
+/// let mut ds = [0.0; 2];
+/// act.deriv(&act.initial_state(), 12.0, &mut ds);
+/// assert!((ds[0] - 1000.0).abs() < 1e-9);
+/// // The plant sees the spool beyond the overlap: 2 V → 1.5 V, 0.3 V → 0.
+/// assert_eq!(act.output(&[2.0, 0.0], 0.0), 1.5);
+/// assert_eq!(act.output(&[0.3, 0.0], 0.0), 0.0);
+/// // A rate limit needs spool dynamics to limit.
+/// let bad = ActuatorConfig { rate_limit: Some(100.0), ..ActuatorConfig::default() };
+/// assert_eq!(Actuator::try_new(&bad).unwrap_err().name, "rate_limit");
+/// # Ok::<(), ehservo_sim::core::error::ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Actuator {
     limit: f64,
@@ -106,6 +127,16 @@ pub struct Actuator {
 }
 
 /// The −3 dB bandwidth of a second-order lag as a multiple of ωn.
+///
+/// ```
+/// use ehservo_sim::actuator::second_order_bandwidth_ratio;
+///
+/// // ζ = 1/√2 (Butterworth): |G(jω)|² = 1/(1 + (ω/ωn)⁴), so −3 dB at ω = ωn.
+/// assert!((second_order_bandwidth_ratio(std::f64::consts::FRAC_1_SQRT_2) - 1.0).abs() < 1e-12);
+/// // ζ = 1: |G(jω)| = 1/(1 + (ω/ωn)²), so −3 dB at ω = ωn·√(√2 − 1).
+/// let want = (2f64.sqrt() - 1.0).sqrt();
+/// assert!((second_order_bandwidth_ratio(1.0) - want).abs() < 1e-12);
+/// ```
 pub fn second_order_bandwidth_ratio(zeta: f64) -> f64 {
     let z2 = zeta * zeta;
     (1.0 - 2.0 * z2 + (4.0 * z2 * z2 - 4.0 * z2 + 2.0).sqrt()).sqrt()

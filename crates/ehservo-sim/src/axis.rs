@@ -13,6 +13,21 @@ use ehservo_core::math::DR;
 use serde::{Deserialize, Serialize};
 
 /// A plant's output quantity.
+///
+/// ```
+/// use ehservo_sim::axis::Axis;
+///
+/// // SI inside, the display unit outside: π rad is 180°, 0.012 m is 12 mm.
+/// assert!((Axis::Rotary.display(std::f64::consts::PI) - 180.0).abs() < 1e-12);
+/// assert_eq!(Axis::Linear.display(0.012), 12.0);
+/// assert_eq!(Axis::Linear.to_si(12.0), 0.012);
+/// // Names follow the axis: trace columns, metrics, the laws' SI units.
+/// assert_eq!(Axis::Rotary.column("_dot", "_s"), "theta_dot_deg_s");
+/// assert_eq!(Axis::Linear.column("_dot", "_s"), "y_dot_mm_s");
+/// assert_eq!(Axis::Rotary.metric("e_max"), "e_max_deg");
+/// assert_eq!(Axis::Linear.metric("e_max"), "e_max");
+/// assert_eq!(Axis::Linear.si_name("z1_rad_s"), "z1_m_s");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum Axis {

@@ -118,6 +118,10 @@ pub struct Cylinder {
 }
 
 /// The cylinder plant.
+///
+/// Built from `[plant] model = "cylinder"`'s tables by
+/// [`CylinderCfg`]'s [`build`](crate::plant::PlantConfig::build), whose
+/// example evaluates its derivative.
 #[derive(Debug, Clone)]
 pub struct CylinderPlant {
     c: Cylinder,
@@ -347,6 +351,51 @@ impl CylinderPlant {
     /// so that b(x, sgn u) is the single rod's gain in each direction,
     /// b₊ ∝ √(A_A·Ps' − F) and b₋ ∝ √(A_B·Ps' + F), and a double-rod
     /// cylinder at mid-stroke is exactly the paper's servo.
+    ///
+    /// ```
+    /// use ehservo_sim::cylinder::{CylinderCfg, CylinderPlant};
+    /// use ehservo_sim::plant::PlantConfig;
+    /// # use ehservo_sim::plant::{PlantContext, UncertaintySpec};
+    /// # let ctx = PlantContext {
+    /// #     load: None,
+    /// #     load_given: false,
+    /// #     uncertainty: UncertaintySpec::NONE,
+    /// #     x0: [0.0; 3],
+    /// #     base_dir: None,
+    /// #     reference_range: None,
+    /// # };
+    /// // A double-rod cylinder: A = π(D² − d²)/4 on both sides.
+    /// let cfg: CylinderCfg = toml::from_str(r#"
+    /// [cylinder]
+    /// bore = 0.063
+    /// rod_diameter = 0.036
+    /// rods = 2
+    /// stroke = 0.5
+    /// dead_volume_a = 2e-4
+    /// dead_volume_b = 2e-4
+    /// [fluid]
+    /// density = 870.0
+    /// bulk_modulus = 1.4e9
+    /// [valve]
+    /// spool_limit = 5e-4
+    /// gain = 5e-5
+    /// discharge_coefficient = 0.65
+    /// area_gradient = 0.02
+    /// [supply]
+    /// kind = "fixed"
+    /// pressure = 2e7
+    /// [load]
+    /// mass = 250.0
+    /// "#).unwrap();
+    /// let plant = cfg.build(&ctx).unwrap();
+    /// let m = CylinderPlant::nominal_model(plant.cylinder(), 0.25).params;
+    /// let a = std::f64::consts::PI / 4.0 * (0.063 * 0.063 - 0.036 * 0.036);
+    /// // Dm = Ā = A, Jt = M; at mid-stroke both chambers hold V = V0 + A·0.25,
+    /// // so Vt = 4A²/(A²/V + A²/V) = 2V.
+    /// assert!((m.dm - a).abs() < 1e-15 && m.jt == 250.0);
+    /// let vol = 2e-4 + a * 0.25;
+    /// assert!((m.vt - 2.0 * vol).abs() < 1e-15);
+    /// ```
     pub fn nominal_model(c: &Cylinder, y: f64) -> NominalModel {
         let [aa, ab] = c.area;
         let abar = 0.5 * (aa + ab);

@@ -143,6 +143,64 @@ pub struct NominalCfg {
 }
 
 /// `[plant] model = "cylinder"`: the tables of a valve-controlled cylinder.
+///
+/// ```
+/// use ehservo_sim::axis::Axis;
+/// use ehservo_sim::cylinder::{CylinderCfg, CylinderVariation};
+/// use ehservo_sim::plant::{Factors, Plant, PlantConfig};
+/// # use ehservo_sim::plant::{PlantContext, UncertaintySpec};
+/// # let ctx = PlantContext {
+/// #     load: None,
+/// #     load_given: false,
+/// #     uncertainty: UncertaintySpec::NONE,
+/// #     x0: [0.0; 3],
+/// #     base_dir: None,
+/// #     reference_range: None,
+/// # };
+/// // A 63/36 mm single-rod cylinder, 0.5 m stroke, on a fixed 200 bar supply,
+/// // a critically centred valve: the inside of a scenario's `[plant]` table.
+/// let cfg: CylinderCfg = toml::from_str(r#"
+/// [cylinder]
+/// bore = 0.063
+/// rod_diameter = 0.036
+/// stroke = 0.5
+/// dead_volume_a = 2e-4
+/// dead_volume_b = 2e-4
+/// [fluid]
+/// density = 870.0
+/// bulk_modulus = 1.4e9
+/// [valve]
+/// spool_limit = 5e-4
+/// gain = 5e-5
+/// discharge_coefficient = 0.65
+/// area_gradient = 0.02
+/// [supply]
+/// kind = "fixed"
+/// pressure = 2e7
+/// [load]
+/// mass = 250.0
+/// "#).unwrap();
+/// let plant = cfg.build(&ctx).unwrap();
+/// assert_eq!(plant.axis(), Axis::Linear);
+/// // At rest at mid-stroke the chambers hold the rod about Ps/2:
+/// // p_A = A_B·Ps/(A_A + A_B), p_B = Ps − p_A, so A_A·p_A = A_B·p_B.
+/// let v = CylinderVariation { f: Factors::ONE };
+/// let s = plant.initial_state([0.25, 0.0, 0.0], &v);
+/// let q = std::f64::consts::PI / 4.0;
+/// let (aa, ab) = (q * 0.063 * 0.063, q * (0.063 * 0.063 - 0.036 * 0.036));
+/// assert!((s[2] - ab * 2e7 / (aa + ab)).abs() < 1e-6);
+/// // The valve closed: nothing moves, nothing flows.
+/// let mut ds = [0.0; 6];
+/// plant.deriv(0.0, &s, 0.0, &v, &mut ds);
+/// assert!(ds.iter().all(|d| d.abs() < 1e-9), "{ds:?}");
+/// // At u = 1 V the spool opens Kv·u = 5e-5 m of P→A: the turbulent orifice
+/// // passes Q = Cd·w·x·√(2(Ps − p_A)/ρ) into V_A = V_0A + A_A·y, and
+/// // ṗ_A = βe·Q/V_A.
+/// plant.deriv(0.0, &s, 1.0, &v, &mut ds);
+/// let flow = 0.65 * 0.02 * 5e-5 * (2.0 * (2e7 - s[2]) / 870.0).sqrt();
+/// let rate = 1.4e9 * flow / (2e-4 + aa * 0.25);
+/// assert!((ds[2] - rate).abs() < 1e-6 * rate);
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct CylinderCfg {

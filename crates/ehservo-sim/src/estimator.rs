@@ -6,6 +6,20 @@
 use ehservo_core::estimate::{Estimator, Levant, LinearObserver};
 
 /// One of the core's estimators, built from a scenario.
+///
+/// ```
+/// use ehservo_sim::core::estimate::Levant;
+/// use ehservo_sim::estimator::AnyEstimator;
+///
+/// // `[estimator] kind = "levant", lipschitz = 40` at the loop's 100 Hz.
+/// let mut est = AnyEstimator::Levant(Levant::try_new(40.0, 0.01)?);
+/// est.reset(0.2);
+/// // A shaft held still at 0.2 rad is estimated still.
+/// for _ in 0..10 {
+///     assert_eq!(est.update(0.2, 0.0), [0.2, 0.0, 0.0]);
+/// }
+/// # Ok::<(), ehservo_sim::core::error::ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy)]
 pub enum AnyEstimator {
     /// Levant's robust exact differentiator of second order.

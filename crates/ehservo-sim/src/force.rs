@@ -61,6 +61,26 @@ pub enum ForceCfg {
 }
 
 /// The validated force signal.
+///
+/// ```
+/// use ehservo_sim::force::{Force, ForceCfg};
+///
+/// // 50 N + 100 N·sin(2π·2t + 90°), as `[plant.load.force]`.
+/// let cfg: ForceCfg = toml::from_str(
+///     "kind = \"sine\"\namplitude = 100.0\nfrequency_hz = 2.0\nphase_deg = 90.0\noffset = 50.0",
+/// )
+/// .unwrap();
+/// let f = Force::try_new(&cfg, None).unwrap();
+/// // t = 0: F = 50 + 100·sin 90° = 150 N at its peak, so Ḟ = 100·4π·cos 90° = 0.
+/// let (force, rate) = f.at(0.0);
+/// assert!((force - 150.0).abs() < 1e-12 && rate.abs() < 1e-9);
+/// // The nominal model knows the constant part only: the offset.
+/// assert_eq!(f.static_part(), 50.0);
+/// // A step of 1 kN at 0.5 s.
+/// let cfg = ForceCfg::Step { value: 1e3, initial: 0.0, start: 0.5 };
+/// let step = Force::try_new(&cfg, None).unwrap();
+/// assert_eq!((step.at(0.49).0, step.at(0.5).0), (0.0, 1e3));
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub enum Force {
     /// None.
@@ -196,6 +216,19 @@ impl Force {
 /// The rows of a force table (`t_s,force_N`), strictly increasing in time.
 /// The error is the force table's key `file`, with a reason that names the
 /// file, the line and the column.
+///
+/// ```
+/// use ehservo_sim::force::{read_table, Force, ForceCfg};
+///
+/// let path = std::env::temp_dir().join(format!("ehservo-force-doc-{}.csv", std::process::id()));
+/// std::fs::write(&path, "t_s,force_N\n0.0,0.0\n1.0,200.0\n").unwrap();
+/// assert_eq!(read_table(&path).unwrap(), [(0.0, 0.0), (1.0, 200.0)]);
+/// // As `kind = "csv"`: linear between rows, so 100 N at 0.5 s, rising 200 N/s.
+/// let cfg = ForceCfg::Csv { file: path.to_string_lossy().into_owned() };
+/// let f = Force::try_new(&cfg, None).unwrap();
+/// assert_eq!(f.at(0.5), (100.0, 200.0));
+/// std::fs::remove_file(&path).unwrap();
+/// ```
 pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
     let file = |r: String| KeyError::new("file", r);
     let name = path.display();

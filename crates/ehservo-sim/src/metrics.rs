@@ -16,7 +16,7 @@
 //! them in JSON. (A rotary axis's `e_max` is also read as `e_max_deg`.)
 //! | `u_max` | max \|u\| over the whole run (the transient included: Fig. 5 is about it), V |
 //! | `u_rms` | RMS of u over t_k ≥ t_s, V |
-//! | `chattering` | c[u] = sqrt(Σ Δu_k²)/sqrt(Σ u_k²) over t_k ≥ t_s, Δu_k = u_k − u_{k−1} |
+//! | `chattering` | c\[u\] = sqrt(Σ Δu_k²)/sqrt(Σ u_k²) over t_k ≥ t_s, Δu_k = u_k − u_{k−1} |
 //! | `u_tv_per_s` | Σ \|Δu_k\| over t_k ≥ t_s, divided by T − t_s, V/s |
 //! | `w_norm_max`, `w_norm_final` | max and last ‖W‖ over the run |
 //! | `dead_zone_fraction` | share of samples with σΔ = 0 over t_k ≥ t_s (NNBVSC only) |
@@ -43,7 +43,7 @@ pub struct Metrics {
     pub u_max: Option<f64>,
     /// RMS of u after the transient (V).
     pub u_rms: Option<f64>,
-    /// Chattering index L2[Δu]/L2[u] after the transient.
+    /// Chattering index L2\[Δu\]/L2\[u\] after the transient.
     pub chattering: Option<f64>,
     /// Total variation of u per second after the transient (V/s).
     pub u_tv_per_s: Option<f64>,
@@ -272,6 +272,35 @@ fn keep_max(m: &mut f64, v: f64) {
 }
 
 /// Accumulates [`Metrics`] sample by sample.
+///
+/// ```
+/// use ehservo_sim::core::math::DR;
+/// use ehservo_sim::metrics::MetricsAccumulator;
+/// use ehservo_sim::simulation::Sample;
+///
+/// // A 1-s run, metrics after t = 0.5 s, a reference of period 0.5 s.
+/// let mut acc = MetricsAccumulator::new(1.0, 0.5, 0.5, false);
+/// // Five samples of (t, e in degrees, u in volts).
+/// let rows = [
+///     (0.0, 5.0, 10.0),
+///     (0.25, 4.0, 0.0),
+///     (0.5, 1.0, 1.0),
+///     (0.75, -3.0, -1.0),
+///     (1.0, 2.0, 1.0),
+/// ];
+/// for (k, &(t, e_deg, u)) in rows.iter().enumerate() {
+///     acc.push(&Sample { k: k as u64, t, e: e_deg * DR, u, ..Sample::default() });
+/// }
+/// let m = acc.finish(None);
+/// assert_eq!(m.samples, 5);
+/// // After t = 0.5: max |e| = max(1, 3, 2) = 3°; RMS of u = √((1 + 1 + 1)/3) = 1.
+/// assert!((m.e_max.unwrap() - 3.0).abs() < 1e-12);
+/// assert!((m.u_rms.unwrap() - 1.0).abs() < 1e-12);
+/// // max |u| is over the whole run, the transient's 10 V included.
+/// assert_eq!(m.u_max, Some(10.0));
+/// // Read by name, as summary.json writes it on a rotary axis.
+/// assert_eq!(m.get("e_max_deg"), m.e_max);
+/// ```
 #[derive(Debug, Clone)]
 pub struct MetricsAccumulator {
     settle: f64,

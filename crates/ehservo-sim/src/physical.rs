@@ -40,6 +40,26 @@ pub struct PhysicalVariation {
 }
 
 /// The physical model (1)–(6) in (θ, θ̇, Pl).
+///
+/// ```
+/// use ehservo_sim::core::servo::{Load, ServoParams};
+/// use ehservo_sim::physical::PhysicalVariation;
+/// use ehservo_sim::plant::{Factors, PhysicalPlant, Plant, Variation};
+///
+/// let p = ServoParams::paper();
+/// let plant = PhysicalPlant::new(p, Load::none());
+/// let v = PhysicalVariation { paper: Variation::NONE, factors: Factors::ONE };
+/// // At rest under u = 1 V, (5): (Vt/4βe)·Ṗl = Kg·Kv·u with Kg = Cd·Ag·√(Ps/ρ) (2).
+/// let mut ds = [0.0; 3];
+/// plant.deriv(0.0, &[0.0; 3], 1.0, &v, &mut ds);
+/// let kg = p.cd * p.ag * (p.ps / p.rho).sqrt();
+/// let pl_rate = 4.0 * p.beta_e / p.vt * kg * p.kv;
+/// assert_eq!(ds[..2], [0.0, 0.0]);
+/// assert!((ds[2] - pl_rate).abs() <= 1e-12 * pl_rate);
+/// // (4) differentiated: Jt·θ⃛ = Dm·Ṗl, the third-order model's b·u at rest.
+/// let b0 = plant.nominal().b_at_rest();
+/// assert!((p.dm / p.jt * ds[2] - b0).abs() <= 1e-12 * b0);
+/// ```
 #[derive(Debug, Clone, Copy)]
 pub struct PhysicalPlant {
     model: NominalModel,
@@ -75,7 +95,7 @@ impl Plant for PhysicalPlant {
         out[0] = s[2];
     }
 
-    /// Pl(0) from the torque balance (4) with θ̈(0) = x0[2].
+    /// Pl(0) from the torque balance (4) with θ̈(0) = `x0[2]`.
     fn initial_state(&self, x0: [f64; 3], v: &PhysicalVariation) -> [f64; 3] {
         let (p, l) = self.truth(v);
         [x0[0], x0[1], NominalModel::new(p, l).load_pressure(&x0)]
@@ -141,6 +161,27 @@ impl Plant for PhysicalPlant {
 
 /// `[plant] model = "physical"`: the same `[plant.params]` as the
 /// third-order model; the load is the scenario's `[load]`.
+///
+/// ```
+/// use ehservo_sim::physical::PhysicalCfg;
+/// use ehservo_sim::plant::{Plant, PlantConfig, PlantContext, UncertaintySpec};
+/// use ehservo_sim::third_order::ThirdOrderCfg;
+///
+/// let ctx = PlantContext {
+///     load: None,
+///     load_given: false,
+///     uncertainty: UncertaintySpec::NONE,
+///     x0: [0.0; 3],
+///     base_dir: None,
+///     reference_range: None,
+/// };
+/// // The same servo as `"third-order"`, in (θ, θ̇, Pl): the controller is
+/// // told the same nominal model.
+/// assert_eq!(PhysicalCfg::MODEL, "physical");
+/// let phys = PhysicalCfg::default().build(&ctx).unwrap();
+/// let third = ThirdOrderCfg::default().build(&ctx).unwrap();
+/// assert_eq!(phys.nominal(), third.nominal());
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct PhysicalCfg {

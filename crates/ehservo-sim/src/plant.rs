@@ -86,6 +86,15 @@ pub const MAX_REFINE: u32 = 4096;
 /// step is compiled out. Without it `0·h/2.5` cannot be folded (h could
 /// be infinite), and the split's set-up, `ceil` among it, was computed
 /// ahead of its test at every step (≈ 65 instructions a Fig. 2 sample).
+///
+/// ```
+/// use ehservo_sim::plant::{refinement, MAX_REFINE};
+///
+/// // |λ| = 1000 1/s over h = 0.01 s: ⌈1000·0.01/2.5⌉ = 4 steps of 2.5 ms.
+/// assert_eq!(refinement(1000.0, 0.01), 4);
+/// assert_eq!(refinement(100.0, 0.01), 1); // |λ|·h = 1: the step is fine
+/// assert_eq!(refinement(1e12, 0.01), MAX_REFINE);
+/// ```
 #[inline(always)]
 pub fn refinement(lambda: f64, h: f64) -> u32 {
     if lambda <= 0.0 {
@@ -105,6 +114,27 @@ pub fn refinement(lambda: f64, h: f64) -> u32 {
 /// spool, a cylinder's pressures, a supply), with an output map to the
 /// x = (position, velocity, acceleration) of its axis, in SI, that the
 /// sensors see.
+///
+/// ```
+/// use ehservo_sim::core::servo::{Load, ServoParams};
+/// use ehservo_sim::plant::{Factors, PhysicalPlant, Plant, ThirdOrderPlant, Variation};
+/// use ehservo_sim::physical::PhysicalVariation;
+///
+/// // Any plant: the state that holds x(0), and the x the sensors then see.
+/// fn round_trip<P: Plant>(p: &P, x0: [f64; 3], v: &P::Variation) -> [f64; 3] {
+///     p.measure(0.0, &p.initial_state(x0, v), v)
+/// }
+/// let x0 = [0.1, 0.0, 2.0];
+/// // The third-order plant's state is x itself.
+/// let third = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+/// assert_eq!(round_trip(&third, x0, &Variation::NONE), x0);
+/// // The physical one keeps Pl, from the torque balance (4), and gives θ̈
+/// // back from (4).
+/// let phys = PhysicalPlant::new(ServoParams::paper(), Load::paper());
+/// let v = PhysicalVariation { paper: Variation::NONE, factors: Factors::ONE };
+/// let x = round_trip(&phys, x0, &v);
+/// assert!((x[0] - 0.1).abs() < 1e-15 && (x[2] - 2.0).abs() < 1e-9);
+/// ```
 pub trait Plant {
     /// The plant's state.
     type State: OdeState;
@@ -221,6 +251,16 @@ pub trait Plant {
 /// `Σ Δa_i x_i − Δb·u_eq + d` with `Δb = b_true − b̄`, from the nominal
 /// `b(x, sgn u)` and `d(x)`: the expression of (19) the third-order family
 /// shares.
+///
+/// ```
+/// use ehservo_sim::plant::{lumped, Variation};
+///
+/// // Δa = (1, 2, 3), δb = 0.25: with b = 100 the true b is 125; the law
+/// // used b̄ = 100. At x = (1, 1, 1), u_eq = 2, d = 5:
+/// // (1 + 2 + 3) − (125 − 100)·2 + 5 = 6 − 50 + 5 = −39.
+/// let v = Variation { da: [1.0, 2.0, 3.0], db_rel: 0.25 };
+/// assert_eq!(lumped(&[1.0; 3], 2.0, 100.0, &v, 100.0, 5.0), -39.0);
+/// ```
 #[inline]
 pub fn lumped(x: &[f64; 3], u_eq: f64, b_bar: f64, v: &Variation, b: f64, d: f64) -> f64 {
     let b_true = (1.0 + v.db_rel) * b;
@@ -253,6 +293,26 @@ pub struct PlantContext {
 /// A plant model as a scenario names it: `[plant] model = "…"` and that
 /// model's keys. Adding a plant is a file with its plant type and one of
 /// these, and a line in the registry.
+///
+/// ```
+/// use ehservo_sim::plant::{PlantConfig, PlantContext, UncertaintySpec};
+/// use ehservo_sim::third_order::ThirdOrderCfg;
+///
+/// // The rest of the scenario, as a plant may read it: nothing here.
+/// let ctx = PlantContext {
+///     load: None,
+///     load_given: false,
+///     uncertainty: UncertaintySpec::NONE,
+///     x0: [0.0; 3],
+///     base_dir: None,
+///     reference_range: None,
+/// };
+/// assert_eq!(ThirdOrderCfg::MODEL, "third-order");
+/// // A bad key comes back as its path from the scenario's root.
+/// let cfg: ThirdOrderCfg = toml::from_str("[params]\nJt = -1.0").unwrap();
+/// let key = cfg.build(&ctx).unwrap_err().key;
+/// assert_eq!(key, "plant.params.Jt");
+/// ```
 pub trait PlantConfig:
     Serialize + DeserializeOwned + Default + Clone + PartialEq + Debug + Send + Sync + 'static
 {

@@ -32,6 +32,20 @@ pub(crate) const LOAD_PRESSURE: [Signal; 1] = [Signal::new(
 /// The paper's parameters varied by the physical factors `f`: Jt by mass,
 /// βe by bulk modulus, Kce by leakage, Ps by supply pressure; the load's
 /// amplitude by load and its friction forces by friction.
+///
+/// ```
+/// use ehservo_sim::core::servo::{Load, ServoParams};
+/// use ehservo_sim::plant::Factors;
+/// use ehservo_sim::third_order::varied;
+///
+/// // `mass = { bias = 1.0 }`: twice the inertia, so a3 = Bm/Jt + 4βe·Kce/Vt
+/// // loses half its first term.
+/// let p = ServoParams::paper();
+/// let (q, _) = varied(&p, &Load::paper(), &Factors { mass: 2.0, ..Factors::ONE });
+/// assert_eq!(q.jt, 2.0 * p.jt);
+/// let (a3p, a3q) = (p.coefficients().a3, q.coefficients().a3);
+/// assert!((a3p - a3q - p.bm / (2.0 * p.jt)).abs() < 1e-9);
+/// ```
 pub fn varied(p: &ServoParams, load: &Load, f: &Factors) -> (ServoParams, Load) {
     let p = ServoParams {
         jt: p.jt * f.mass,
@@ -51,6 +65,24 @@ pub fn varied(p: &ServoParams, load: &Load, f: &Factors) -> (ServoParams, Load) 
 }
 
 /// The third-order model (8)–(9).
+///
+/// ```
+/// use ehservo_sim::core::servo::{Load, ServoParams};
+/// use ehservo_sim::plant::{Draw, Plant, ThirdOrderPlant, UncertaintySpec};
+///
+/// let p = ServoParams::paper();
+/// let plant = ThirdOrderPlant::new(p, Load::none());
+/// // b of (9) at Pl = 0: 4βe·Dm·Kv·Cd·Ag·√(Ps/ρ)/(Vt·Jt).
+/// let b0 = 4.0 * p.beta_e * p.dm * p.kv * p.cd * p.ag * (p.ps / p.rho).sqrt() / (p.vt * p.jt);
+/// // Fig. 2's variation (the default [uncertainty]): true b = 1.25·b̄.
+/// let v = plant.variation(&UncertaintySpec::default(), &Draw::default());
+/// assert_eq!(v.db_rel, 0.25);
+/// // At rest under u = 1 V: ẋ = (x2, x3, b·u) = (0, 0, 1.25·b̄).
+/// let mut dx = [0.0; 3];
+/// plant.deriv(0.0, &[0.0; 3], 1.0, &v, &mut dx);
+/// assert_eq!(dx[..2], [0.0, 0.0]);
+/// assert!((dx[2] - 1.25 * b0).abs() <= 1e-12 * b0);
+/// ```
 #[derive(Debug, Clone, Copy)]
 pub struct ThirdOrderPlant {
     model: NominalModel,
@@ -244,6 +276,27 @@ impl Plant for ThirdOrderPlant {
 /// paper's physical parameters (SI, by the paper's symbol: `Ps`, `beta_e`,
 /// `Vt`, `Kce`, `Dm`, `Jt`, `Bm`, `Kv`, `G`, `rho`, `Cd`, `Ag`); the load is
 /// the scenario's `[load]`.
+///
+/// ```
+/// use ehservo_sim::plant::{Plant, PlantConfig};
+/// use ehservo_sim::third_order::ThirdOrderCfg;
+/// # use ehservo_sim::plant::{PlantContext, UncertaintySpec};
+/// # let ctx = PlantContext {
+/// #     load: None,
+/// #     load_given: false,
+/// #     uncertainty: UncertaintySpec::NONE,
+/// #     x0: [0.0; 3],
+/// #     base_dir: None,
+/// #     reference_range: None,
+/// # };
+/// // Twice the paper's inertia, every other key the paper's.
+/// let cfg: ThirdOrderCfg = toml::from_str("[params]\nJt = 0.11304").unwrap();
+/// let heavy = cfg.build(&ctx).unwrap();
+/// let paper = ThirdOrderCfg::default().build(&ctx).unwrap();
+/// // a2 = (G + 4βe·Dm²/Vt + 4βe·Kce·Bm/Vt)/Jt of (9): halved.
+/// let (a2h, a2p) = (heavy.nominal().coeffs.a2, paper.nominal().coeffs.a2);
+/// assert!((a2h - a2p / 2.0).abs() <= 1e-12 * a2p);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ThirdOrderCfg {

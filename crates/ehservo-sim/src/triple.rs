@@ -5,6 +5,20 @@
 //! `Option<[f64; 3]>`: a missing key is then not `None` by itself, so the
 //! struct needs `#[serde(default)]` (as every scenario section has) or the
 //! field its own `default`.
+//!
+//! ```
+//! #[derive(Debug, serde::Deserialize)]
+//! struct Section {
+//!     #[serde(with = "ehservo_sim::triple")]
+//!     x0: [f64; 3],
+//! }
+//!
+//! let s: Section = toml::from_str("x0 = [0.1, 0.0, 0.0]").unwrap();
+//! assert_eq!(s.x0, [0.1, 0.0, 0.0]);
+//! // Four numbers: the message says how many the key takes.
+//! let err = toml::from_str::<Section>("x0 = [0.1, 0.0, 0.0, 0.0]").unwrap_err();
+//! assert!(err.to_string().contains("invalid length 4, expected an array of 3 numbers"), "{err}");
+//! ```
 
 use serde::{de::Error, Deserialize, Deserializer, Serialize, Serializer};
 

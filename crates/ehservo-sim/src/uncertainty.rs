@@ -30,6 +30,18 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 /// A bias and a random part, as fractions of a parameter's nominal value.
+///
+/// ```
+/// use ehservo_sim::uncertainty::{PhysicalSpec, Spread};
+///
+/// // `mass = { bias = 0.2, random = 0.1 }`: 20 % heavier, ±10 % drawn.
+/// let mass = Spread { bias: 0.2, random: 0.1 };
+/// assert!((mass.factor(0.5) - 1.25).abs() < 1e-15); // 1 + 0.2 + 0.1·0.5
+/// assert!((mass.min_factor() - 1.1).abs() < 1e-15);
+/// // A mass that a draw could make zero is refused, by key.
+/// let spec = PhysicalSpec { mass: Spread { bias: -0.5, random: 0.5 }, ..PhysicalSpec::default() };
+/// assert_eq!(spec.validate().unwrap_err().key, "mass.bias");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Spread {
@@ -197,6 +209,21 @@ impl Factors {
 /// Sizes of the variation: a scenario's `[uncertainty]`, resolved for its
 /// plant (the scenario's own table leaves the paper's keys unset for a
 /// plant outside the third-order family).
+///
+/// ```
+/// use ehservo_sim::core::servo::{Load, ServoParams};
+/// use ehservo_sim::plant::{Draw, Plant, ThirdOrderPlant, UncertaintySpec, Variation};
+///
+/// // The default is Fig. 2: a_bias = 1, b_bias = 0.5 of β = 0.5·b̄.
+/// let spec = UncertaintySpec::default();
+/// assert!(spec.paper_is_set() && !spec.is_random());
+/// let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+/// let abar = plant.nominal().coeffs.as_array();
+/// // Δa_i = |ā_i|·1 (true a = 2ā), δb = 0.5·0.5 = 0.25 (true b = 1.25·b̄).
+/// let v = Variation::of(&spec, &abar, &Draw::default());
+/// assert_eq!(v.da, abar.map(f64::abs));
+/// assert_eq!(v.db_rel, 0.25);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct UncertaintySpec {
@@ -277,6 +304,23 @@ pub struct Draw {
 }
 
 /// The random numbers, held over hold intervals of a seeded stream.
+///
+/// ```
+/// use ehservo_sim::plant::{UncertaintySignal, UncertaintySpec};
+///
+/// // Fig. 8's random part, drawn every 0.01 s.
+/// let spec = UncertaintySpec { a_random: 0.5, b_random: 0.25, seed: 7, ..UncertaintySpec::NONE };
+/// let mut sig = UncertaintySignal::new(spec);
+/// // t = 0.025 s is in hold interval 2 (of [0.02, 0.03)).
+/// assert_eq!(sig.interval_at(0.025), 2);
+/// let d2 = *sig.draw_at(2);
+/// assert!(d2.paper.iter().all(|r| (-1.0..1.0).contains(r)));
+/// // Held: the same interval gives the same numbers; the next one others.
+/// assert_eq!(*sig.draw_at(2), d2);
+/// assert_ne!(*sig.draw_at(3), d2);
+/// // The same seed, the same stream.
+/// assert_eq!(*UncertaintySignal::new(spec).draw_at(2), d2);
+/// ```
 #[derive(Debug, Clone)]
 pub struct UncertaintySignal {
     spec: UncertaintySpec,
@@ -363,6 +407,22 @@ impl UncertaintySignal {
 
 /// A plant's variation over time: the signal's draws turned into the
 /// plant's variation once per hold interval.
+///
+/// ```
+/// use ehservo_sim::core::servo::{Load, ServoParams};
+/// use ehservo_sim::plant::{Plant, ThirdOrderPlant, UncertaintySpec, Varying};
+///
+/// let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+/// // Fig. 8's a_i: a bias and a random part, drawn every 0.01 s and held.
+/// let spec = UncertaintySpec { a_bias: 0.5, a_random: 0.5, ..UncertaintySpec::NONE };
+/// let mut var = Varying::new(&plant, spec);
+/// let (v0, v1, v2) = (var.at(&plant, 0.0), var.at(&plant, 0.004), var.at(&plant, 0.012));
+/// assert_eq!(v0, v1); // one hold interval
+/// assert_ne!(v1, v2); // the next
+/// // Δa1 = |ā1|·(0.5 + 0.5·r) with r in [−1, 1): within [0, |ā1|).
+/// let a1 = plant.nominal().coeffs.a1.abs();
+/// assert!((0.0..a1).contains(&v2.da[0]));
+/// ```
 #[derive(Debug, Clone)]
 pub struct Varying<V: Copy> {
     signal: UncertaintySignal,

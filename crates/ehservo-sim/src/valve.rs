@@ -130,6 +130,26 @@ const AT: usize = 2;
 const BT: usize = 3;
 
 /// The validated valve.
+///
+/// ```
+/// use ehservo_sim::valve::{SpoolValve, ValveCfg};
+///
+/// // Rated as a datasheet gives it: 4e-4 m³/s at a 70-bar valve drop and
+/// // 10 V (full spool travel, 1 mm), as `[plant.valve]`.
+/// let cfg: ValveCfg = toml::from_str(
+///     "spool_limit = 1e-3\nrated_signal = 10.0\nrated_flow = 4e-4\nrated_drop = 7e6",
+/// )
+/// .unwrap();
+/// let valve = SpoolValve::try_new(&cfg, 850.0, 46e-6).unwrap();
+/// assert_eq!(valve.spool(10.0), 1e-3);
+/// // Fully open with 35 bar across each land (70 bar over the two in
+/// // series, Ps = 100 bar, Pt = 0): the rated flow in at A and out at B.
+/// let q = valve.flows(valve.spool(10.0), 1e7, 0.0, 6.5e6, 3.5e6);
+/// assert!((q.a - 4e-4).abs() < 1e-9 && (q.b + 4e-4).abs() < 1e-9);
+/// // Half the command, half the opening, half the flow.
+/// let half = valve.flows(valve.spool(5.0), 1e7, 0.0, 6.5e6, 3.5e6);
+/// assert!((half.a - 2e-4).abs() < 1e-9);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpoolValve {
     /// x_max (m).

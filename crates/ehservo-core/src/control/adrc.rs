@@ -77,6 +77,32 @@ use crate::math::Real;
 
 /// `kind = "adrc"`: the `[controller]` keys. Bandwidths left out follow the
 /// module doc's rule.
+///
+/// ```
+/// use ehservo_core::control::adrc::AdrcConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let adrc = AdrcConfig::default().build(&design)?;
+/// // The rule at dt = 0.01 s: ω_o = min(2·ā3, 1/dt) = min(340, 100) = 100,
+/// // ω_c = ω_o/4 = 25; (s + 25)³ gives k = (25³, 3·25², 3·25).
+/// assert_eq!(adrc.bandwidths(), (25.0, 100.0));
+/// assert_eq!(adrc.feedback_gains(), [15625.0, 1875.0, 75.0]);
+/// // Observer at rest, θd = 0.01: u0 = k1·θd = 156.25, so b0·u = 156.25,
+/// // and the LESO's ż3 = z4 + b0·u + β3·(θ − z1) = 156.25.
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.01, 0.0, 0.0, 0.0] };
+/// let mut ds = [0.0; 4];
+/// let out = adrc.law(&m, &[0.0; 4], &mut ds);
+/// assert!((out.u * adrc.b0() - 156.25).abs() < 1e-9);
+/// assert!((ds[2] - 156.25).abs() < 1e-9);
+/// // ω_o·dt ≥ 2: the forward-Euler observer would be unstable.
+/// let fast = AdrcConfig { omega_o: Some(200.0), ..AdrcConfig::default() };
+/// assert_eq!(fast.build(&design).unwrap_err().name, "omega_o");
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(
     feature = "serde",
@@ -106,6 +132,23 @@ pub struct AdrcConfig {
 /// The observer gains β1..β4 placing the LESO's error poles at −ω_o (four
 /// times), with the nominal coefficients `a` in the observer when
 /// `model` (module doc).
+///
+/// ```
+/// use ehservo_core::control::adrc::observer_gains;
+///
+/// let w = 100.0;
+/// // Gao's plain LESO: (s + ω)⁴ = s⁴ + 4ωs³ + 6ω²s² + 4ω³s + ω⁴.
+/// assert_eq!(observer_gains(w, [0.4, 13000.0, 170.0], false), [400.0, 6e4, 4e6, 1e8]);
+/// // With the model a = (a1, a2, a3) in the observer, its polynomial
+/// // s⁴ + (β1 + a3)s³ + (β2 + a3β1 + a2)s² + (β3 + a3β2 + a2β1 + a1)s + β4
+/// // is still (s + ω)⁴.
+/// let [a1, a2, a3] = [0.4, 13000.0, 170.0];
+/// let [b1, b2, b3, b4] = observer_gains(w, [a1, a2, a3], true);
+/// let got = [b1 + a3, b2 + a3 * b1 + a2, b3 + a3 * b2 + a2 * b1 + a1, b4];
+/// for (g, want) in got.into_iter().zip([400.0, 6e4, 4e6, 1e8]) {
+///     assert!((g - want).abs() <= 1e-12 * want);
+/// }
+/// ```
 pub fn observer_gains(omega_o: f64, a: [f64; 3], model: bool) -> [f64; 4] {
     let w = omega_o;
     let [a1, a2, a3] = if model { a } else { [0.0; 3] };
@@ -175,6 +218,8 @@ impl<T: Real> Signals for AdrcParts<T> {
 }
 
 /// The ADRC, built.
+/// Built by [`AdrcConfig`] (`kind = "adrc"`), whose example evaluates one
+/// step of the law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Adrc<T: Real = f64> {
     k: [T; 3],

@@ -92,6 +92,34 @@ use crate::surface::SwitchingSurface;
 
 /// `kind = "arc"`: the `[controller]` keys. Values left out are designed
 /// by the rules of the module doc.
+///
+/// ```
+/// use ehservo_core::control::arc::ArcConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let arc = ArcConfig::default().build(&design)?;
+/// // The estimates start at the nominal model: (∫e, â1, â2, â3, ϑ̂b) = (0, ā, 1).
+/// let s = arc.initial_state();
+/// let [a1, a2, a3] = design.model.coeffs.as_array();
+/// assert_eq!(s, [0.0, a1, a2, a3, 1.0]);
+/// // At rest, z = (0, 0.5, 0, 0): σ = 90·0.5 = 45, the model part
+/// // v_a = p2·θ̇d = 1300, k_s = p1/3 = 30 so v_s1 = k_s·σ/ϑb_min = 30·45/0.5 = 2700,
+/// // and the robust bound h = (ϑb_max − ϑb_min)·|v_a| = (1.5 − 0.5)·1300.
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.0, 0.5, 0.0, 0.0] };
+/// let out = arc.law(&m, &s, &mut [0.0; 5]);
+/// assert!((out.u_a * out.b_bar - 1300.0).abs() < 1e-9);
+/// assert!((out.u_s1 * out.b_bar - 2700.0).abs() < 1e-9);
+/// assert!((out.h - 1300.0).abs() < 1e-9);
+/// // v_s2 = h²/(4ε)·σ/ϑb_min.
+/// let (_, eps, _) = arc.gains();
+/// let v_s2 = 1300.0 * 1300.0 / (4.0 * eps) * 45.0 / 0.5;
+/// assert!((out.u_s2 * out.b_bar - v_s2).abs() <= 1e-12 * v_s2);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -207,6 +235,8 @@ impl<T: Real> Signals for ArcParts<T> {
 }
 
 /// The ARC controller, built.
+/// Built by [`ArcConfig`] (`kind = "arc"`), whose example evaluates one
+/// step of the law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Arc<T: Real = f64> {
     model: NominalModel<T>,

@@ -82,6 +82,27 @@ use crate::servo::NominalModel;
 
 /// `kind = "backstepping"`: the `[controller]` keys. Values left out are
 /// designed by the rules of the module doc.
+///
+/// ```
+/// use ehservo_core::control::backstepping::BacksteppingConfig;
+/// use ehservo_core::prelude::*;
+///
+/// // No load, so d(x) = 0.
+/// let model = NominalModel::new(ServoParams::paper(), Load::none());
+/// let design = Design { model, surface: SwitchingSurface::paper(), dt: 0.01 };
+/// let bs = BacksteppingConfig::default().build(&design)?; // c1 = c2 = c3 = 30
+/// // θ = 0.01 at rest on the reference θd ≡ 0, estimates at the nominal model:
+/// // z1 = 0.01, α1 = −c1·z1 = −0.3, z2 = 0 − α1 = 0.3, α2 = −z1 − c2·z2 = −9.01,
+/// // z3 = 0 − α2 = 9.01, the reference and the state's derivatives being 0;
+/// // ᾱ3 = −z2 − c3·z3 + â1·θ = −0.3 − 270.3 + 0.01·ā1, and b̄·u = ϱ̂·ᾱ3 with ϱ̂ = 1.
+/// let m = Measurement { t: 0.0, x: [0.01, 0.0, 0.0], z: [0.0; 4] };
+/// let out = bs.law(&m, &bs.initial_state(), &mut [0.0; 4]);
+/// let alpha3 = -0.3 - 270.3 + 0.01 * model.coeffs.a1;
+/// assert!((out.z2 - 0.3).abs() < 1e-12 && (out.z3 - 9.01).abs() < 1e-12);
+/// assert!((out.alpha3 - alpha3).abs() < 1e-9);
+/// assert!((out.u * out.b_bar - alpha3).abs() < 1e-9);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -205,6 +226,8 @@ impl<T: Real> Signals for BacksteppingParts<T> {
 }
 
 /// The adaptive backstepping controller, built.
+/// Built by [`BacksteppingConfig`] (`kind = "backstepping"`), whose example evaluates one
+/// step of the law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Backstepping<T: Real = f64> {
     model: NominalModel<T>,

@@ -137,6 +137,18 @@ pub struct Measurement<T = f64> {
 }
 
 /// Flags a law may raise (bit set in [`Output::flags`]).
+///
+/// ```
+/// use ehservo_core::control::flags;
+///
+/// // One bit each: a sample's flags say every reason at once.
+/// let bits = flags::ALL.iter().fold(0u8, |acc, &(_, bit, _)| {
+///     assert_eq!(bit.count_ones(), 1);
+///     assert_eq!(acc & bit, 0);
+///     acc | bit
+/// });
+/// assert_eq!(bits, 0b111_1111);
+/// ```
 pub mod flags {
     /// The valve root of (2) had a negative argument and was clamped at 0;
     /// the nominal gain b̄ was floored to keep u finite.
@@ -236,6 +248,19 @@ impl Signal {
 }
 
 /// A controller's parts as named signals.
+///
+/// ```
+/// use ehservo_core::control::pid::PidParts;
+/// use ehservo_core::control::Signals;
+///
+/// let parts = PidParts { p: 0.5, i: 0.25, d: -0.125, ff: 1.0, u_unsat: 1.625 };
+/// let mut values = [0.0; 5];
+/// parts.write(&mut values);
+/// // Read by key, as a trace or a binding does, knowing no field.
+/// let at = |key: &str| PidParts::<f64>::SIGNALS.iter().position(|s| s.key == key).unwrap();
+/// assert_eq!(values[at("i")], 0.25);
+/// assert_eq!(PidParts::<f64>::SIGNALS[at("i")].column, "i_V");
+/// ```
 pub trait Signals: Copy + Default {
     /// The signals, in the order [`Signals::write`] writes them.
     const SIGNALS: &'static [Signal];
@@ -294,6 +319,41 @@ pub trait Truth {
 
 /// A control law with state, computing in the float type `T` (f64 by
 /// default; f32 on a board's single-precision FPU).
+///
+/// A law is a dynamic system that never integrates itself: `law` returns
+/// u and writes ξ̇; the caller (the simulator, or
+/// [`SampledController`](crate::sampled::SampledController)) advances ξ.
+///
+/// ```
+/// use ehservo_core::control::{Controller, Measurement, Output};
+///
+/// /// u = kp·e + ξ with ξ̇ = ki·e: a PI law, e = θd − θ.
+/// struct Pi { kp: f64, ki: f64 }
+///
+/// impl Controller for Pi {
+///     type State = [f64; 1];
+///     type Parts = ();
+///     fn initial_state(&self) -> [f64; 1] {
+///         [0.0]
+///     }
+///     fn law(&self, m: &Measurement, s: &[f64; 1], ds: &mut [f64; 1]) -> Output<()> {
+///         let e = m.z[0] - m.x[0];
+///         ds[0] = self.ki * e;
+///         Output { u: self.kp * e + s[0], flags: 0, parts: () }
+///     }
+/// }
+///
+/// let c = Pi { kp: 2.0, ki: 10.0 };
+/// let m = Measurement { t: 0.0, x: [0.1, 0.0, 0.0], z: [0.3, 0.0, 0.0, 0.0] };
+/// // e = 0.2 with ξ = 0.5: u = 2·0.2 + 0.5 = 0.9, ξ̇ = 10·0.2 = 2.
+/// let mut ds = [0.0];
+/// let out = c.law(&m, &[0.5], &mut ds);
+/// assert!((out.u - 0.9).abs() < 1e-12 && (ds[0] - 2.0).abs() < 1e-12);
+/// // The law and a forward-Euler step at dt = 0.01: ξ + dt·ξ̇ = 0.5 + 0.02.
+/// let mut next = [0.0];
+/// let (_, finite) = c.law_euler(&m, &[0.5], &mut next, 0.01);
+/// assert!(finite && (next[0] - 0.52).abs() < 1e-12);
+/// ```
 pub trait Controller<T: Real = f64> {
     /// The controller state ξ.
     type State: OdeState<T>;
@@ -363,6 +423,22 @@ pub trait Controller<T: Real = f64> {
 }
 
 /// What a controller is designed from besides its own parameters.
+///
+/// ```
+/// use ehservo_core::prelude::*;
+///
+/// let design = Design {
+///     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+///     surface: SwitchingSurface::paper(),
+///     dt: 0.01,
+/// };
+/// let nn = NnVscConfig::default().build(&design)?;
+/// assert_eq!(nn.surface().p(), [90.0, 2600.0, 24000.0]);
+/// // The same context for a board's f32 build.
+/// let board: Design<f32> = design.cast();
+/// assert_eq!(board.dt, 0.01f32);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Design<T: Real = f64> {
     /// The nominal model (what the controller is told of the plant).
@@ -386,6 +462,33 @@ impl<T: Real> Design<T> {
 
 /// A controller kind's parameters: what a scenario's `[controller]` table
 /// holds, and how to build the controller from it.
+///
+/// ```
+/// use ehservo_core::control::pid::PidConfig;
+/// use ehservo_core::control::sliding::{NnVscConfig, VscSatConfig};
+/// use ehservo_core::control::{Config, Controller, Design, Measurement};
+/// use ehservo_core::prelude::{Load, NominalModel, ServoParams, SwitchingSurface};
+///
+/// // Any kind, by its parameter type: build, then one evaluation of the law.
+/// fn first_command<C: Config>(cfg: &C, design: &Design, m: &Measurement) -> f64 {
+///     let ctl = cfg.build(design).expect("valid parameters");
+///     let s = ctl.initial_state();
+///     let mut ds = s;
+///     ctl.law(m, &s, &mut ds).u
+/// }
+///
+/// let design = Design {
+///     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+///     surface: SwitchingSurface::paper(),
+///     dt: 0.01,
+/// };
+/// assert_eq!((PidConfig::KIND, PidConfig::USES_SURFACE), ("pid", false));
+/// assert_eq!((NnVscConfig::KIND, VscSatConfig::KIND), ("nnvsc", "vsc-sat"));
+/// // At rest on the reference θd ≡ 0 there is nothing to correct: u = 0.
+/// let rest = Measurement::default();
+/// assert_eq!(first_command(&PidConfig::default(), &design, &rest), 0.0);
+/// assert_eq!(first_command(&NnVscConfig::default(), &design, &rest), 0.0);
+/// ```
 pub trait Config {
     /// The kind's name in a scenario (`controller.kind`).
     const KIND: &'static str;

@@ -18,13 +18,13 @@
 //! * **σ-modification**: P. A. Ioannou and P. V. Kokotović, *Adaptive
 //!   Systems with Reduced Models*, Springer LNCIS 47, 1983, and "Instability
 //!   analysis and improvement of robustness of adaptive control",
-//!   *Automatica* 20(5), 1984 (the paper's [27]); P. A. Ioannou and J. Sun,
+//!   *Automatica* 20(5), 1984 (the paper's \[27\]); P. A. Ioannou and J. Sun,
 //!   *Robust Adaptive Control*, Prentice Hall, 1996, §8.5. A fixed leakage
 //!   −σ_mod·W: W is bounded whatever the excitation, at the price of a bias
 //!   (W does not reach W̄ even without disturbance).
 //! * **e-modification**: K. S. Narendra and A. M. Annaswamy, "A new adaptive
 //!   law for robust adaptation without persistent excitation", *IEEE Trans.
-//!   Automatic Control* 32(2), 134–145, 1987 (the paper's [28]). The leakage
+//!   Automatic Control* 32(2), 134–145, 1987 (the paper's \[28\]). The leakage
 //!   is scaled by the error, −ν|σ|·W, so it vanishes as the tracking does.
 //!   The paper's own (26) is this law with σ replaced by σΔ ("a revision of
 //!   ε-modification"): `e-mod` is (26) without its dead zone, and with
@@ -63,12 +63,12 @@
 //!   the league scenario).
 //!
 //! **What the paper says about these alternatives** (Section I):
-//! "a dead zone in the adaptive law [24]–[26] guarantees the boundedness of
-//! all the signals in the adaptive loop. In addition, [24], as well as
-//! [26], restrict the search region of parameter space by using *a priori*
+//! "a dead zone in the adaptive law \[24\]–\[26\] guarantees the boundedness of
+//! all the signals in the adaptive loop. In addition, \[24\], as well as
+//! \[26\], restrict the search region of parameter space by using *a priori*
 //! information about the bound of parameter. An extra term of the form −σθ
-//! in the adaptive law for adjusting the parameter θ introduced in [27] is
-//! referred to as σ-modification. In [28], an ϵ-modification is designed to
+//! in the adaptive law for adjusting the parameter θ introduced in \[27\] is
+//! referred to as σ-modification. In \[28\], an ϵ-modification is designed to
 //! improve the performance of the system in all respects, while retaining
 //! the advantage of assuring robustness in the presence of disturbances
 //! without the requirement of persistent excitation (PE). In this paper, a
@@ -78,9 +78,9 @@
 //! (26) is the time-varying dead zone ᾱ‖E(t)‖. The updating algorithm stops
 //! when the operating point is inside the exponential tracking region
 //! according to the Theorem 1 … its second term (or revised ε-modification
-//! of [28]) is used to ensure the boundedness of estimated weight W(t)
+//! of \[28\]) is used to ensure the boundedness of estimated weight W(t)
 //! without the requirement of PE." The paper's case is thus exponential
-//! tracking without PE (which an RBF network rarely has, its [29]); it does
+//! tracking without PE (which an RBF network rarely has, its \[29\]); it does
 //! not argue against projection beyond naming it as the use of a priori
 //! bounds, though its own γ2 (34) already assumes ‖W̄‖ ≤ Wmax (21) — the
 //! bound projection needs.
@@ -111,6 +111,14 @@ use crate::servo::NominalModel;
 use crate::surface::SwitchingSurface;
 
 /// Which robust weight law replaces (26)–(27).
+///
+/// ```
+/// use ehservo_core::control::nn_robust::WeightLaw;
+///
+/// // As a scenario writes `controller.weight_law`.
+/// assert_eq!(WeightLaw::parse("sigma-mod"), Some(WeightLaw::SigmaMod));
+/// assert_eq!(WeightLaw::Projection.as_str(), "projection");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WeightLaw {
     /// Ẇ = H⁻¹(σΦ − σ_mod·W) (Ioannou & Kokotović).
@@ -223,6 +231,8 @@ impl<T: Real> Signals for RobustParts<T> {
 }
 
 /// Theorem 3's controller with a classical robust weight law.
+/// Built by [`NnRobustConfig`] (`kind = "nn-robust"`), whose example evaluates one
+/// step of the law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NnRobust<T: Real = f64> {
     nn: NnVsc<T>,
@@ -376,6 +386,28 @@ impl<T: Real> Controller<T> for NnRobust<T> {
 /// `kind = "nn-robust"`: the `[controller]` keys — the NNBVSC's (same
 /// names, same defaults as `nnvsc`: the paper's Fig. 2 values) and the
 /// weight law's.
+///
+/// ```
+/// use ehservo_core::control::nn_robust::NnRobustConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let nr = NnRobustConfig::default().build(&design)?; // e-modification
+/// // At rest, z = (0, 0.5, 0, 0), W = 0: σ = 90·0.5 = 45, and the switching
+/// // part's dead zone (27) gives σΔ = 45 − ᾱ·‖E‖ = 45 − 5·0.5 = 42.5.
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.0, 0.5, 0.0, 0.0] };
+/// let (s, mut ds) = (nr.initial_state(), nr.initial_state());
+/// let out = nr.law(&m, &s, &mut ds);
+/// assert!((out.sigma_delta - 42.5).abs() < 1e-12);
+/// // The weights learn from σ itself, no dead zone: Ẇ = σΦ − ν|σ|W = 45·Φ
+/// // (h = 1, W = 0), and Φ's first entry is the bias 1; nothing leaks yet.
+/// assert!((ds.w[0] - 45.0).abs() < 1e-12);
+/// assert_eq!(out.parts.leak, 0.0);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",

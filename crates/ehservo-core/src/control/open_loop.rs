@@ -16,6 +16,22 @@ use crate::error::ParamError;
 use crate::math::{Real, DR};
 
 /// `kind = "open-loop"`: the `[controller]` keys.
+///
+/// ```
+/// use ehservo_core::control::open_loop::OpenLoopConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let ol = OpenLoopConfig { volts_per_deg: 2.0 }.build(&design)?;
+/// // 0.25° of reference at 2 V/° is 0.5 V, whatever the plant does.
+/// let m = Measurement { t: 0.3, x: [0.7, -3.0, 9.0], z: [0.25_f64.to_radians(), 1.0, 2.0, 3.0] };
+/// let out = ol.law(&m, &[0.0], &mut [0.0]);
+/// assert!((out.u - 0.5).abs() < 1e-12);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -54,6 +70,8 @@ impl<T: Real> Signals for OpenLoopParts<T> {
 }
 
 /// The open loop, built: u = gain·θd with the gain in V/rad.
+/// Built by [`OpenLoopConfig`] (`kind = "open-loop"`), whose example evaluates one
+/// step of the law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OpenLoop<T: Real = f64> {
     gain: T,

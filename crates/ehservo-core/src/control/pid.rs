@@ -56,6 +56,30 @@ use crate::math::{sqrt, Real};
 
 /// `kind = "pid"`: the `[controller]` keys. Gains left out are designed
 /// from the nominal model (module doc).
+///
+/// ```
+/// use ehservo_core::control::pid::PidConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let pid = PidConfig::default().build(&design)?;
+/// let (kp, ki, kd) = pid.gains();
+/// // The pole placement worked by hand in the module doc: ω = 78.557,
+/// // kp = 26.2, ki = 310, kd = 0.0375.
+/// assert!((kp - 26.2).abs() < 0.05 && (ki - 310.0).abs() < 1.0 && (kd - 0.0375).abs() < 5e-4);
+/// // At rest with θd = 0.01 rad and θ̇d = θ̈d = θ⃛d = 0, state 0: e = 0.01, the
+/// // filter and the integral still at 0, so p = kp·e and the feedforward
+/// // is ā1·θd/b̄0 (the nominal model's static term).
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.01, 0.0, 0.0, 0.0] };
+/// let out = pid.law(&m, &[0.0; 2], &mut [0.0; 2]);
+/// assert!((out.p - kp * 0.01).abs() < 1e-15);
+/// let ff = design.model.coeffs.a1 * 0.01 / design.model.b_at_rest();
+/// assert!((out.u - (kp * 0.01 + ff)).abs() < 1e-15);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -107,6 +131,24 @@ impl Default for PidConfig {
 }
 
 /// Gains designed by pole placement (module doc): `(kp, ki, kd)`.
+///
+/// ```
+/// use ehservo_core::control::pid::design_gains;
+/// use ehservo_core::servo::{Load, NominalModel, ServoParams};
+///
+/// let m = NominalModel::new(ServoParams::paper(), Load::paper());
+/// let (a, b0) = (m.coeffs.as_array(), m.b_at_rest());
+/// let (kp, ki, kd) = design_gains(a, b0, 30.0, 0.7)?;
+/// // The closed loop's s⁴ + ā3s³ + (ā2 + b̄0kd)s² + (ā1 + b̄0kp)s + b̄0ki
+/// // has the double pole λ = 30 asked for: it and its derivative vanish at −30.
+/// let c = [1.0, a[2], a[1] + b0 * kd, a[0] + b0 * kp, b0 * ki];
+/// let p = |s: f64| c.iter().fold(0.0, |acc, ci| acc * s + ci);
+/// let dp = |s: f64| 4.0 * s.powi(3) + 3.0 * c[1] * s * s + 2.0 * c[2] * s + c[3];
+/// assert!(p(-30.0).abs() < 1e-9 * c[4] && dp(-30.0).abs() < 1e-9 * c[4]);
+/// // The poles' sum is the plant's −ā3: λ = 90 leaves nothing for the pair.
+/// assert_eq!(design_gains(a, b0, 90.0, 0.7).unwrap_err().name, "design_pole");
+/// # Ok::<(), ehservo_core::error::ParamError>(())
+/// ```
 pub fn design_gains(
     a: [f64; 3],
     b0: f64,
@@ -180,6 +222,35 @@ impl<T: Real> Signals for PidParts<T> {
 }
 
 /// The PID controller, built.
+///
+/// ```
+/// use ehservo_core::control::pid::PidConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// // Gains given, no feedforward: kp = 2, ki = 3, kd = 0.5, Tf = 0.1 s.
+/// let pid = PidConfig {
+///     kp: Some(2.0),
+///     ki: Some(3.0),
+///     kd: Some(0.5),
+///     filter_time: Some(0.1),
+///     feedforward: false,
+///     ..PidConfig::default()
+/// }
+/// .build(&design)?;
+/// // State (I, θf) = (0.25, 0.01), θ = 0.03, θd = 0.05, θ̇d = 0.2:
+/// // e = 0.02, y_d = (0.03 − 0.01)/0.1 = 0.2, p = 2·0.02 = 0.04,
+/// // d = 0.5·(0.2 − 0.2) = 0, u = 0.04 + 0.25 + 0 = 0.29; İ = 3·0.02 = 0.06.
+/// let m = Measurement { t: 0.0, x: [0.03, 0.0, 0.0], z: [0.05, 0.2, 0.0, 0.0] };
+/// let mut ds = [0.0; 2];
+/// let out = pid.law(&m, &[0.25, 0.01], &mut ds);
+/// assert!((out.u - 0.29).abs() < 1e-12 && (out.p - 0.04).abs() < 1e-12);
+/// assert!((ds[0] - 0.06).abs() < 1e-12 && (ds[1] - 0.2).abs() < 1e-12);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pid<T: Real = f64> {
     kp: T,

@@ -36,9 +36,9 @@ pub struct SlidingParts<T = f64> {
     pub uncertainty: T,
     /// ‖W‖ (0 without a network; filled by [`super::Controller::annotate`]).
     pub w_norm: T,
-    /// The paper's w_1, the first Gaussian's weight W[1].
+    /// The paper's w_1, the first Gaussian's weight `W[1]`.
     pub w_1: T,
-    /// The paper's w_128, θ̈d's weight W[128].
+    /// The paper's w_128, θ̈d's weight `W[128]`.
     pub w_128: T,
     /// Boundary layer: μ(t) (NNBVSC, SPEC §5) or the constant μ (VSC-sat).
     pub mu: T,
@@ -181,6 +181,17 @@ serde_by_name!(
 );
 
 /// `[controller.rbf]`: the network's grid, width and normalising scales.
+///
+/// ```
+/// use ehservo_core::control::sliding::RbfConfig;
+/// use ehservo_core::rbf::Rbf;
+///
+/// // The defaults are the paper's network.
+/// assert_eq!(RbfConfig::default().build()?, Rbf::paper());
+/// let err = RbfConfig { width: 0.0, ..RbfConfig::default() }.build().unwrap_err();
+/// assert_eq!(err.name, "rbf.width");
+/// # Ok::<(), ehservo_core::error::ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -218,6 +229,25 @@ impl RbfConfig {
 
 /// The `[controller]` table of the paper's laws (`vsc`, `vsc-sat`,
 /// `nnvsc`), every key at the paper's Fig. 2 value by default.
+///
+/// One table for the three kinds: a study switches `controller.kind`
+/// among `"vsc"`, `"vsc-sat"` and `"nnvsc"` and keeps its keys.
+///
+/// ```
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let table = SlidingConfig { gamma1: 200.0, ..SlidingConfig::default() };
+/// assert_eq!(NnVscConfig(table).build(&design)?.params().gamma1, 200.0);
+/// assert_eq!(VscConfig(table).build(&design)?.params().bound_b, 0.5);
+/// // Every key is checked, whichever law reads it: `mu` is `vsc-sat`'s.
+/// let bad = SlidingConfig { mu: 0.0, ..SlidingConfig::default() };
+/// assert_eq!(NnVscConfig(bad).build(&design).unwrap_err().name, "mu");
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -320,6 +350,30 @@ impl SlidingConfig {
 }
 
 /// `kind = "nnvsc"`: the NNBVSC of Theorem 3.
+///
+/// ```
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let nn = NnVscConfig::default().build(&design)?;
+/// // At rest (x = 0, so Pl = 0 and d = 0), z = (θd, θ̇d, θ̈d, θ⃛d) = (0, 0.5, 0, 0):
+/// // e = ë = 0, ė = 0.5, so σ = p1·ė = 90·0.5 = 45 and
+/// // N = p2·θ̇d = 2600·0.5 = 1300 (the numerator of (12)).
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.0, 0.5, 0.0, 0.0] };
+/// let (s, mut ds) = (nn.initial_state(), nn.initial_state());
+/// let out = nn.law(&m, &s, &mut ds);
+/// assert!((out.sigma - 45.0).abs() < 1e-12);
+/// // W = 0: u_eq = N/b̄ (24), no network term.
+/// assert!((out.u_eq * out.b_bar - 1300.0).abs() < 1e-9);
+/// // Dead zone (27): Δ = ᾱ·‖E‖ = 5·0.5, so σΔ = 45 − 2.5 = 42.5.
+/// assert!((out.sigma_delta - 42.5).abs() < 1e-12);
+/// // (26) with W = 0, h = 1: Ẇ = σΔ·Φ, and Φ's first entry is the bias 1.
+/// assert!((ds.w[0] - 42.5).abs() < 1e-12);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(
     feature = "serde",
@@ -330,6 +384,25 @@ impl SlidingConfig {
 pub struct NnVscConfig(pub SlidingConfig);
 
 /// `kind = "vsc"`: the traditional VSC of Theorem 1, sgn(σ).
+///
+/// ```
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let vsc = VscConfig::default().build(&design)?;
+/// // At rest (x = 0, so Pl = 0 and d = 0), z = (θd, θ̇d, θ̈d, θ⃛d) = (0, 0.5, 0, 0):
+/// // e = ë = 0, ė = 0.5, so σ = p1·ė = 90·0.5 = 45 and
+/// // N = p2·θ̇d = 2600·0.5 = 1300 (the numerator of (12)).
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.0, 0.5, 0.0, 0.0] };
+/// let out = vsc.law(&m, &[0.0], &mut [0.0]);
+/// // (14) with x = 0 and γ = |d| = 0: k·b̄ = bound_b·|N|/(1 − bound_b)
+/// // = 0.5·1300/0.5 = 1300, so b̄·u = N + k·b̄·sgn σ = 2600.
+/// assert!((out.u * out.b_bar - 2600.0).abs() < 1e-9);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(
     feature = "serde",
@@ -340,6 +413,26 @@ pub struct NnVscConfig(pub SlidingConfig);
 pub struct VscConfig(pub SlidingConfig);
 
 /// `kind = "vsc-sat"`: Theorem 1 with sat(σ/μ) (Remark 2).
+///
+/// ```
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let table = SlidingConfig { mu: 90.0, ..SlidingConfig::default() };
+/// let vsc = VscSatConfig(table).build(&design)?;
+/// // At rest (x = 0, so Pl = 0 and d = 0), z = (θd, θ̇d, θ̈d, θ⃛d) = (0, 0.5, 0, 0):
+/// // e = ë = 0, ė = 0.5, so σ = p1·ė = 90·0.5 = 45 and
+/// // N = p2·θ̇d = 2600·0.5 = 1300 (the numerator of (12)).
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.0, 0.5, 0.0, 0.0] };
+/// let out = vsc.law(&m, &[0.0], &mut [0.0]);
+/// // As `"vsc"` (k·b̄ = 1300) but with sat(σ/μ) = sat(45/90) = 0.5:
+/// // b̄·u = 1300 + 0.5·1300 = 1950.
+/// assert!((out.u * out.b_bar - 1950.0).abs() < 1e-9);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(
     feature = "serde",

@@ -55,6 +55,26 @@ use crate::servo::NominalModel;
 use crate::surface::SwitchingSurface;
 
 /// `kind = "sta"`: the `[controller]` keys.
+///
+/// ```
+/// use ehservo_core::control::sta::StaConfig;
+/// # use ehservo_core::prelude::*;
+/// # let design = Design {
+/// #     model: NominalModel::new(ServoParams::paper(), Load::paper()),
+/// #     surface: SwitchingSurface::paper(),
+/// #     dt: 0.01,
+/// # };
+/// let sta = StaConfig { k1: Some(2.0), k2: Some(3.0), ..StaConfig::default() }.build(&design)?;
+/// // At rest, z = (0, 0.5, 0, 0), state (∫e, v) = (0, 0.2): σ = 90·0.5 = 45,
+/// // N = 2600·0.5 = 1300, so b̄·u = N + k1·√45·sgn σ − v = 1300 + 2√45 − 0.2,
+/// // and v̇ = −k2·sgn σ = −3.
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.0, 0.5, 0.0, 0.0] };
+/// let mut ds = [0.0; 2];
+/// let out = sta.law(&m, &[0.0, 0.2], &mut ds);
+/// assert!((out.u * out.b_bar - (1300.0 + 2.0 * 45f64.sqrt() - 0.2)).abs() < 1e-9);
+/// assert_eq!(ds, [0.0, -3.0]);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(
     feature = "serde",
@@ -150,6 +170,8 @@ impl<T: Real> Signals for StaParts<T> {
 }
 
 /// The super-twisting controller, built.
+/// Built by [`StaConfig`] (`kind = "sta"`), whose example evaluates one
+/// step of the law.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sta<T: Real = f64> {
     model: NominalModel<T>,
@@ -165,6 +187,20 @@ pub struct Sta<T: Real = f64> {
 
 impl<T: Real> Sta<T> {
     /// C(t) of the module doc for the reference `z = (θd, θ̇d, θ̈d, θ⃛d)`.
+    ///
+    /// ```
+    /// use ehservo_core::control::sta::StaConfig;
+    /// use ehservo_core::prelude::*;
+    ///
+    /// // No load, so D(z) = 0 and C = Σ (bound_a + bound_b)·|ā_i|·|ż_{i+1}|/(1 − bound_b).
+    /// let model = NominalModel::new(ServoParams::paper(), Load::none());
+    /// let design = Design { model, surface: SwitchingSurface::paper(), dt: 0.01 };
+    /// let sta = StaConfig::default().build(&design)?; // bound_a = 1, bound_b = 0.5
+    /// let [a1, a2, a3] = model.coeffs.as_array();
+    /// let want = (1.0 + 0.5) * (a1 * 0.5 + a2 * 2.0 + a3 * 10.0) / (1.0 - 0.5);
+    /// assert!((sta.c_bound(&[0.0, 0.5, 2.0, 10.0]) - want).abs() <= 1e-12 * want);
+    /// # Ok::<(), ParamError>(())
+    /// ```
     #[inline]
     pub fn c_bound(&self, z: &[T; 4]) -> T {
         let [ak, k, ct, inv_jt] = self.load;

@@ -70,6 +70,30 @@ impl<T: Real> VscParams<T> {
 }
 
 /// The traditional VSC (Theorem 1), or its boundary-layer variant.
+/// In a scenario: `kind = "vsc"` or `"vsc-sat"`
+/// ([`VscConfig`](super::sliding::VscConfig),
+/// [`VscSatConfig`](super::sliding::VscSatConfig)).
+///
+/// ```
+/// use ehservo_core::prelude::*;
+///
+/// let model = NominalModel::new(ServoParams::paper(), Load::paper());
+/// let vsc = Vsc::try_new(model, SwitchingSurface::paper(), VscParams::paper())?;
+/// // At rest, z = (0, −0.5, 0, 0): σ = p1·ė = 90·(−0.5) = −45 and
+/// // N = p2·θ̇d = −1300, so k·b̄ = 0.5·1300/(1 − 0.5) = 1300 (14) and
+/// // b̄·u = N + k·b̄·sgn σ = −2600: the sign of σ picks the direction.
+/// let m = Measurement { t: 0.0, x: [0.0; 3], z: [0.0, -0.5, 0.0, 0.0] };
+/// let mut ds = [0.0];
+/// let out = vsc.law(&m, &[0.0], &mut ds);
+/// assert!((out.sigma + 45.0).abs() < 1e-12);
+/// assert!((out.u * out.b_bar + 2600.0).abs() < 1e-9);
+/// // The state is ∫e, and ė of it is e = 0.
+/// assert_eq!(ds[0], 0.0);
+/// // Assumption A1 needs β < b̄: bound_b = 1 is refused.
+/// let bad = VscParams { bound_b: 1.0, ..VscParams::paper() };
+/// assert_eq!(Vsc::try_new(model, SwitchingSurface::paper(), bad).unwrap_err().name, "bound_b");
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Vsc<T: Real = f64> {
     model: NominalModel<T>,

@@ -15,7 +15,7 @@
 //!   the plant state, the actuator state and the controller state are
 //!   integrated together;
 //! - [`Mode::Sampled`]: at `t_k` the core's
-//!   [`SampledController`](ehservo_core::sampled::SampledController) — the
+//!   [`SampledController`] — the
 //!   same loop a board runs, with its valve range and fault policy — computes
 //!   `u` and advances the controller state once by forward Euler; `u` is
 //!   held over `[t_k, t_k + h)` (zero-order hold) while the plant and the
@@ -205,6 +205,48 @@ pub struct Stages {
 }
 
 /// A closed loop that can be stepped, run to a time, and resumed.
+///
+/// ```
+/// use ehservo_sim::actuator::Actuator;
+/// use ehservo_sim::core::prelude::*;
+/// use ehservo_sim::plant::{Plant, ThirdOrderPlant, UncertaintySpec};
+/// use ehservo_sim::sensor::Sensor;
+/// use ehservo_sim::simulation::{Mode, SimConfig, Simulation, Stages, Stop};
+///
+/// // The paper's Fig. 2 case: the NNBVSC on the third-order plant (8) with
+/// // Δa_i = |ā_i| and Δb = 0.25·b̄, sampled at 100 Hz, RK4 at 0.01 s.
+/// let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+/// let design = Design {
+///     model: *plant.nominal(),
+///     surface: SwitchingSurface::paper(),
+///     dt: 0.01,
+/// };
+/// let nn = NnVscConfig::default().build(&design)?;
+/// let stages = Stages {
+///     uncertainty: UncertaintySpec::default(),
+///     actuator: Actuator::IDENTITY,
+///     sensor: Sensor::identity(),
+///     policy: FaultPolicy::default(),
+///     estimator: None,
+/// };
+/// let cfg = SimConfig {
+///     steps: 100,
+///     step: 0.01,
+///     mode: Mode::Sampled,
+///     substeps: 1,
+///     theta_limit: 1.0,
+///     x0: [0.0; 3],
+///     computation_delay: false,
+/// };
+/// let mut sim = Simulation::new(plant, nn, Sine::paper(), stages, cfg)?;
+///
+/// // Samples at t_k = k·h, k = 0..=100: 101 of them over 1 s.
+/// let outcome = sim.run(&mut |_| {});
+/// assert_eq!(outcome.samples, 101);
+/// assert_eq!(sim.stopped(), Some(Stop::Horizon));
+/// assert!(outcome.diverged.is_none());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Simulation<P: Plant, C: Controller, R: Reference> {
     plant: P,
@@ -326,6 +368,44 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
     /// A simulation at t = 0 with x(0) = `cfg.x0` and the controller's
     /// initial state. Fails when the stages do not suit the mode, or the
     /// sample period or the policy is invalid ([`Settings::try_new`]).
+    ///
+    /// ```
+    /// # use ehservo_sim::actuator::Actuator;
+    /// # use ehservo_sim::core::prelude::*;
+    /// # use ehservo_sim::plant::{Plant, ThirdOrderPlant, UncertaintySpec};
+    /// # use ehservo_sim::sensor::Sensor;
+    /// # use ehservo_sim::simulation::{Mode, SimConfig, Simulation, Stages, Stop};
+    /// # // The paper's Fig. 2 case: the NNBVSC on the third-order plant (8) with
+    /// # // Δa_i = |ā_i| and Δb = 0.25·b̄, sampled at 100 Hz, RK4 at 0.01 s.
+    /// # let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+    /// # let design = Design {
+    /// #     model: *plant.nominal(),
+    /// #     surface: SwitchingSurface::paper(),
+    /// #     dt: 0.01,
+    /// # };
+    /// # let nn = NnVscConfig::default().build(&design)?;
+    /// # let stages = Stages {
+    /// #     uncertainty: UncertaintySpec::default(),
+    /// #     actuator: Actuator::IDENTITY,
+    /// #     sensor: Sensor::identity(),
+    /// #     policy: FaultPolicy::default(),
+    /// #     estimator: None,
+    /// # };
+    /// # let cfg = SimConfig {
+    /// #     steps: 100,
+    /// #     step: 0.01,
+    /// #     mode: Mode::Sampled,
+    /// #     substeps: 1,
+    /// #     theta_limit: 1.0,
+    /// #     x0: [0.0; 3],
+    /// #     computation_delay: false,
+    /// # };
+    /// # let mut sim = Simulation::new(plant, nn, Sine::paper(), stages, cfg)?;
+    /// assert_eq!((sim.time(), sim.stopped()), (0.0, None));
+    /// // The controller starts from W = 0.
+    /// assert!(sim.controller_state().w.iter().all(|&w| w == 0.0));
+    /// # Ok::<(), ParamError>(())
+    /// ```
     pub fn new(
         plant: P,
         ctrl: C,
@@ -428,6 +508,52 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
 
     /// Produces the sample at `t_k` and advances to `t_{k+1}`; `None` once
     /// the run has stopped (see [`Simulation::stopped`]).
+    ///
+    /// ```
+    /// # use ehservo_sim::actuator::Actuator;
+    /// # use ehservo_sim::core::prelude::*;
+    /// # use ehservo_sim::plant::{Plant, ThirdOrderPlant, UncertaintySpec};
+    /// # use ehservo_sim::sensor::Sensor;
+    /// # use ehservo_sim::simulation::{Mode, SimConfig, Simulation, Stages, Stop};
+    /// # // The paper's Fig. 2 case: the NNBVSC on the third-order plant (8) with
+    /// # // Δa_i = |ā_i| and Δb = 0.25·b̄, sampled at 100 Hz, RK4 at 0.01 s.
+    /// # let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+    /// # let design = Design {
+    /// #     model: *plant.nominal(),
+    /// #     surface: SwitchingSurface::paper(),
+    /// #     dt: 0.01,
+    /// # };
+    /// # let nn = NnVscConfig::default().build(&design)?;
+    /// # let stages = Stages {
+    /// #     uncertainty: UncertaintySpec::default(),
+    /// #     actuator: Actuator::IDENTITY,
+    /// #     sensor: Sensor::identity(),
+    /// #     policy: FaultPolicy::default(),
+    /// #     estimator: None,
+    /// # };
+    /// # let cfg = SimConfig {
+    /// #     steps: 100,
+    /// #     step: 0.01,
+    /// #     mode: Mode::Sampled,
+    /// #     substeps: 1,
+    /// #     theta_limit: 1.0,
+    /// #     x0: [0.0; 3],
+    /// #     computation_delay: false,
+    /// # };
+    /// # let mut sim = Simulation::new(plant, nn, Sine::paper(), stages, cfg)?;
+    /// // t = 0: at rest on θd(0) = 0, no error yet.
+    /// let s0 = sim.step().expect("a sample");
+    /// assert_eq!((s0.k, s0.t, s0.e), (0, 0.0, 0.0));
+    /// // t = 0.01 against the independent NumPy implementation of Fig. 2
+    /// // (bench/peers/nnvsc_numpy.py; crates/ehservo/tests/it/independent.rs):
+    /// // θ = 0.0181445994348°, u = 0.727779612044 V, σ = 41.4188293018 rad/s².
+    /// let s1 = sim.step().expect("a sample");
+    /// assert!((s1.theta_deg() - 0.0181445994348).abs() < 1e-9 * 0.0181445994348);
+    /// assert!((s1.u - 0.727779612044).abs() < 1e-9 * 0.727779612044);
+    /// assert!((s1.part("sigma") - 41.4188293018).abs() < 1e-9 * 41.4188293018);
+    /// assert_eq!(sim.time(), 0.02);
+    /// # Ok::<(), ParamError>(())
+    /// ```
     pub fn step(&mut self) -> Option<Sample> {
         let mut sample = Sample::default();
         self.advance(&mut sample).then_some(sample)
@@ -538,6 +664,54 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
     /// Steps until the next sample would be later than `t_end` (s) or the
     /// run stops, handing each sample to `observe`. Returns the stop reason
     /// if the run has stopped.
+    ///
+    /// ```
+    /// # use ehservo_sim::actuator::Actuator;
+    /// # use ehservo_sim::core::prelude::*;
+    /// # use ehservo_sim::plant::{Plant, ThirdOrderPlant, UncertaintySpec};
+    /// # use ehservo_sim::sensor::Sensor;
+    /// # use ehservo_sim::simulation::{Mode, SimConfig, Simulation, Stages, Stop};
+    /// # // The paper's Fig. 2 case: the NNBVSC on the third-order plant (8) with
+    /// # // Δa_i = |ā_i| and Δb = 0.25·b̄, sampled at 100 Hz, RK4 at 0.01 s.
+    /// # let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+    /// # let design = Design {
+    /// #     model: *plant.nominal(),
+    /// #     surface: SwitchingSurface::paper(),
+    /// #     dt: 0.01,
+    /// # };
+    /// # let nn = NnVscConfig::default().build(&design)?;
+    /// # let stages = Stages {
+    /// #     uncertainty: UncertaintySpec::default(),
+    /// #     actuator: Actuator::IDENTITY,
+    /// #     sensor: Sensor::identity(),
+    /// #     policy: FaultPolicy::default(),
+    /// #     estimator: None,
+    /// # };
+    /// # let cfg = SimConfig {
+    /// #     steps: 100,
+    /// #     step: 0.01,
+    /// #     mode: Mode::Sampled,
+    /// #     substeps: 1,
+    /// #     theta_limit: 1.0,
+    /// #     x0: [0.0; 3],
+    /// #     computation_delay: false,
+    /// # };
+    /// # let mut sim = Simulation::new(plant, nn, Sine::paper(), stages, cfg)?;
+    /// // To t = 0.5 s: samples k = 0..=50, and the run goes on.
+    /// let mut last = None;
+    /// assert_eq!(sim.run_until(0.5, &mut |s| last = Some(*s)), None);
+    /// let s = last.expect("samples");
+    /// assert_eq!((sim.outcome().samples, s.k), (51, 50));
+    /// // The independent NumPy implementation of Fig. 2 at t = 0.5
+    /// // (crates/ehservo/tests/it/independent.rs): θ = 0.149089034611°,
+    /// // u = −0.682616728963 V.
+    /// assert!((s.theta_deg() - 0.149089034611).abs() < 1e-9 * 0.149089034611);
+    /// assert!((s.u + 0.682616728963).abs() < 1e-9 * 0.682616728963);
+    /// // Resumed to the horizon, 1 s.
+    /// assert_eq!(sim.run_until(f64::INFINITY, &mut |_| {}), Some(Stop::Horizon));
+    /// assert_eq!(sim.outcome().samples, 101);
+    /// # Ok::<(), ParamError>(())
+    /// ```
     pub fn run_until(&mut self, t_end: f64, observe: &mut dyn FnMut(&Sample)) -> Option<Stop> {
         let tol = 1e-9 * self.cfg.step;
         let mut sample = Sample::default();
@@ -551,6 +725,47 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
 
     /// Runs to the horizon (or the earlier stop), handing each sample to
     /// `observe`.
+    ///
+    /// ```
+    /// # use ehservo_sim::actuator::Actuator;
+    /// # use ehservo_sim::core::prelude::*;
+    /// # use ehservo_sim::plant::{Plant, ThirdOrderPlant, UncertaintySpec};
+    /// # use ehservo_sim::sensor::Sensor;
+    /// # use ehservo_sim::simulation::{Mode, SimConfig, Simulation, Stages, Stop};
+    /// # // The paper's Fig. 2 case: the NNBVSC on the third-order plant (8) with
+    /// # // Δa_i = |ā_i| and Δb = 0.25·b̄, sampled at 100 Hz, RK4 at 0.01 s.
+    /// # let plant = ThirdOrderPlant::new(ServoParams::paper(), Load::paper());
+    /// # let design = Design {
+    /// #     model: *plant.nominal(),
+    /// #     surface: SwitchingSurface::paper(),
+    /// #     dt: 0.01,
+    /// # };
+    /// # let nn = NnVscConfig::default().build(&design)?;
+    /// # let stages = Stages {
+    /// #     uncertainty: UncertaintySpec::default(),
+    /// #     actuator: Actuator::IDENTITY,
+    /// #     sensor: Sensor::identity(),
+    /// #     policy: FaultPolicy::default(),
+    /// #     estimator: None,
+    /// # };
+    /// # let cfg = SimConfig {
+    /// #     steps: 100,
+    /// #     step: 0.01,
+    /// #     mode: Mode::Sampled,
+    /// #     substeps: 1,
+    /// #     theta_limit: 1.0,
+    /// #     x0: [0.0; 3],
+    /// #     computation_delay: false,
+    /// # };
+    /// # let mut sim = Simulation::new(plant, nn, Sine::paper(), stages, cfg)?;
+    /// // Over 1 s, the largest |e| and the number of samples.
+    /// let mut e_max: f64 = 0.0;
+    /// let outcome = sim.run(&mut |s| e_max = e_max.max(s.e_deg().abs()));
+    /// assert_eq!(outcome.samples, 101);
+    /// // Well inside the reference's 5° amplitude: the loop tracks.
+    /// assert!(e_max > 0.0 && e_max < 0.5, "{e_max}");
+    /// # Ok::<(), ParamError>(())
+    /// ```
     pub fn run(&mut self, observe: &mut dyn FnMut(&Sample)) -> Outcome {
         let mut sample = Sample::default();
         while self.stop.is_none() {

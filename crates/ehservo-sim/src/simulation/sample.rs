@@ -11,6 +11,22 @@ pub const MAX_PARTS: usize = 32;
 
 /// One logged sample at `t_k`: the true plant, the command, and the
 /// controller's parts as named signals.
+///
+/// ```
+/// use ehservo_sim::core::control::sliding::SlidingParts;
+/// use ehservo_sim::core::control::Signals;
+/// use ehservo_sim::simulation::Sample;
+///
+/// // A sliding-mode law's parts, logged as the loop logs them.
+/// let parts = SlidingParts { sigma: 45.0, sigma_delta: 42.5, ..SlidingParts::default() };
+/// let mut s = Sample { signals: SlidingParts::<f64>::SIGNALS, ..Sample::default() };
+/// parts.write(&mut s.values);
+/// // Read by key, knowing nothing of the controller.
+/// assert_eq!(s.get("sigma"), Some(45.0));
+/// assert_eq!(s.part("sigma_delta"), 42.5);
+/// // A key this controller does not have: None, or 0 for `part`.
+/// assert_eq!((s.get("p"), s.part("p")), (None, 0.0));
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
     /// Sample index k.

@@ -44,6 +44,15 @@ use crate::surface::SwitchingSurface;
 use fast::one_pass;
 
 /// How the boundary layer μ(t) of (25) is computed.
+///
+/// ```
+/// use ehservo_core::control::nnvsc::MuRule;
+///
+/// // As a scenario writes `controller.mu_rule`.
+/// assert_eq!(MuRule::parse("literal-33"), Some(MuRule::Literal33));
+/// assert_eq!(MuRule::Remark7.as_str(), "remark7");
+/// assert_eq!(MuRule::parse("Remark7"), None);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MuRule {
     /// SPEC §5: μ = (α − ᾱ)‖E‖·ε2/c, the value Remark 7 back-solves from
@@ -76,6 +85,16 @@ impl MuRule {
 }
 
 /// Gains of the NNBVSC.
+///
+/// ```
+/// use ehservo_core::control::nnvsc::NnVscParams;
+///
+/// let p = NnVscParams::paper();
+/// assert!(p.validate().is_ok());
+/// // Theorem 3 needs 0 ≤ ᾱ < α.
+/// let bad = NnVscParams { alpha_bar: 300.0, ..p };
+/// assert_eq!(bad.validate().unwrap_err().name, "alpha_bar");
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NnVscParams<T = f64> {
     /// γ1 > 0, the linear switching gain.
@@ -178,8 +197,8 @@ impl<T: Real> NnVscParams<T> {
     }
 }
 
-/// The NNBVSC state: ∫e and the 130 weights (W[0] is the bias weight, the
-/// paper's w_1 is W[1], w_128 is W[128]).
+/// The NNBVSC state: ∫e and the 130 weights (`W[0]` is the bias weight, the
+/// paper's w_1 is `W[1]`, w_128 is `W[128]`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NnState<T = f64> {
     /// ∫e.
@@ -246,7 +265,26 @@ impl<T: Real> OdeState<T> for NnState<T> {
     }
 }
 
-/// The NNBVSC of Theorem 3.
+/// The NNBVSC of Theorem 3; in a scenario, `kind = "nnvsc"`
+/// ([`NnVscConfig`](super::sliding::NnVscConfig)).
+///
+/// ```
+/// use ehservo_core::prelude::*;
+///
+/// let model = NominalModel::new(ServoParams::paper(), Load::paper());
+/// let nn = NnVsc::try_new(model, SwitchingSurface::paper(), NnVscParams::paper(), Rbf::paper())?;
+/// // On the reference at rest, ‖E‖ = 0: no switching, no learning, flagged.
+/// let m = Measurement::default();
+/// let (s, mut ds) = (NnState::zero(), NnState::zero());
+/// let out = nn.law(&m, &s, &mut ds);
+/// assert_eq!(out.u, 0.0);
+/// assert_ne!(out.flags & ehservo_core::control::flags::ZERO_ERROR_NORM, 0);
+/// assert!(ds.w.iter().all(|&w| w == 0.0));
+/// // The same law in f32, for a board.
+/// let board: NnVsc<f32> = nn.cast()?;
+/// assert_eq!(board.params().gamma1, 100.0f32);
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NnVsc<T: Real = f64> {
     model: NominalModel<T>,
@@ -386,7 +424,7 @@ impl<T: Real> Controller<T> for NnVsc<T> {
     }
 
     /// ‖W‖ was computed by `law_euler` beside its Euler pass, except in
-    /// the one-pass form ([`one_pass`]), where it is computed here as
+    /// the one-pass form (`one_pass`), where it is computed here as
     /// `annotate` does.
     #[inline]
     fn annotate_stepped(
