@@ -63,25 +63,98 @@ pub struct Metrics {
     pub axis: Axis,
 }
 
-impl Metrics {
-    /// The names of a linear axis's metrics ([`Metrics::NAMES`] without
-    /// the `_deg`).
-    pub const NAMES_LINEAR: [&'static str; 13] = [
-        "e_max",
-        "e_final",
-        "e_rms",
-        "u_max",
-        "u_rms",
-        "chattering",
-        "u_tv_per_s",
-        "w_norm_max",
-        "w_norm_final",
-        "dead_zone_fraction",
-        "diverged",
-        "diverged_at_s",
-        "samples",
-    ];
+/// The metrics, one line each: the field, what it is (an error in the
+/// axis's unit, a number in a fixed unit, the divergence flag, the sample
+/// count), in the order of tables and CSV columns. Every list of names, the
+/// units and the lookup by name are generated from it.
+macro_rules! metric_table {
+    ($($field:ident: $kind:ident $($unit:literal)?),* $(,)?) => {
+        impl Metrics {
+            /// The names of the metrics on a rotary axis, in the order of
+            /// tables and CSV columns (errors in degrees: `e_max_deg`).
+            pub const NAMES: [&'static str; 13] = [$(metric_table!(@rotary $field $kind)),*];
 
+            /// The names of a linear axis's metrics ([`Metrics::NAMES`]
+            /// without the `_deg`; the unit, mm, is beside them).
+            pub const NAMES_LINEAR: [&'static str; 13] = [$(stringify!($field)),*];
+
+            /// The columns of a linear axis's metrics in a CSV (results.csv):
+            /// the errors with their unit in the name (`e_max_mm`), as a rotary
+            /// axis's say `_deg`, so that a table read into pandas or MATLAB
+            /// carries its unit.
+            pub const CSV_LINEAR: [&'static str; 13] = [$(metric_table!(@csv $field $kind)),*];
+
+            /// The unit of a metric on `axis` (`""` for a ratio, a count or a flag).
+            pub fn unit_of(name: &str, axis: Axis) -> &'static str {
+                $(
+                    if name == stringify!($field) {
+                        return metric_table!(@unit axis $kind $($unit)?);
+                    }
+                    if name == metric_table!(@rotary $field $kind) {
+                        return metric_table!(@unit Axis::Rotary $kind $($unit)?);
+                    }
+                    if name == metric_table!(@csv $field $kind) {
+                        return metric_table!(@unit Axis::Linear $kind $($unit)?);
+                    }
+                )*
+                ""
+            }
+
+            /// A metric by name, as a number (`diverged` is 1 or 0): any
+            /// axis's bare name, or the error's name in this axis's unit.
+            pub fn get(&self, name: &str) -> Option<f64> {
+                let own = match self.axis {
+                    Axis::Rotary => &Self::NAMES,
+                    Axis::Linear => &Self::CSV_LINEAR,
+                };
+                let i = Self::NAMES_LINEAR
+                    .iter()
+                    .position(|n| *n == name)
+                    .or_else(|| own.iter().position(|n| *n == name))?;
+                let mut k = 0;
+                $(
+                    if i == k {
+                        return metric_table!(@get self $field $kind);
+                    }
+                    k += 1;
+                )*
+                let _ = k;
+                None
+            }
+        }
+    };
+    (@rotary $field:ident error) => { concat!(stringify!($field), "_deg") };
+    (@rotary $field:ident $kind:ident) => { stringify!($field) };
+    (@csv $field:ident error) => { concat!(stringify!($field), "_mm") };
+    (@csv $field:ident $kind:ident) => { stringify!($field) };
+    (@unit $axis:ident error) => { $axis.unit() };
+    (@unit $axis:ident value $unit:literal) => { $unit };
+    (@unit $axis:ident $kind:ident) => { "" };
+    (@unit $a:ident :: $b:ident error) => { Axis::$b.unit() };
+    (@unit $a:ident :: $b:ident value $unit:literal) => { $unit };
+    (@unit $a:ident :: $b:ident $kind:ident) => { "" };
+    (@get $s:ident $field:ident flag) => { Some(if $s.$field { 1.0 } else { 0.0 }) };
+    (@get $s:ident $field:ident count) => { Some($s.$field as f64) };
+    (@get $s:ident $field:ident $kind:ident) => { $s.$field };
+}
+
+metric_table! {
+    e_max: error,
+    e_final: error,
+    e_rms: error,
+    u_max: value "V",
+    u_rms: value "V",
+    chattering: ratio,
+    u_tv_per_s: value "V/s",
+    w_norm_max: ratio,
+    w_norm_final: ratio,
+    dead_zone_fraction: ratio,
+    diverged: flag,
+    diverged_at_s: value "s",
+    samples: count,
+}
+
+impl Metrics {
     /// The metric columns of `axis` in a CSV: [`Metrics::NAMES`] on a
     /// rotary axis, [`Metrics::CSV_LINEAR`] on a linear one.
     pub fn csv_names(axis: Axis) -> &'static [&'static str; 13] {
@@ -91,90 +164,12 @@ impl Metrics {
         }
     }
 
-    /// The columns of a linear axis's metrics in a CSV (results.csv):
-    /// the errors with their unit in the name (`e_max_mm`), as a rotary
-    /// axis's say `_deg`, so that a table read into pandas or MATLAB
-    /// carries its unit.
-    pub const CSV_LINEAR: [&'static str; 13] = [
-        "e_max_mm",
-        "e_final_mm",
-        "e_rms_mm",
-        "u_max",
-        "u_rms",
-        "chattering",
-        "u_tv_per_s",
-        "w_norm_max",
-        "w_norm_final",
-        "dead_zone_fraction",
-        "diverged",
-        "diverged_at_s",
-        "samples",
-    ];
-
     /// The metric keys of `axis` (summary.json, the bindings): rotary
     /// `e_max_deg`, linear `e_max` (with the unit beside it).
     pub fn names(axis: Axis) -> &'static [&'static str; 13] {
         match axis {
             Axis::Rotary => &Self::NAMES,
             Axis::Linear => &Self::NAMES_LINEAR,
-        }
-    }
-
-    /// The unit of a metric on `axis` (`""` for a ratio, a count or a flag).
-    pub fn unit_of(name: &str, axis: Axis) -> &'static str {
-        match name {
-            "e_max_deg" | "e_final_deg" | "e_rms_deg" => "deg",
-            "e_max_mm" | "e_final_mm" | "e_rms_mm" => "mm",
-            "e_max" | "e_final" | "e_rms" => axis.unit(),
-            "u_max" | "u_rms" => "V",
-            "u_tv_per_s" => "V/s",
-            "diverged_at_s" => "s",
-            _ => "",
-        }
-    }
-
-    /// The names of the metrics on a rotary axis, in the order of tables
-    /// and CSV columns.
-    pub const NAMES: [&'static str; 13] = [
-        "e_max_deg",
-        "e_final_deg",
-        "e_rms_deg",
-        "u_max",
-        "u_rms",
-        "chattering",
-        "u_tv_per_s",
-        "w_norm_max",
-        "w_norm_final",
-        "dead_zone_fraction",
-        "diverged",
-        "diverged_at_s",
-        "samples",
-    ];
-
-    /// A metric by name, as a number (`diverged` is 1 or 0).
-    pub fn get(&self, name: &str) -> Option<f64> {
-        let rotary = self.axis == Axis::Rotary;
-        match name {
-            "e_max_deg" if rotary => self.e_max,
-            "e_final_deg" if rotary => self.e_final,
-            "e_rms_deg" if rotary => self.e_rms,
-            "e_max_mm" if !rotary => self.e_max,
-            "e_final_mm" if !rotary => self.e_final,
-            "e_rms_mm" if !rotary => self.e_rms,
-            "e_max" => self.e_max,
-            "e_final" => self.e_final,
-            "e_rms" => self.e_rms,
-            "u_max" => self.u_max,
-            "u_rms" => self.u_rms,
-            "chattering" => self.chattering,
-            "u_tv_per_s" => self.u_tv_per_s,
-            "w_norm_max" => self.w_norm_max,
-            "w_norm_final" => self.w_norm_final,
-            "dead_zone_fraction" => self.dead_zone_fraction,
-            "diverged" => Some(if self.diverged { 1.0 } else { 0.0 }),
-            "diverged_at_s" => self.diverged_at_s,
-            "samples" => Some(self.samples as f64),
-            _ => None,
         }
     }
 
@@ -493,6 +488,67 @@ mod tests {
     /// keep_max is f64::max for a maximum running from +0: −0 and
     /// negative values leave +0 as it is, a peak in the middle is kept,
     /// NaN and smaller values leave it, +∞ takes it.
+    /// The lists generated from the one table, against the names and units
+    /// written out: the errors carry the axis's unit in every form, the
+    /// rest their own.
+    #[test]
+    fn names_units_and_lookup_come_from_one_table() {
+        assert_eq!(
+            Metrics::NAMES[..3],
+            ["e_max_deg", "e_final_deg", "e_rms_deg"]
+        );
+        assert_eq!(
+            Metrics::CSV_LINEAR[..3],
+            ["e_max_mm", "e_final_mm", "e_rms_mm"]
+        );
+        assert_eq!(Metrics::NAMES_LINEAR[..3], ["e_max", "e_final", "e_rms"]);
+        assert_eq!(Metrics::NAMES[3..], Metrics::NAMES_LINEAR[3..]);
+        assert_eq!(Metrics::NAMES[12], "samples");
+        for (name, axis, unit) in [
+            ("e_max_deg", Axis::Linear, "deg"),
+            ("e_rms_mm", Axis::Rotary, "mm"),
+            ("e_final", Axis::Linear, "mm"),
+            ("e_final", Axis::Rotary, "deg"),
+            ("u_rms", Axis::Linear, "V"),
+            ("u_tv_per_s", Axis::Rotary, "V/s"),
+            ("diverged_at_s", Axis::Rotary, "s"),
+            ("chattering", Axis::Rotary, ""),
+            ("samples", Axis::Linear, ""),
+            ("nonsense", Axis::Linear, ""),
+        ] {
+            assert_eq!(Metrics::unit_of(name, axis), unit, "{name}");
+        }
+        let mut m = sample_metrics(Axis::Linear);
+        assert_eq!(m.get("e_max"), Some(1.5));
+        assert_eq!(m.get("e_max_mm"), Some(1.5));
+        assert_eq!(m.get("e_max_deg"), None, "a rotary name on a linear axis");
+        assert_eq!(m.get("u_tv_per_s"), Some(7.0));
+        assert_eq!(m.get("diverged"), Some(1.0));
+        assert_eq!(m.get("samples"), Some(42.0));
+        m.axis = Axis::Rotary;
+        assert_eq!(m.get("e_max_deg"), Some(1.5));
+        assert_eq!(m.get("e_max_mm"), None);
+    }
+
+    fn sample_metrics(axis: Axis) -> Metrics {
+        Metrics {
+            e_max: Some(1.5),
+            e_final: None,
+            e_rms: None,
+            u_max: None,
+            u_rms: None,
+            chattering: None,
+            u_tv_per_s: Some(7.0),
+            w_norm_max: None,
+            w_norm_final: None,
+            dead_zone_fraction: None,
+            diverged: true,
+            diverged_at_s: Some(0.5),
+            samples: 42,
+            axis,
+        }
+    }
+
     #[test]
     fn keep_max_is_a_running_max() {
         let seq = [

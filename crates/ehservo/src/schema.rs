@@ -90,10 +90,60 @@ pub fn schema(format: Format) -> Value {
     let mut v = root.to_value();
     strip_null(&mut v);
     prune(&mut v);
+    strip_code(&mut v);
     if let Some(o) = v.as_object_mut() {
         o.insert("title".into(), format.title().into());
     }
     v
+}
+
+/// Removes the code blocks (a type's runnable rustdoc example) from every
+/// description: a schema and its page say what a key means to a user, not
+/// how the Rust API is called.
+fn strip_code(v: &mut Value) {
+    match v {
+        Value::Object(o) => {
+            for (k, x) in o.iter_mut() {
+                match x {
+                    Value::String(d) if k == "description" => *d = without_code(d),
+                    _ => strip_code(x),
+                }
+            }
+        }
+        Value::Array(a) => a.iter_mut().for_each(strip_code),
+        _ => {}
+    }
+}
+
+/// `text` without its Rust code blocks (a fence with no language or
+/// `rust`; a `text` block, a formula, stays), and with rustdoc's escaped
+/// brackets (`\[6\]`, which keep a citation from reading as a link) as
+/// plain brackets.
+fn without_code(text: &str) -> String {
+    let mut out: Vec<&str> = Vec::new();
+    let mut code = false;
+    let mut other = false;
+    for line in text.lines() {
+        let t = line.trim_start();
+        if let Some(lang) = t.strip_prefix("```") {
+            if code {
+                code = false;
+                continue;
+            }
+            if !other && (lang.is_empty() || lang.starts_with("rust")) {
+                code = true;
+                continue;
+            }
+            other = !other;
+        }
+        if !code {
+            out.push(line);
+        }
+    }
+    out.join("\n")
+        .trim_end()
+        .replace("\\[", "[")
+        .replace("\\]", "]")
 }
 
 /// The schema as the committed file holds it: pretty JSON and a newline.

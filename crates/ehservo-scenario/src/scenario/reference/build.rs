@@ -1,20 +1,42 @@
-//! Building a `[reference]` into its trajectory: the kinds on a rotary axis
-//! (degrees) and on a linear one (millimetres), each in SI.
+//! Building a `[reference]` into its trajectory: one code path for a rotary
+//! axis (keys in degrees) and a linear one (millimetres), each in SI.
 
 use super::*;
 
 impl ReferenceCfg {
-    /// The kinds on a linear axis, in millimetres.
-    pub(super) fn build_linear(
+    /// The kind on `axis`, its keys in the axis's display unit (degrees or
+    /// millimetres), its trajectory in SI: one code path for both axes. A
+    /// position limit (`theta_limit`, SI; infinite for a plant with end
+    /// stops) is checked where the kind's peak is known. On a rotary axis
+    /// the amplitude defaults to the paper's 5° (and must be ≥ 0 for a
+    /// sine, as the paper's checks had it); on a linear one it is required.
+    pub(super) fn build_kind(
         &self,
+        axis: Axis,
         horizon: f64,
+        theta_limit: f64,
         base_dir: Option<&Path>,
     ) -> Result<AnyReference, Bad> {
         let kind = self.kind;
-        let mm = |v: f64| v / 1e3;
+        let si = |v: f64| axis.to_si(v);
+        let amp_key = Self::unit_key(axis, "amplitude_deg");
+        let slope_key = Self::unit_key(axis, "slope_deg_per_s");
+        // |position| ≤ `peak` (SI) over the run, checked against the limit.
+        let within = |key: &str, peak: f64| -> Result<(), Bad> {
+            if peak >= theta_limit {
+                bad(
+                    key,
+                    "the reference reaches simulation.theta_limit: every run would count as diverged",
+                )
+            } else {
+                Ok(())
+            }
+        };
         let amplitude = || -> Result<f64, Bad> {
-            let a = required(kind, "amplitude_mm", self.amplitude_mm)?;
-            finite("amplitude_mm", a)
+            match axis {
+                Axis::Rotary => finite(amp_key, self.amplitude()),
+                Axis::Linear => finite(amp_key, required(kind, amp_key, self.amplitude_mm)?),
+            }
         };
         let tau = || {
             let t = required(kind, "prefilter_tau", self.prefilter_tau)?;
@@ -30,32 +52,40 @@ impl ReferenceCfg {
         let start = || finite("start", self.start.unwrap_or(0.0));
         match kind {
             ReferenceKind::Sine => {
-                let a = amplitude()?;
+                let a = match axis {
+                    Axis::Rotary => non_negative(amp_key, self.amplitude())?,
+                    Axis::Linear => amplitude()?,
+                };
+                within(amp_key, si(a))?;
                 let f = positive("frequency_hz", self.frequency())?;
                 let mut s = Sine::from_deg_hz(0.0, f);
-                s.amplitude = mm(a);
+                s.amplitude = si(a);
                 Ok(AnyReference::Sine(s))
             }
             ReferenceKind::Step => {
-                let (a, t0) = (amplitude()?, start()?);
+                let a = amplitude()?;
+                within(amp_key, si(a.abs()))?;
+                let t0 = start()?;
                 Table::reference(
-                    vec![Knot { t: t0, v: 0.0 }, Knot { t: t0, v: mm(a) }],
+                    vec![Knot { t: t0, v: 0.0 }, Knot { t: t0, v: si(a) }],
                     tau()?,
                 )
             }
             ReferenceKind::Ramp => {
-                let slope = finite(
-                    "slope_mm_per_s",
-                    required(kind, "slope_mm_per_s", self.slope_mm_per_s)?,
-                )?;
+                let given = match axis {
+                    Axis::Rotary => self.slope_deg_per_s,
+                    Axis::Linear => self.slope_mm_per_s,
+                };
+                let slope = finite(slope_key, required(kind, slope_key, given)?)?;
                 let t0 = start()?;
+                within(slope_key, si(slope.abs() * (horizon - t0).max(0.0)))?;
                 let end = horizon.max(t0) + 1.0;
                 Table::reference(
                     vec![
                         Knot { t: t0, v: 0.0 },
                         Knot {
                             t: end,
-                            v: mm(slope) * (end - t0),
+                            v: si(slope) * (end - t0),
                         },
                     ],
                     tau()?,
@@ -63,20 +93,26 @@ impl ReferenceCfg {
             }
             ReferenceKind::Square => {
                 let a = amplitude()?;
+                within(amp_key, si(a.abs()))?;
                 let f = positive("frequency_hz", self.frequency())?;
-                Table::reference(square_knots(mm(a), f, horizon)?, tau()?)
+                Table::reference(square_knots(si(a), f, horizon)?, tau()?)
             }
             ReferenceKind::Chirp => {
                 let a = amplitude()?;
+                within(amp_key, si(a.abs()))?;
                 let f0 = positive("f0_hz", required(kind, "f0_hz", self.f0_hz)?)?;
                 let f1 = positive("f1_hz", required(kind, "f1_hz", self.f1_hz)?)?;
                 let d = positive("duration", required(kind, "duration", self.duration)?)?;
-                let c = Chirp::try_new(mm(a), f0, f1, d)
+                let c = Chirp::try_new(si(a), f0, f1, d)
                     .map_err(|e| KeyError::new("reference", format!("{}: {}", e.name, e.reason)))?;
                 Ok(AnyReference::Chirp(c))
             }
             ReferenceKind::Multisine => {
-                let comps = self.components(Axis::Linear)?;
+                let comps = self.components(axis)?;
+                within(
+                    "components",
+                    comps.iter().map(|c| c.amplitude.abs()).sum::<f64>(),
+                )?;
                 let m = Multisine::try_new(&comps)
                     .map_err(|e| KeyError::new("reference.components", e.to_string()))?;
                 Ok(AnyReference::Multisine(m))
@@ -90,8 +126,13 @@ impl ReferenceCfg {
                     Some(d) if Path::new(file).is_relative() => d.join(file),
                     _ => PathBuf::from(file),
                 };
-                let knots = read_csv_on(&path, Axis::Linear)
+                let knots = read_csv_on(&path, axis)
                     .map_err(|e| KeyError::new("reference.file", e.to_string()))?;
+                let peak = knots.iter().map(|k| k.v.abs()).fold(0.0, f64::max);
+                within("file", peak).map_err(|e| {
+                    let r = format!("{}: {}", path.display(), e.reason);
+                    KeyError::new(e.key, r)
+                })?;
                 Table::reference(knots, tau)
             }
         }
@@ -144,132 +185,6 @@ impl ReferenceCfg {
             });
         }
         Ok(comps)
-    }
-
-    /// The paper's kinds, in degrees, with their checks in their order.
-    pub(super) fn build_rotary(
-        &self,
-        horizon: f64,
-        theta_limit: f64,
-        base_dir: Option<&Path>,
-    ) -> Result<AnyReference, Bad> {
-        let kind = self.kind;
-        // |θd| ≤ `peak` (rad) over the run, checked against the limit.
-        let within = |key: &str, peak: f64| -> Result<(), Bad> {
-            if peak >= theta_limit {
-                bad(
-                    key,
-                    "the reference reaches simulation.theta_limit: every run would count as diverged",
-                )
-            } else {
-                Ok(())
-            }
-        };
-        let tau = || {
-            let t = required(kind, "prefilter_tau", self.prefilter_tau)?;
-            if t.is_finite() && t >= 0.0 {
-                Ok(t)
-            } else {
-                bad(
-                    "prefilter_tau",
-                    format!("must be finite and >= 0 (got {t:?})"),
-                )
-            }
-        };
-        let start = || finite("start", self.start.unwrap_or(0.0));
-        match kind {
-            ReferenceKind::Sine => {
-                // The paper's checks, in their order, with their words.
-                let (a, f) = (self.amplitude(), self.frequency());
-                if !(a.is_finite() && a >= 0.0) {
-                    return bad(
-                        "amplitude_deg",
-                        format!("must be finite and >= 0 (got {a:?})"),
-                    );
-                }
-                within("amplitude_deg", a.to_radians())?;
-                if !(f.is_finite() && f > 0.0) {
-                    return bad(
-                        "frequency_hz",
-                        format!("must be finite and > 0 (got {f:?})"),
-                    );
-                }
-                Ok(AnyReference::Sine(Sine::from_deg_hz(a, f)))
-            }
-            ReferenceKind::Step => {
-                let a = finite("amplitude_deg", self.amplitude())?;
-                within("amplitude_deg", a.abs().to_radians())?;
-                let t0 = start()?;
-                let v = a * DR;
-                Table::reference(vec![Knot { t: t0, v: 0.0 }, Knot { t: t0, v }], tau()?)
-            }
-            ReferenceKind::Ramp => {
-                let slope = finite(
-                    "slope_deg_per_s",
-                    required(kind, "slope_deg_per_s", self.slope_deg_per_s)?,
-                )?;
-                let t0 = start()?;
-                within(
-                    "slope_deg_per_s",
-                    (slope.abs() * (horizon - t0).max(0.0)).to_radians(),
-                )?;
-                let end = horizon.max(t0) + 1.0;
-                Table::reference(
-                    vec![
-                        Knot { t: t0, v: 0.0 },
-                        Knot {
-                            t: end,
-                            v: slope * DR * (end - t0),
-                        },
-                    ],
-                    tau()?,
-                )
-            }
-            ReferenceKind::Square => {
-                let a = finite("amplitude_deg", self.amplitude())?;
-                within("amplitude_deg", a.abs().to_radians())?;
-                let f = positive("frequency_hz", self.frequency())?;
-                Table::reference(square_knots(a * DR, f, horizon)?, tau()?)
-            }
-            ReferenceKind::Chirp => {
-                let a = finite("amplitude_deg", self.amplitude())?;
-                within("amplitude_deg", a.abs().to_radians())?;
-                let f0 = positive("f0_hz", required(kind, "f0_hz", self.f0_hz)?)?;
-                let f1 = positive("f1_hz", required(kind, "f1_hz", self.f1_hz)?)?;
-                let d = positive("duration", required(kind, "duration", self.duration)?)?;
-                let c = Chirp::try_new(a * DR, f0, f1, d)
-                    .map_err(|e| KeyError::new("reference", format!("{}: {}", e.name, e.reason)))?;
-                Ok(AnyReference::Chirp(c))
-            }
-            ReferenceKind::Multisine => {
-                let comps = self.components(Axis::Rotary)?;
-                within(
-                    "components",
-                    comps.iter().map(|c| c.amplitude.abs()).sum::<f64>(),
-                )?;
-                let m = Multisine::try_new(&comps)
-                    .map_err(|e| KeyError::new("reference.components", e.to_string()))?;
-                Ok(AnyReference::Multisine(m))
-            }
-            ReferenceKind::Csv => {
-                let Some(file) = &self.file else {
-                    return bad("file", "is required by kind `csv`");
-                };
-                let tau = tau()?;
-                let path = match base_dir {
-                    Some(d) if Path::new(file).is_relative() => d.join(file),
-                    _ => PathBuf::from(file),
-                };
-                let knots =
-                    read_csv(&path).map_err(|e| KeyError::new("reference.file", e.to_string()))?;
-                let peak = knots.iter().map(|k| k.v.abs()).fold(0.0, f64::max);
-                within("file", peak).map_err(|e| {
-                    let r = format!("{}: {}", path.display(), e.reason);
-                    KeyError::new(e.key, r)
-                })?;
-                Table::reference(knots, tau)
-            }
-        }
     }
 }
 

@@ -285,6 +285,10 @@ fn positive(key: &str, v: f64) -> Result<f64, Bad> {
     ehservo_sim::error::positive(key, v).map_err(|e| e.under("reference"))
 }
 
+fn non_negative(key: &str, v: f64) -> Result<f64, Bad> {
+    ehservo_sim::error::non_negative(key, v).map_err(|e| e.under("reference"))
+}
+
 fn required(kind: ReferenceKind, key: &str, v: Option<f64>) -> Result<f64, Bad> {
     v.map_or_else(
         || bad(key, format!("is required by kind `{}`", kind.name())),
@@ -462,10 +466,7 @@ impl ReferenceCfg {
             Axis::Rotary => finite("offset_deg", self.offset_deg.unwrap_or(0.0))?,
             Axis::Linear => finite("offset_mm", self.offset_mm.unwrap_or(0.0))?,
         };
-        let built = match axis {
-            Axis::Rotary => self.build_rotary(horizon, theta_limit, base_dir)?,
-            Axis::Linear => self.build_linear(horizon, base_dir)?,
-        };
+        let built = self.build_kind(axis, horizon, theta_limit, base_dir)?;
         Ok(if offset == 0.0 {
             built
         } else {
