@@ -45,7 +45,7 @@ pub use bounds::Bounds;
 
 use crate::error::InputError;
 use crate::scenario::Scenario;
-use bounds::spread;
+use bounds::{spread, Fitted};
 use data::{Axis, ColumnMap, Experiment, ReadOptions};
 use derived::{greybox_derived, linear_derived};
 use ehservo_core::servo::{Load, ServoParams};
@@ -286,17 +286,13 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         gb_model = Some(model);
     }
     // 4. The spread and the bounds.
-    let bounds = spread(
-        opts,
-        &exps,
-        &linear,
-        &linear_result,
-        gb_model.as_ref(),
-        greybox_result.as_ref(),
-        &job.pl,
-        opts.load_terms,
-        k,
-    )?;
+    let fitted = Fitted {
+        linear: &linear,
+        lin: &linear_result,
+        gb: gb_model.as_ref(),
+        gbr: greybox_result.as_ref(),
+    };
+    let bounds = spread(opts, &exps, &fitted, &job.pl, opts.load_terms, k)?;
     // 5. The scenario.
     let scenario = match &greybox_result {
         Some(g) if !g.fit.diverged => Some(identified_scenario(
