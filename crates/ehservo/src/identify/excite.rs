@@ -274,101 +274,10 @@ pub fn design(s: &Spec) -> Result<Design> {
     let n = check(s)?;
     let h = 1.0 / s.rate;
     let (mut values, freqs, phases, iterations) = match s.signal {
-        Signal::Chirp => {
-            let c = ehservo_core::reference::Chirp::try_new(1.0, s.f0, s.f1, s.duration)
-                .map_err(|e| bad(format!("chirp: {e}")))?;
-            use ehservo_core::reference::Reference;
-            (
-                (0..n).map(|k| c.z(k as f64 * h)[0]).collect::<Vec<f64>>(),
-                vec![],
-                vec![],
-                0,
-            )
-        }
-        Signal::Multisine => {
-            let l = s.period;
-            let fr = s.rate / l as f64;
-            let ks: Vec<usize> = ((s.f0 / fr).ceil() as usize..=(s.f1 / fr).floor() as usize)
-                .filter(|&k| k >= 1 && k < l / 2)
-                .collect();
-            let kk = ks.len() as f64;
-            let mut ph: Vec<f64> = (1..=ks.len())
-                .map(|i| -std::f64::consts::PI * (i as f64) * (i as f64 - 1.0) / kk)
-                .collect();
-            let mut iters = 0;
-            if s.phases == Phases::Crest {
-                let mut planner = RealFftPlanner::<f64>::new();
-                let fwd = planner.plan_fft_forward(l);
-                let mut best = (
-                    peak(&period_of(l, &ks, &ph)) / rms(&period_of(l, &ks, &ph)),
-                    ph.clone(),
-                );
-                for it in 0..200 {
-                    iters = it + 1;
-                    let mut x = period_of(l, &ks, &ph);
-                    let (p, r) = (peak(&x), rms(&x));
-                    if p / r < best.0 {
-                        best = (p / r, ph.clone());
-                    }
-                    // Clip at 90 % of the peak, keep the phases the clipping gives.
-                    let c = 0.9 * p;
-                    for v in x.iter_mut() {
-                        *v = v.clamp(-c, c);
-                    }
-                    let mut spec = fwd.make_output_vec();
-                    fwd.process(&mut x, &mut spec)
-                        .expect("buffers of the plan's length");
-                    for (i, &k) in ks.iter().enumerate() {
-                        ph[i] = spec[k].arg() + std::f64::consts::FRAC_PI_2;
-                    }
-                }
-                let x = period_of(l, &ks, &ph);
-                if peak(&x) / rms(&x) < best.0 {
-                    best = (peak(&x) / rms(&x), ph.clone());
-                }
-                ph = best.1;
-            }
-            let one = period_of(l, &ks, &ph);
-            (
-                (0..n).map(|k| one[k % l]).collect(),
-                ks.iter().map(|&k| k as f64 * fr).collect(),
-                ph,
-                iters,
-            )
-        }
-        Signal::Prbs => {
-            let taps = TAPS
-                .iter()
-                .find(|t| t.0 == s.order)
-                .map(|t| t.1)
-                .unwrap_or(&[]);
-            let mut reg: u32 = (1u32 << s.order) - 1;
-            let mut bits = Vec::with_capacity(n / s.clock + 1);
-            while bits.len() * s.clock < n {
-                bits.push(reg & 1);
-                // XOR of the taps (1-based from the output end), shifted in.
-                let fb = taps
-                    .iter()
-                    .fold(0u32, |a, &t| a ^ ((reg >> (s.order - t)) & 1));
-                reg = (reg >> 1) | (fb << (s.order - 1));
-            }
-            (
-                (0..n)
-                    .map(|k| if bits[k / s.clock] == 1 { 1.0 } else { -1.0 })
-                    .collect(),
-                vec![],
-                vec![],
-                0,
-            )
-        }
-        Signal::Steps => {
-            let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
-            let per = (s.hold * s.rate).round().max(1.0) as usize;
-            let levels: Vec<f64> = (0..n / per + 1)
-                .map(|_| 2.0 * rng.random::<f64>() - 1.0)
-                .collect();
-            ((0..n).map(|k| levels[k / per]).collect(), vec![], vec![], 0)
-        }
+        Signal::Chirp => (chirp(s, n, h)?, vec![], vec![], 0),
+        Signal::Multisine => multisine(s, n),
+        Signal::Prbs => (prbs(s, n), vec![], vec![], 0),
+        Signal::Steps => (steps(s, n), vec![], vec![], 0),
     };
     // Scaled to the peak A (a chirp is A·sin φ as its reference kind is).
     let pk = if s.signal == Signal::Chirp {
@@ -392,6 +301,112 @@ pub fn design(s: &Spec) -> Result<Design> {
         crest_factor: p / r,
         iterations,
     })
+}
+
+/// `n` samples of the unit chirp from f0 to f1, as the chirp reference is.
+fn chirp(s: &Spec, n: usize, h: f64) -> Result<Vec<f64>> {
+    let c = ehservo_core::reference::Chirp::try_new(1.0, s.f0, s.f1, s.duration)
+        .map_err(|e| bad(format!("chirp: {e}")))?;
+    use ehservo_core::reference::Reference;
+    Ok((0..n).map(|k| c.z(k as f64 * h)[0]).collect::<Vec<f64>>())
+}
+
+/// `n` samples of the multisine: the harmonics of the period between f0
+/// and f1 with Schroeder's phases, or the crest-minimised ones; also its
+/// frequencies (Hz), phases (rad) and the iterations that minimised them.
+fn multisine(s: &Spec, n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize) {
+    let l = s.period;
+    let fr = s.rate / l as f64;
+    let ks: Vec<usize> = ((s.f0 / fr).ceil() as usize..=(s.f1 / fr).floor() as usize)
+        .filter(|&k| k >= 1 && k < l / 2)
+        .collect();
+    let kk = ks.len() as f64;
+    let mut ph: Vec<f64> = (1..=ks.len())
+        .map(|i| -std::f64::consts::PI * (i as f64) * (i as f64 - 1.0) / kk)
+        .collect();
+    let mut iters = 0;
+    if s.phases == Phases::Crest {
+        (ph, iters) = crest_phases(l, &ks, ph);
+    }
+    let one = period_of(l, &ks, &ph);
+    (
+        (0..n).map(|k| one[k % l]).collect(),
+        ks.iter().map(|&k| k as f64 * fr).collect(),
+        ph,
+        iters,
+    )
+}
+
+/// The phases of harmonics `ks` of period `l` that minimise the crest
+/// factor, from Schroeder's `ph`: 200 rounds of clipping at 90 % of the
+/// peak and keeping the phases the clipping gives; the best seen, and the
+/// rounds made.
+fn crest_phases(l: usize, ks: &[usize], mut ph: Vec<f64>) -> (Vec<f64>, usize) {
+    let mut iters = 0;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(l);
+    let mut best = (
+        peak(&period_of(l, ks, &ph)) / rms(&period_of(l, ks, &ph)),
+        ph.clone(),
+    );
+    for it in 0..200 {
+        iters = it + 1;
+        let mut x = period_of(l, ks, &ph);
+        let (p, r) = (peak(&x), rms(&x));
+        if p / r < best.0 {
+            best = (p / r, ph.clone());
+        }
+        // Clip at 90 % of the peak, keep the phases the clipping gives.
+        let c = 0.9 * p;
+        for v in x.iter_mut() {
+            *v = v.clamp(-c, c);
+        }
+        let mut spec = fwd.make_output_vec();
+        fwd.process(&mut x, &mut spec)
+            .expect("buffers of the plan's length");
+        for (i, &k) in ks.iter().enumerate() {
+            ph[i] = spec[k].arg() + std::f64::consts::FRAC_PI_2;
+        }
+    }
+    let x = period_of(l, ks, &ph);
+    if peak(&x) / rms(&x) < best.0 {
+        best = (peak(&x) / rms(&x), ph.clone());
+    }
+    (best.1, iters)
+}
+
+/// `n` samples of the maximum-length sequence of the register's order,
+/// ±1, each bit held `clock` samples.
+fn prbs(s: &Spec, n: usize) -> Vec<f64> {
+    let taps = TAPS
+        .iter()
+        .find(|t| t.0 == s.order)
+        .map(|t| t.1)
+        .unwrap_or(&[]);
+    let mut reg: u32 = (1u32 << s.order) - 1;
+    let mut bits = Vec::with_capacity(n / s.clock + 1);
+    while bits.len() * s.clock < n {
+        bits.push(reg & 1);
+        // XOR of the taps (1-based from the output end), shifted in.
+        let fb = taps
+            .iter()
+            .fold(0u32, |a, &t| a ^ ((reg >> (s.order - t)) & 1));
+        reg = (reg >> 1) | (fb << (s.order - 1));
+    }
+    (0..n)
+        .map(|k| if bits[k / s.clock] == 1 { 1.0 } else { -1.0 })
+        .collect()
+}
+
+/// `n` samples of random levels in [−1, 1), each held `hold` seconds
+/// (seeded ChaCha8).
+fn steps(s: &Spec, n: usize) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    let per = (s.hold * s.rate).round().max(1.0) as usize;
+    let levels: Vec<f64> = (0..n / per + 1)
+        .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+        .collect();
+    (0..n).map(|k| levels[k / per]).collect()
 }
 
 /// The default proportional gain: a fifth of (a2·a3 − a1)/b.
