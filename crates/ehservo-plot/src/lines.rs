@@ -5,7 +5,8 @@ use crate::axes::{linear_ticks, log_tick, pad, range, typeset, Bounds, Runs};
 use crate::backend::{ensure_font, png_file, FAMILY};
 use crate::style::{color, cycle, Dash};
 use anyhow::{anyhow, Context, Result};
-use plotters::coord::ranged1d::{BoldPoints, Ranged};
+use plotters::coord::ranged1d::{BoldPoints, Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -216,6 +217,63 @@ where
         .enumerate()
         .map(|(i, s)| (i, finite_runs(&s.x, &s.y, p.log_y)))
         .collect();
+    let ((x0, x1), (y0, y1)) = data_ranges(p, &runs);
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(typeset(&p.title), font(18))
+        .margin(8)
+        .x_label_area_size(40)
+        .y_label_area_size(80);
+    if p.log_y {
+        let (y0, y1) = (y0.max(1e-300), y1.max(1e-300));
+        let (y0, y1) = if y1 > y0 {
+            (y0, y1)
+        } else {
+            (y0 / 10.0, y1 * 10.0)
+        };
+        let bounds = Bounds {
+            x0,
+            x1,
+            y0: y0.log10(),
+            y1: y1.log10(),
+            log_y: true,
+        };
+        let chart = builder
+            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+            .map_err(|e| anyhow!("building a chart: {e}"))?;
+        draw_chart(chart, p, &runs, &bounds, &log_tick, segments)?;
+    } else {
+        let (y0, y1) = if p.y_range.is_some() && y1 > y0 {
+            (y0, y1)
+        } else {
+            pad(y0, y1)
+        };
+        let bounds = Bounds {
+            x0,
+            x1,
+            y0,
+            y1,
+            log_y: false,
+        };
+        let chart = builder
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| anyhow!("building a chart: {e}"))?;
+        let yfmt = linear_ticks(chart.as_coord_spec().y_spec().key_points(BoldPoints(8)));
+        draw_chart(chart, p, &runs, &bounds, &yfmt, segments)?;
+    }
+    Ok(())
+}
+
+/// The text of a panel in `size` points.
+fn font(size: u32) -> FontDesc<'static> {
+    (FAMILY, size).into_font()
+}
+
+/// A panel's x range, given or the data's and the marks' (a point range
+/// widened), and its y range, given or the data's inside the x range (not
+/// yet padded); the data are the lines' finite `runs` and the bands'
+/// lower edges.
+fn data_ranges(p: &Panel, runs: &[(usize, Runs)]) -> ((f64, f64), (f64, f64)) {
     let lowers: Vec<(usize, Runs)> = p
         .series
         .iter()
@@ -237,194 +295,214 @@ where
         .y_range
         .or_else(|| range(pts().filter(in_x).map(|p| p.1)))
         .unwrap_or((0.0, 1.0));
-    let font = |s: u32| (FAMILY, s).into_font();
-    let mut builder = ChartBuilder::on(area);
-    builder
-        .caption(typeset(&p.title), font(18))
-        .margin(8)
-        .x_label_area_size(40)
-        .y_label_area_size(80);
-    macro_rules! finish {
-        ($chart:expr, $bounds:expr, $yfmt:expr) => {{
-            let mut chart = $chart;
-            let bounds: Bounds = $bounds;
-            let xfmt = linear_ticks(chart.as_coord_spec().x_spec().key_points(BoldPoints(10)));
-            chart
-                .configure_mesh()
-                .x_labels(10)
-                .y_labels(8)
-                .x_label_formatter(&xfmt)
-                .y_label_formatter(&$yfmt)
-                .x_desc(typeset(&p.x_label))
-                .y_desc(typeset(&p.y_label))
-                .label_style(font(13))
-                .axis_desc_style(font(14))
-                .light_line_style(RGBColor(235, 235, 235))
-                .draw()
-                .map_err(|e| anyhow!("drawing axes: {e}"))?;
-            let mut any_label = false;
-            // Bands first, under the lines; clamped to the area.
-            for s in p.series.iter() {
-                let Some(lower) = &s.lower else { continue };
-                let clamp = |y: f64| {
-                    let (lo, hi) = (
-                        bounds.data_coords((0.0, bounds.y0)).1,
-                        bounds.data_coords((0.0, bounds.y1)).1,
-                    );
-                    y.clamp(lo, hi)
-                };
-                let c = color(s.color);
-                let mut drawn = false;
-                let keep = |i: &usize| {
-                    let (x, a, b) = (s.x[*i], lower[*i], s.y[*i]);
-                    x >= x0
-                        && x <= x1
-                        && a.is_finite()
-                        && b.is_finite()
-                        && (!p.log_y || (a > 0.0 && b > 0.0))
-                };
-                let idx: Vec<usize> = (0..s.x.len().min(lower.len()).min(s.y.len())).collect();
-                for piece in idx.split(|i| !keep(i)).filter(|r| r.len() > 1) {
-                    let mut poly: Vec<(f64, f64)> =
-                        piece.iter().map(|&i| (s.x[i], clamp(s.y[i]))).collect();
-                    poly.extend(piece.iter().rev().map(|&i| (s.x[i], clamp(lower[i]))));
-                    let anno = chart
-                        .draw_series(std::iter::once(Polygon::new(poly, c.mix(0.25).filled())))
-                        .map_err(|e| anyhow!("drawing a band: {e}"))?;
-                    let s_dash = s.dash;
-                    if !drawn && !s.label.is_empty() {
-                        any_label = true;
-                        anno.label(typeset(&s.label))
-                            .legend(move |at| swatch(c, s_dash, true, at));
-                    }
-                    drawn = true;
-                }
-            }
-            for (i, r) in &runs {
-                let s = &p.series[*i];
-                if s.lower.is_some() {
-                    continue;
-                }
-                let c = color(s.color);
-                let style = ShapeStyle::from(&c).stroke_width(2);
-                let mut first = true;
-                let pieces: Runs = if s.dash == Dash::Points {
-                    r.iter()
-                        .map(|run| run.iter().copied().filter(|q| bounds.inside(*q)).collect())
-                        .collect()
-                } else {
-                    r.iter().flat_map(|run| bounds.clip(run)).collect()
-                };
-                for run in pieces.iter().filter(|r| !r.is_empty()) {
-                    let dashed =
-                        |a: u32, b: u32| DashedLineSeries::new(run.iter().copied(), a, b, style);
-                    let anno = match s.dash {
-                        Dash::Solid if segments => chart
-                            .draw_series(
-                                run.windows(2)
-                                    .map(|w| PathElement::new(vec![w[0], w[1]], style)),
-                            )
-                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
-                        Dash::Solid => chart
-                            .draw_series(LineSeries::new(run.iter().copied(), style))
-                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
-                        Dash::Dashed => chart
-                            .draw_series(dashed(10, 6))
-                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
-                        Dash::Dotted => chart
-                            .draw_series(dashed(2, 4))
-                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
-                        Dash::DashDot => chart
-                            .draw_series(dashed(12, 4))
-                            .map_err(|e| anyhow!("drawing a line: {e}"))?,
-                        Dash::Points => chart
-                            .draw_series(
-                                run.iter()
-                                    .map(|&(x, y)| Circle::new((x, y), 4, style.filled())),
-                            )
-                            .map_err(|e| anyhow!("drawing points: {e}"))?,
-                    };
-                    let s_dash = s.dash;
-                    if first && !s.label.is_empty() {
-                        any_label = true;
-                        anno.label(typeset(&s.label))
-                            .legend(move |at| swatch(c, s_dash, false, at));
-                    }
-                    first = false;
-                }
-            }
-            let (ylo, yhi) = (
+    ((x0, x1), (y0, y1))
+}
+
+/// Draws a panel on its built chart (linear or logarithmic y): the axes,
+/// the bands under the lines, the lines, the marks and the legend.
+fn draw_chart<'a, DB, Y>(
+    mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    p: &Panel,
+    runs: &[(usize, Runs)],
+    bounds: &Bounds,
+    yfmt: &dyn Fn(&f64) -> String,
+    segments: bool,
+) -> Result<()>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let xfmt = linear_ticks(chart.as_coord_spec().x_spec().key_points(BoldPoints(10)));
+    chart
+        .configure_mesh()
+        .x_labels(10)
+        .y_labels(8)
+        .x_label_formatter(&xfmt)
+        .y_label_formatter(yfmt)
+        .x_desc(typeset(&p.x_label))
+        .y_desc(typeset(&p.y_label))
+        .label_style(font(13))
+        .axis_desc_style(font(14))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(|e| anyhow!("drawing axes: {e}"))?;
+    let banded = draw_bands(&mut chart, p, bounds)?;
+    let lined = draw_lines(&mut chart, p, runs, bounds, segments)?;
+    draw_marks(&mut chart, p, bounds)?;
+    if banded || lined {
+        chart
+            .configure_series_labels()
+            .label_font(font(13))
+            .legend_area_size(30)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| anyhow!("drawing the legend: {e}"))?;
+    }
+    Ok(())
+}
+
+/// Draws the bands, shaded and clamped to the plotting area, each piece
+/// where both edges are finite inside the x range; true when one has a
+/// legend entry.
+fn draw_bands<'a, DB, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    p: &Panel,
+    bounds: &Bounds,
+) -> Result<bool>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64>,
+{
+    let (x0, x1) = (bounds.x0, bounds.x1);
+    let mut any_label = false;
+    for s in p.series.iter() {
+        let Some(lower) = &s.lower else { continue };
+        let clamp = |y: f64| {
+            let (lo, hi) = (
                 bounds.data_coords((0.0, bounds.y0)).1,
                 bounds.data_coords((0.0, bounds.y1)).1,
             );
-            for m in p.marks.iter().filter(|m| m.x >= x0 && m.x <= x1) {
-                let st = ShapeStyle::from(&RGBColor(90, 90, 90)).stroke_width(1);
-                chart
-                    .draw_series(DashedLineSeries::new([(m.x, ylo), (m.x, yhi)], 6, 4, st))
-                    .map_err(|e| anyhow!("drawing a mark: {e}"))?;
-                chart
-                    .draw_series(std::iter::once(
-                        EmptyElement::at((m.x, ylo))
-                            + Text::new(
-                                typeset(&m.text),
-                                (-6, -4),
-                                TextStyle::from(font(13)).pos(Pos::new(HPos::Right, VPos::Bottom)),
-                            ),
-                    ))
-                    .map_err(|e| anyhow!("drawing a mark: {e}"))?;
+            y.clamp(lo, hi)
+        };
+        let c = color(s.color);
+        let mut drawn = false;
+        let keep = |i: &usize| {
+            let (x, a, b) = (s.x[*i], lower[*i], s.y[*i]);
+            x >= x0
+                && x <= x1
+                && a.is_finite()
+                && b.is_finite()
+                && (!p.log_y || (a > 0.0 && b > 0.0))
+        };
+        let idx: Vec<usize> = (0..s.x.len().min(lower.len()).min(s.y.len())).collect();
+        for piece in idx.split(|i| !keep(i)).filter(|r| r.len() > 1) {
+            let mut poly: Vec<(f64, f64)> =
+                piece.iter().map(|&i| (s.x[i], clamp(s.y[i]))).collect();
+            poly.extend(piece.iter().rev().map(|&i| (s.x[i], clamp(lower[i]))));
+            let anno = chart
+                .draw_series(std::iter::once(Polygon::new(poly, c.mix(0.25).filled())))
+                .map_err(|e| anyhow!("drawing a band: {e}"))?;
+            let s_dash = s.dash;
+            if !drawn && !s.label.is_empty() {
+                any_label = true;
+                anno.label(typeset(&s.label))
+                    .legend(move |at| swatch(c, s_dash, true, at));
             }
-            if any_label {
-                chart
-                    .configure_series_labels()
-                    .label_font(font(13))
-                    .legend_area_size(30)
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .position(SeriesLabelPosition::UpperRight)
-                    .draw()
-                    .map_err(|e| anyhow!("drawing the legend: {e}"))?;
-            }
-        }};
+            drawn = true;
+        }
     }
-    if p.log_y {
-        let (y0, y1) = (y0.max(1e-300), y1.max(1e-300));
-        let (y0, y1) = if y1 > y0 {
-            (y0, y1)
+    Ok(any_label)
+}
+
+/// Draws the lines (and points), each clipped to the plotting area, in its
+/// dash; true when one has a legend entry.
+fn draw_lines<'a, DB, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    p: &Panel,
+    runs: &[(usize, Runs)],
+    bounds: &Bounds,
+    segments: bool,
+) -> Result<bool>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64>,
+{
+    let mut any_label = false;
+    for (i, r) in runs {
+        let s = &p.series[*i];
+        if s.lower.is_some() {
+            continue;
+        }
+        let c = color(s.color);
+        let style = ShapeStyle::from(&c).stroke_width(2);
+        let mut first = true;
+        let pieces: Runs = if s.dash == Dash::Points {
+            r.iter()
+                .map(|run| run.iter().copied().filter(|q| bounds.inside(*q)).collect())
+                .collect()
         } else {
-            (y0 / 10.0, y1 * 10.0)
+            r.iter().flat_map(|run| bounds.clip(run)).collect()
         };
-        let bounds = Bounds {
-            x0,
-            x1,
-            y0: y0.log10(),
-            y1: y1.log10(),
-            log_y: true,
-        };
-        finish!(
-            builder
-                .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-                .map_err(|e| anyhow!("building a chart: {e}"))?,
-            bounds,
-            log_tick
-        );
-    } else {
-        let (y0, y1) = if p.y_range.is_some() && y1 > y0 {
-            (y0, y1)
-        } else {
-            pad(y0, y1)
-        };
-        let bounds = Bounds {
-            x0,
-            x1,
-            y0,
-            y1,
-            log_y: false,
-        };
-        let chart = builder
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| anyhow!("building a chart: {e}"))?;
-        let yfmt = linear_ticks(chart.as_coord_spec().y_spec().key_points(BoldPoints(8)));
-        finish!(chart, bounds, yfmt);
+        for run in pieces.iter().filter(|r| !r.is_empty()) {
+            let dashed = |a: u32, b: u32| DashedLineSeries::new(run.iter().copied(), a, b, style);
+            let anno = match s.dash {
+                Dash::Solid if segments => chart
+                    .draw_series(
+                        run.windows(2)
+                            .map(|w| PathElement::new(vec![w[0], w[1]], style)),
+                    )
+                    .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                Dash::Solid => chart
+                    .draw_series(LineSeries::new(run.iter().copied(), style))
+                    .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                Dash::Dashed => chart
+                    .draw_series(dashed(10, 6))
+                    .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                Dash::Dotted => chart
+                    .draw_series(dashed(2, 4))
+                    .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                Dash::DashDot => chart
+                    .draw_series(dashed(12, 4))
+                    .map_err(|e| anyhow!("drawing a line: {e}"))?,
+                Dash::Points => chart
+                    .draw_series(
+                        run.iter()
+                            .map(|&(x, y)| Circle::new((x, y), 4, style.filled())),
+                    )
+                    .map_err(|e| anyhow!("drawing points: {e}"))?,
+            };
+            let s_dash = s.dash;
+            if first && !s.label.is_empty() {
+                any_label = true;
+                anno.label(typeset(&s.label))
+                    .legend(move |at| swatch(c, s_dash, false, at));
+            }
+            first = false;
+        }
+    }
+    Ok(any_label)
+}
+
+/// Draws the marks inside the x range: a dashed vertical line across the
+/// plotting area, its note at its foot.
+fn draw_marks<'a, DB, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    p: &Panel,
+    bounds: &Bounds,
+) -> Result<()>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64>,
+{
+    let (ylo, yhi) = (
+        bounds.data_coords((0.0, bounds.y0)).1,
+        bounds.data_coords((0.0, bounds.y1)).1,
+    );
+    for m in p
+        .marks
+        .iter()
+        .filter(|m| m.x >= bounds.x0 && m.x <= bounds.x1)
+    {
+        let st = ShapeStyle::from(&RGBColor(90, 90, 90)).stroke_width(1);
+        chart
+            .draw_series(DashedLineSeries::new([(m.x, ylo), (m.x, yhi)], 6, 4, st))
+            .map_err(|e| anyhow!("drawing a mark: {e}"))?;
+        chart
+            .draw_series(std::iter::once(
+                EmptyElement::at((m.x, ylo))
+                    + Text::new(
+                        typeset(&m.text),
+                        (-6, -4),
+                        TextStyle::from(font(13)).pos(Pos::new(HPos::Right, VPos::Bottom)),
+                    ),
+            ))
+            .map_err(|e| anyhow!("drawing a mark: {e}"))?;
     }
     Ok(())
 }

@@ -5,11 +5,12 @@
 use super::fmt_sig;
 use super::poles::{sort_poles, Pole};
 use super::{paper_law, PaperLaw};
-use crate::scenario::{Loop, Scenario};
+use crate::scenario::{Loop, Scenario, SimulationCfg};
 use crate::simulation::Mode;
 use ehservo_core::control::sliding::SlidingConfig;
 use ehservo_core::reference::Reference;
 use ehservo_core::servo::NominalModel;
+use ehservo_sim::plant::UncertaintySpec;
 use nalgebra::{Complex, Matrix3, Matrix4, Vector3};
 use serde::Serialize;
 
@@ -166,29 +167,12 @@ pub(super) fn loop_analysis(lp: &Loop, model: &NominalModel, p: [f64; 3]) -> Loo
     let abar = model.coeffs.as_array();
     let u = &lp.stages().uncertainty;
     let h = sim.step;
-    let r_of = |fb: f64| 1.0 + u.b_reference * fb;
-    let a_of = |fa: f64| -> [f64; 3] { std::array::from_fn(|i| abar[i] + abar[i].abs() * fa) };
-    let bias = Truth {
-        a: a_of(u.a_bias),
-        r: r_of(u.b_bias),
-    };
-    let mut corners = Vec::new();
-    for fa in [u.a_bias - u.a_random.abs(), u.a_bias + u.a_random.abs()] {
-        for fb in [u.b_bias - u.b_random.abs(), u.b_bias + u.b_random.abs()] {
-            corners.push(Truth {
-                a: a_of(fa),
-                r: r_of(fb),
-            });
-        }
-    }
-    let r_worst = r_of(u.b_bias + u.b_random.abs());
-    // Load slopes at θ = 0 (module doc): sine load and the viscous friction.
-    let load = model.load;
-    let amp_k = load.amplitude * load.wavenumber;
-    let bv = load.friction.map(|f| f.viscous).unwrap_or(0.0);
-    let kd = model.params.d_per_torque();
-    let jt = model.params.jt;
-    let dd = [kd * amp_k, amp_k / jt + kd * bv, bv / jt];
+    let Variation {
+        bias,
+        corners,
+        r_worst,
+    } = Variation::of(&abar, u);
+    let dd = load_slopes(model);
     let bb = c.bound_b;
     let (slope, kb_range) = match law {
         PaperLaw::Nnvsc => (Some(c.gamma1 / (1.0 - bb)), None),
@@ -256,12 +240,84 @@ pub(super) fn loop_analysis(lp: &Loop, model: &NominalModel, p: [f64; 3]) -> Loo
         growth = growth.max(growth_of(v));
     }
     let stable = growth < 1.0;
-    let corner_note = if u.a_random != 0.0 || u.b_random != 0.0 {
+    let varied = u.a_random != 0.0 || u.b_random != 0.0;
+    let sat = law == PaperLaw::VscSat;
+    (out.check, out.verdict, out.warning) = loop_texts(sim, sat, varied, fast_worst, growth);
+    out.fast_estimate =
+        Some(-(bias.r * gs + (bias.a[2] + dd[2] - bias.r * abar[2]) + (bias.r - 1.0) * p[0]));
+    out.eigenvalues = eigs;
+    out.fast = Some(fast);
+    out.fast_worst = Some(fast_worst);
+    out.h_lambda = Some(h * fast_worst);
+    out.growth = Some(growth);
+    out.stable = Some(stable);
+    out
+}
+
+/// The plant's parameter variation as the loop sees it: the bias, the
+/// corners bias ± |random| of the a and b variations, and the worst b/b̄.
+struct Variation {
+    bias: Truth,
+    corners: Vec<Truth>,
+    r_worst: f64,
+}
+
+impl Variation {
+    /// The variation `u` of the nominal coefficients `abar`.
+    fn of(abar: &[f64; 3], u: &UncertaintySpec) -> Variation {
+        let r_of = |fb: f64| 1.0 + u.b_reference * fb;
+        let a_of = |fa: f64| -> [f64; 3] { std::array::from_fn(|i| abar[i] + abar[i].abs() * fa) };
+        let bias = Truth {
+            a: a_of(u.a_bias),
+            r: r_of(u.b_bias),
+        };
+        let mut corners = Vec::new();
+        for fa in [u.a_bias - u.a_random.abs(), u.a_bias + u.a_random.abs()] {
+            for fb in [u.b_bias - u.b_random.abs(), u.b_bias + u.b_random.abs()] {
+                corners.push(Truth {
+                    a: a_of(fa),
+                    r: r_of(fb),
+                });
+            }
+        }
+        let r_worst = r_of(u.b_bias + u.b_random.abs());
+        Variation {
+            bias,
+            corners,
+            r_worst,
+        }
+    }
+}
+
+/// The load's slopes at θ = 0 (module doc): the sine load and the viscous
+/// friction.
+fn load_slopes(model: &NominalModel) -> [f64; 3] {
+    let load = model.load;
+    let amp_k = load.amplitude * load.wavenumber;
+    let bv = load.friction.map(|f| f.viscous).unwrap_or(0.0);
+    let kd = model.params.d_per_torque();
+    let jt = model.params.jt;
+    [kd * amp_k, amp_k / jt + kd * bv, bv / jt]
+}
+
+/// The check made, the verdict and the warning of an unstable loop, from
+/// the worst fast eigenvalue and growth (over the corners when the
+/// variation is `varied`); `sat`: the boundary-layer law.
+fn loop_texts(
+    sim: &SimulationCfg,
+    sat: bool,
+    varied: bool,
+    fast_worst: f64,
+    growth: f64,
+) -> (String, String, Option<String>) {
+    let h = sim.step;
+    let stable = growth < 1.0;
+    let corner_note = if varied {
         " (worst over the corners bias ± |random| of the variation)"
     } else {
         ""
     };
-    out.check = match sim.mode {
+    let check = match sim.mode {
         Mode::Continuous => format!(
             "continuous RK4 at h = {} s: every eigenvalue must have |R(hλ)| < 1 (real axis: h·λ > {:.3}){corner_note}",
             fmt_sig(h, 3),
@@ -286,8 +342,7 @@ pub(super) fn loop_analysis(lp: &Loop, model: &NominalModel, p: [f64; 3]) -> Loo
             fmt_sig(h * fast_worst, 4)
         ),
     };
-    let sat = law == PaperLaw::VscSat;
-    out.verdict = match (stable, sat) {
+    let verdict = match (stable, sat) {
         (true, false) => format!("stable: {what}"),
         (false, false) => format!("unstable: {what}"),
         (true, true) => format!(
@@ -297,7 +352,7 @@ pub(super) fn loop_analysis(lp: &Loop, model: &NominalModel, p: [f64; 3]) -> Loo
             "unstable inside the boundary layer: {what}; u will chatter across the layer as with sgn(σ) (bounded by ±k in continuous mode; a sampled loop can diverge as the sgn law does)"
         ),
     };
-    out.warning = (!stable).then(|| match sim.mode {
+    let warning = (!stable).then(|| match sim.mode {
         Mode::Continuous => format!(
             "continuous RK4 at h = {} s is outside its stability region on the linearised σ-loop (fast eigenvalue {:.1} s⁻¹, h·λ = {:.2} < {:.3}): the run will blow up{}; use h < {} s",
             fmt_sig(h, 3),
@@ -314,15 +369,7 @@ pub(super) fn loop_analysis(lp: &Loop, model: &NominalModel, p: [f64; 3]) -> Loo
             if sat { " or a wider boundary layer μ" } else { " or a smaller γ1" }
         ),
     });
-    out.fast_estimate =
-        Some(-(bias.r * gs + (bias.a[2] + dd[2] - bias.r * abar[2]) + (bias.r - 1.0) * p[0]));
-    out.eigenvalues = eigs;
-    out.fast = Some(fast);
-    out.fast_worst = Some(fast_worst);
-    out.h_lambda = Some(h * fast_worst);
-    out.growth = Some(growth);
-    out.stable = Some(stable);
-    out
+    (check, verdict, warning)
 }
 
 /// Spectral radius of the linearised one-sample map of the sampled mode:

@@ -190,150 +190,41 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
         .iter()
         .filter(|q| (q.re - dominant).abs() <= tol)
         .collect();
-    for (i, a) in dom.iter().enumerate() {
-        for b in &dom[i + 1..] {
-            if (a.im - b.im).abs() <= tol {
-                return K1 {
-                    value: None,
-                    at_t: None,
-                    span: f64::INFINITY,
-                    grid_points: 0,
-                    limit: None,
-                    tail_bound: None,
-                    check_points: 0,
-                    check_max_ratio: f64::INFINITY,
-                    exp_discrepancy: None,
-                    tolerance: K1_TOLERANCE,
-                    verified: false,
-                };
-            }
-        }
+    if repeated(&dom, tol) {
+        return K1::INFINITE;
     }
     let terms = sylvester_terms(p, poles);
-    let gap = poles
-        .iter()
-        .filter(|q| dominant - q.re > tol)
-        .map(|q| dominant - q.re)
-        .fold(f64::INFINITY, f64::min);
     let omega = dom.iter().map(|q| q.im.abs()).fold(0.0, f64::max);
-    let mut span: f64 = if gap.is_finite() { 40.0 / gap } else { 0.0 };
-    if omega > 0.0 {
-        span = span.max(10.0 * 2.0 * std::f64::consts::PI / omega);
-    }
-    // Long enough for the slower-decaying terms to fall below 1e-12 of the
-    // dominant ones even when Sylvester's coefficients are large.
-    if let (Some(a), true) = (&terms, gap.is_finite()) {
-        let big: f64 = a.iter().map(|m| m.norm()).sum();
-        let small = a
-            .iter()
-            .zip(poles)
-            .filter(|(_, q)| (q.re - dominant).abs() <= tol)
-            .map(|(m, _)| m.norm())
-            .fold(f64::INFINITY, f64::min);
-        span = span.max((big / (1e-12 * small)).ln().max(0.0) / gap);
-    }
-    let span = span.max(10.0 / k2.max(1e-12)).min(1e6 / k2.max(1e-12));
+    let span = search_span(poles, terms.as_ref(), tol, omega, k2);
     // g(t) in closed form when the poles allow it (spectral module doc),
     // else by nalgebra's exp.
-    let closed = if closed_form {
-        SpectralExp::new(p, poles, k2)
-    } else {
-        None
-    };
-    let g = |t: f64| match &closed {
-        Some(c) => c.norm(t),
-        None => k1_profile(p, k2, t),
+    let s = Search {
+        p,
+        poles,
+        k2,
+        dominant,
+        tol,
+        omega,
+        span,
+        t0: 1e-3 / scale,
+        closed: if closed_form {
+            SpectralExp::new(p, poles, k2)
+        } else {
+            None
+        },
     };
 
-    // 2. Search grid: linear ∪ geometric, sorted; each point with its
-    //    index on the linear grid, or GEO + its index on the geometric one.
-    let n_lin = 4000usize;
-    let n_geo = 1000usize;
-    let t0 = 1e-3 / scale;
-    let linear = (0..=n_lin).map(|i| (span * i as f64 / n_lin as f64, i));
-    let geometric: Vec<(f64, usize)> = if t0 < span {
-        let ratio = (span / t0).ln();
-        geometric_times(t0, ratio, n_geo, 0.0)
-            .into_iter()
-            .enumerate()
-            .map(|(j, t)| (t, GEO + j))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    // Both runs are ascending: merged (a linear point first on a tie), as
-    // a stable sort of their concatenation would order them.
-    let mut points: Vec<(f64, usize)> = Vec::with_capacity(n_lin + 1 + geometric.len());
-    let mut geo = geometric.iter().copied().peekable();
-    for l in linear {
-        while let Some(g) = geo.next_if(|g| g.0.total_cmp(&l.0).is_lt()) {
-            points.push(g);
-        }
-        points.push(l);
-    }
-    points.extend(geo);
-    if !points.is_sorted_by(|a, b| a.0.total_cmp(&b.0).is_le()) {
-        points.sort_by(|a, b| a.0.total_cmp(&b.0));
-    }
-    points.dedup_by(|a, b| a.0.to_bits() == b.0.to_bits());
+    // 2. The search grid and its largest g.
+    let (points, geometric) = s.grid();
     let grid_len = points.len();
     let t_at = |i: usize| points[i].0;
-    // The points where nalgebra's exp is compared with the closed form.
-    let stride = grid_len.div_ceil(DISCREPANCY_POINTS).max(1);
-    let compared = |i: usize| i % stride == 0 || i + 1 == grid_len;
-    // g at every point (nalgebra's exp) or at the compared points only
-    // (closed form), for the discrepancy below; and the largest g of the
-    // grid with its index (the last of equal ones, as `max_by` picks).
-    let mut sampled: Vec<(usize, f64)> = Vec::new();
-    let best = match &closed {
-        None => {
-            sampled = points.iter().map(|q| g(q.0)).enumerate().collect();
-            sampled.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1))
-        }
-        Some(c) => {
-            // Only the largest value matters (and the compared ones): a
-            // point screened out (below the largest so far, or within
-            // SLACK of it) counts as −∞. The last point (t = span)
-            // first: a profile that rises to its limit has its largest
-            // values there.
-            let lin = c.uniform(span / n_lin as f64, 0.0, n_lin + 1);
-            // The geometric points' coefficients, four at a time.
-            let geo_t: Vec<f64> = geometric.iter().map(|q| q.0).collect();
-            let geo_c = c.coefficients_many(&geo_t);
-            let m_at = |&(t, i): &(f64, usize)| match (&lin, i) {
-                (_, i) if i >= GEO => c.combine(geo_c[i - GEO]),
-                (Some(u), i) => u.exp(i),
-                (None, _) => c.exp(t),
-            };
-            let mut floor = points.last().map_or(0.0, |q| norm2_fast(&m_at(q)));
-            sampled.reserve(DISCREPANCY_POINTS + 1);
-            points
-                .iter()
-                .enumerate()
-                .map(|(i, q)| {
-                    let m = m_at(q);
-                    let v = if compared(i) {
-                        let v = norm2_fast(&m);
-                        sampled.push((i, v));
-                        v
-                    } else {
-                        match screen(&m, floor) {
-                            Screen::Exact(v) => v,
-                            Screen::Below | Screen::Near(_) => f64::NEG_INFINITY,
-                        }
-                    };
-                    floor = floor.max(v);
-                    (i, v)
-                })
-                .max_by(|a, b| a.1.total_cmp(&b.1))
-        }
-    };
+    let (best, sampled) = s.grid_max(&points, &geometric);
     let (imax, vmax) = best.unwrap_or((0, 1.0));
     // 3. Refinement between the neighbours of the best sample.
     let lo = t_at(imax.saturating_sub(1));
     let hi = t_at((imax + 1).min(grid_len - 1));
     let (tr, vr) = if hi > lo {
-        golden_max(g, lo, hi)
+        golden_max(|t| s.g(t), lo, hi)
     } else {
         (t_at(imax), vmax)
     };
@@ -346,73 +237,12 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
     // 4. The limit and the tail bound from Sylvester's terms.
     let (limit, tail_bound) = match &terms {
         Some(a) => {
-            let is_dom: [bool; 3] = std::array::from_fn(|i| (poles[i].re - dominant).abs() <= tol);
-            let d_at = |t: f64| {
-                let mut m = CMat::zeros();
-                for i in 0..3 {
-                    if is_dom[i] {
-                        m += a[i] * Complex::new(0.0, poles[i].im * t).exp();
-                    }
-                }
-                let m = m.map(|c| c.re);
-                if closed.is_some() {
-                    norm2_fast(&m)
-                } else {
-                    norm2(&m)
-                }
-            };
-            let lim = if omega > 0.0 {
-                let period = 2.0 * std::f64::consts::PI / omega;
-                let n = 2000;
-                let (ib, vb) = (0..n)
-                    .map(|i| (i, d_at(period * i as f64 / n as f64)))
-                    .fold((0, f64::NEG_INFINITY), |b, x| if x.1 > b.1 { x } else { b });
-                let h = period / n as f64;
-                let (_, vg) = golden_max(d_at, ib as f64 * h - h, ib as f64 * h + h);
-                vb.max(vg)
-            } else {
-                d_at(0.0)
-            };
-            let rest: f64 = (0..3)
-                .filter(|&i| !is_dom[i])
-                .map(|i| cnorm2(&a[i]) * ((poles[i].re + k2) * span).exp())
-                .sum();
-            (Some(lim), Some(lim + rest))
+            let (lim, tail) = s.limit_and_tail(a);
+            (Some(lim), Some(tail))
         }
         None => (None, None),
     };
-    // The arithmetic's own accuracy: nalgebra's exp against the closed
-    // form on the search grid. The check cannot be sharper than
-    // their disagreement (≈ 1e-13 for well-separated poles, ≈ 1e-8 for
-    // poles 0.5 s⁻¹ apart, where the scaling and squaring of a large,
-    // non-normal (P + K2 I)t loses digits).
-    let discrepancy = terms.as_ref().map(|a| {
-        if closed.is_some() {
-            // g came from the closed form: nalgebra's exp, the reference,
-            // on the strided points of the search grid (the disagreement is
-            // smooth in t; the whole grid would cost what the closed form
-            // saves).
-            return sampled
-                .iter()
-                .map(|&(i, v)| {
-                    let e = k1_profile(p, k2, t_at(i));
-                    (v - e).abs() / v
-                })
-                .fold(0.0, f64::max);
-        }
-        sampled
-            .iter()
-            .map(|&(i, v)| {
-                let t = t_at(i);
-                let mut m = CMat::zeros();
-                for (ai, q) in a.iter().zip(poles) {
-                    m += ai * (Complex::new(q.re + k2, q.im) * t).exp();
-                }
-                let exact = norm2(&m.map(|c| c.re));
-                (v - exact).abs() / exact
-            })
-            .fold(0.0, f64::max)
-    });
+    let discrepancy = terms.as_ref().map(|a| s.discrepancy(a, &sampled, &points));
     let tolerance = K1_TOLERANCE.max(4.0 * discrepancy.unwrap_or(0.0));
     let mut approached = false;
     if let Some(l) = limit {
@@ -434,95 +264,14 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
             k1v = l;
         }
     }
-    if !approached && limit.is_none() && g(span) >= k1v * (1.0 - tolerance) {
+    if !approached && limit.is_none() && s.g(span) >= k1v * (1.0 - tolerance) {
         approached = true;
     }
 
     // 5. Independent check: 3× denser, offset, over twice the span.
-    let m_lin = 3 * n_lin;
-    let m_geo = 3 * n_geo;
-    let t_lin = |i: usize| 2.0 * span * (i as f64 + 0.5) / m_lin as f64;
-    let geo = (t0 < 2.0 * span).then(|| (2.0 * span / t0).ln());
-    let worst = match &closed {
-        None => {
-            let mut worst: f64 = 0.0;
-            for i in 0..m_lin {
-                worst = worst.max(g(t_lin(i)) / k1v);
-            }
-            if let Some(ratio) = geo {
-                for t in geometric_times(t0, ratio, m_geo, 0.5) {
-                    worst = worst.max(g(t) / k1v);
-                }
-            }
-            worst
-        }
-        Some(c) => {
-            // The largest g over the check grid: first the points likeliest
-            // to hold it (the last one, and those around the search's
-            // maximum), then every point not screened out. A point within
-            // the slack counts with its bound: the result is the largest
-            // g/K1, or above it by at most SLACK, never below.
-            let lin = c.uniform(2.0 * span / m_lin as f64, 0.5, m_lin);
-            let m_at = |i: usize| match &lin {
-                Some(u) => u.exp(i),
-                None => c.exp(t_lin(i)),
-            };
-            let mut best: f64 = norm2_fast(&m_at(m_lin - 1));
-            if t_star.is_finite() && t_star < 2.0 * span {
-                let j = (t_star / (2.0 * span) * m_lin as f64 - 0.5)
-                    .floor()
-                    .max(0.0) as usize;
-                for i in [j, j + 1] {
-                    if i < m_lin {
-                        best = best.max(norm2_fast(&m_at(i)));
-                    }
-                }
-            }
-            let mut bound: f64 = 0.0;
-            // A point screened: its bound or its norm taken.
-            macro_rules! take {
-                ($screen:expr) => {
-                    match $screen {
-                        Screen::Below => {}
-                        Screen::Near(b) => bound = bound.max(b),
-                        Screen::Exact(v) => best = best.max(v),
-                    }
-                };
-            }
-            match &lin {
-                Some(u) => {
-                    // Four points at a time, screened in order.
-                    let mut i = 0;
-                    while i + 4 <= m_lin {
-                        for (l, f2) in u.frobenius2_4(i).into_iter().enumerate() {
-                            take!(screen_f2(f2, || u.exp(i + l), best));
-                        }
-                        i += 4;
-                    }
-                    for i in i..m_lin {
-                        take!(screen(&u.exp(i), best));
-                    }
-                }
-                None => {
-                    for i in 0..m_lin {
-                        take!(screen(&m_at(i), best));
-                    }
-                }
-            }
-            if let Some(ratio) = geo {
-                let t = geometric_times(t0, ratio, m_geo, 0.5);
-                let mut chunks = t.chunks_exact(4);
-                for q in &mut chunks {
-                    for m in c.exp4([q[0], q[1], q[2], q[3]]) {
-                        take!(screen(&m, best));
-                    }
-                }
-                for &t in chunks.remainder() {
-                    take!(screen(&c.exp(t), best));
-                }
-            }
-            best.max(bound) / k1v
-        }
+    let worst = match &s.closed {
+        None => s.check_exp(k1v),
+        Some(c) => s.check_closed(c, k1v, t_star),
     };
     let tail_ok = tail_bound.is_none_or(|b| b <= k1v * (1.0 + tolerance));
     K1 {
@@ -532,11 +281,368 @@ fn k1_with(p: &Matrix3<f64>, poles: &[Pole; 3], k2: f64, closed_form: bool) -> K
         grid_points: grid_len,
         limit,
         tail_bound,
-        check_points: m_lin + m_geo,
+        check_points: CHECK_LINEAR + CHECK_GEOMETRIC,
         check_max_ratio: worst,
         exp_discrepancy: discrepancy,
         tolerance,
         verified: worst <= 1.0 + tolerance && tail_ok,
+    }
+}
+
+/// Whether two of the dominant poles `dom` coincide (within `tol`).
+fn repeated(dom: &[&Pole], tol: f64) -> bool {
+    dom.iter()
+        .enumerate()
+        .any(|(i, a)| dom[i + 1..].iter().any(|b| (a.im - b.im).abs() <= tol))
+}
+
+impl K1 {
+    /// K1 of a repeated dominant pole: infinite.
+    const INFINITE: K1 = K1 {
+        value: None,
+        at_t: None,
+        span: f64::INFINITY,
+        grid_points: 0,
+        limit: None,
+        tail_bound: None,
+        check_points: 0,
+        check_max_ratio: f64::INFINITY,
+        exp_discrepancy: None,
+        tolerance: K1_TOLERANCE,
+        verified: false,
+    };
+}
+
+/// Points of the search grid's linear part (intervals) and its geometric
+/// part.
+const SEARCH_LINEAR: usize = 4000;
+const SEARCH_GEOMETRIC: usize = 1000;
+/// Points of the check grid's linear and geometric parts: three times
+/// denser than the search's.
+const CHECK_LINEAR: usize = 3 * SEARCH_LINEAR;
+const CHECK_GEOMETRIC: usize = 3 * SEARCH_GEOMETRIC;
+
+/// The span of the search grid: max(40/gap, ten periods of the dominant
+/// oscillation, 10/K2), longer when Sylvester's coefficients of the faster
+/// modes are large, at most 10⁶/K2; gap = distance from the dominant real
+/// part to the next.
+fn search_span(poles: &[Pole; 3], terms: Option<&[CMat; 3]>, tol: f64, omega: f64, k2: f64) -> f64 {
+    let dominant = poles[0].re;
+    let gap = poles
+        .iter()
+        .filter(|q| dominant - q.re > tol)
+        .map(|q| dominant - q.re)
+        .fold(f64::INFINITY, f64::min);
+    let mut span: f64 = if gap.is_finite() { 40.0 / gap } else { 0.0 };
+    if omega > 0.0 {
+        span = span.max(10.0 * 2.0 * std::f64::consts::PI / omega);
+    }
+    // Long enough for the slower-decaying terms to fall below 1e-12 of the
+    // dominant ones even when Sylvester's coefficients are large.
+    if let (Some(a), true) = (terms, gap.is_finite()) {
+        let big: f64 = a.iter().map(|m| m.norm()).sum();
+        let small = a
+            .iter()
+            .zip(poles)
+            .filter(|(_, q)| (q.re - dominant).abs() <= tol)
+            .map(|(m, _)| m.norm())
+            .fold(f64::INFINITY, f64::min);
+        span = span.max((big / (1e-12 * small)).ln().max(0.0) / gap);
+    }
+    span.max(10.0 / k2.max(1e-12)).min(1e6 / k2.max(1e-12))
+}
+
+/// Points of a grid: (t, its index on the linear grid, or GEO + its index
+/// on the geometric one).
+type Points = Vec<(f64, usize)>;
+
+/// g at points of the search grid: (index, g).
+type Sampled = Vec<(usize, f64)>;
+
+/// The search for K1 of one P: its poles, K2, the dominant real part, the
+/// tolerance that tells poles apart, the dominant oscillation's frequency,
+/// the span, the first geometric point, and g's closed form (when used).
+struct Search<'a> {
+    p: &'a Matrix3<f64>,
+    poles: &'a [Pole; 3],
+    k2: f64,
+    dominant: f64,
+    tol: f64,
+    omega: f64,
+    span: f64,
+    t0: f64,
+    closed: Option<SpectralExp>,
+}
+
+impl Search<'_> {
+    /// g(t), in closed form or by nalgebra's exp.
+    fn g(&self, t: f64) -> f64 {
+        match &self.closed {
+            Some(c) => c.norm(t),
+            None => k1_profile(self.p, self.k2, t),
+        }
+    }
+
+    /// The search grid, linear ∪ geometric, sorted; each point with its
+    /// index on the linear grid, or GEO + its index on the geometric one.
+    /// Also the geometric points alone.
+    fn grid(&self) -> (Points, Points) {
+        let (span, t0) = (self.span, self.t0);
+        let (n_lin, n_geo) = (SEARCH_LINEAR, SEARCH_GEOMETRIC);
+        let linear = (0..=n_lin).map(|i| (span * i as f64 / n_lin as f64, i));
+        let geometric: Vec<(f64, usize)> = if t0 < span {
+            let ratio = (span / t0).ln();
+            geometric_times(t0, ratio, n_geo, 0.0)
+                .into_iter()
+                .enumerate()
+                .map(|(j, t)| (t, GEO + j))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        // Both runs are ascending: merged (a linear point first on a tie), as
+        // a stable sort of their concatenation would order them.
+        let mut points: Vec<(f64, usize)> = Vec::with_capacity(n_lin + 1 + geometric.len());
+        let mut geo = geometric.iter().copied().peekable();
+        for l in linear {
+            while let Some(g) = geo.next_if(|g| g.0.total_cmp(&l.0).is_lt()) {
+                points.push(g);
+            }
+            points.push(l);
+        }
+        points.extend(geo);
+        if !points.is_sorted_by(|a, b| a.0.total_cmp(&b.0).is_le()) {
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        points.dedup_by(|a, b| a.0.to_bits() == b.0.to_bits());
+        (points, geometric)
+    }
+
+    /// The largest g of the search grid with its index (the last of equal
+    /// ones, as `max_by` picks), and g at every point (nalgebra's exp) or
+    /// at the points compared with nalgebra's exp only (closed form), for
+    /// the discrepancy.
+    fn grid_max(
+        &self,
+        points: &[(f64, usize)],
+        geometric: &[(f64, usize)],
+    ) -> (Option<(usize, f64)>, Sampled) {
+        let grid_len = points.len();
+        // The points where nalgebra's exp is compared with the closed form.
+        let stride = grid_len.div_ceil(DISCREPANCY_POINTS).max(1);
+        let compared = |i: usize| i % stride == 0 || i + 1 == grid_len;
+        let mut sampled: Vec<(usize, f64)> = Vec::new();
+        let best = match &self.closed {
+            None => {
+                sampled = points.iter().map(|q| self.g(q.0)).enumerate().collect();
+                sampled.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1))
+            }
+            Some(c) => {
+                // Only the largest value matters (and the compared ones): a
+                // point screened out (below the largest so far, or within
+                // SLACK of it) counts as −∞. The last point (t = span)
+                // first: a profile that rises to its limit has its largest
+                // values there.
+                let lin = c.uniform(self.span / SEARCH_LINEAR as f64, 0.0, SEARCH_LINEAR + 1);
+                // The geometric points' coefficients, four at a time.
+                let geo_t: Vec<f64> = geometric.iter().map(|q| q.0).collect();
+                let geo_c = c.coefficients_many(&geo_t);
+                let m_at = |&(t, i): &(f64, usize)| match (&lin, i) {
+                    (_, i) if i >= GEO => c.combine(geo_c[i - GEO]),
+                    (Some(u), i) => u.exp(i),
+                    (None, _) => c.exp(t),
+                };
+                let mut floor = points.last().map_or(0.0, |q| norm2_fast(&m_at(q)));
+                sampled.reserve(DISCREPANCY_POINTS + 1);
+                points
+                    .iter()
+                    .enumerate()
+                    .map(|(i, q)| {
+                        let m = m_at(q);
+                        let v = if compared(i) {
+                            let v = norm2_fast(&m);
+                            sampled.push((i, v));
+                            v
+                        } else {
+                            match screen(&m, floor) {
+                                Screen::Exact(v) => v,
+                                Screen::Below | Screen::Near(_) => f64::NEG_INFINITY,
+                            }
+                        };
+                        floor = floor.max(v);
+                        (i, v)
+                    })
+                    .max_by(|a, b| a.1.total_cmp(&b.1))
+            }
+        };
+        (best, sampled)
+    }
+
+    /// The limit of g as t → ∞ from Sylvester's terms `a` (the dominant
+    /// ones' largest norm over a period), and the bound of g beyond the
+    /// span (the limit and the faster terms at the span).
+    fn limit_and_tail(&self, a: &[CMat; 3]) -> (f64, f64) {
+        let (poles, dominant, tol, omega) = (self.poles, self.dominant, self.tol, self.omega);
+        let is_dom: [bool; 3] = std::array::from_fn(|i| (poles[i].re - dominant).abs() <= tol);
+        let d_at = |t: f64| {
+            let mut m = CMat::zeros();
+            for i in 0..3 {
+                if is_dom[i] {
+                    m += a[i] * Complex::new(0.0, poles[i].im * t).exp();
+                }
+            }
+            let m = m.map(|c| c.re);
+            if self.closed.is_some() {
+                norm2_fast(&m)
+            } else {
+                norm2(&m)
+            }
+        };
+        let lim = if omega > 0.0 {
+            let period = 2.0 * std::f64::consts::PI / omega;
+            let n = 2000;
+            let (ib, vb) = (0..n)
+                .map(|i| (i, d_at(period * i as f64 / n as f64)))
+                .fold((0, f64::NEG_INFINITY), |b, x| if x.1 > b.1 { x } else { b });
+            let h = period / n as f64;
+            let (_, vg) = golden_max(d_at, ib as f64 * h - h, ib as f64 * h + h);
+            vb.max(vg)
+        } else {
+            d_at(0.0)
+        };
+        let rest: f64 = (0..3)
+            .filter(|&i| !is_dom[i])
+            .map(|i| cnorm2(&a[i]) * ((poles[i].re + self.k2) * self.span).exp())
+            .sum();
+        (lim, lim + rest)
+    }
+
+    /// The arithmetic's own accuracy: nalgebra's exp against the closed
+    /// form on the search grid. The check cannot be sharper than their
+    /// disagreement (≈ 1e-13 for well-separated poles, ≈ 1e-8 for poles
+    /// 0.5 s⁻¹ apart, where the scaling and squaring of a large,
+    /// non-normal (P + K2 I)t loses digits).
+    fn discrepancy(&self, a: &[CMat; 3], sampled: &[(usize, f64)], points: &[(f64, usize)]) -> f64 {
+        let t_at = |i: usize| points[i].0;
+        if self.closed.is_some() {
+            // g came from the closed form: nalgebra's exp, the reference,
+            // on the strided points of the search grid (the disagreement is
+            // smooth in t; the whole grid would cost what the closed form
+            // saves).
+            return sampled
+                .iter()
+                .map(|&(i, v)| {
+                    let e = k1_profile(self.p, self.k2, t_at(i));
+                    (v - e).abs() / v
+                })
+                .fold(0.0, f64::max);
+        }
+        sampled
+            .iter()
+            .map(|&(i, v)| {
+                let t = t_at(i);
+                let mut m = CMat::zeros();
+                for (ai, q) in a.iter().zip(self.poles) {
+                    m += ai * (Complex::new(q.re + self.k2, q.im) * t).exp();
+                }
+                let exact = norm2(&m.map(|c| c.re));
+                (v - exact).abs() / exact
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The check grid's linear time i: offset to the midpoints, over twice
+    /// the span.
+    fn check_t(&self, i: usize) -> f64 {
+        2.0 * self.span * (i as f64 + 0.5) / CHECK_LINEAR as f64
+    }
+
+    /// The check grid's geometric part's log-ratio (None when it is empty).
+    fn check_geometric(&self) -> Option<f64> {
+        (self.t0 < 2.0 * self.span).then(|| (2.0 * self.span / self.t0).ln())
+    }
+
+    /// The largest g/K1 on the check grid, g by nalgebra's exp.
+    fn check_exp(&self, k1v: f64) -> f64 {
+        let mut worst: f64 = 0.0;
+        for i in 0..CHECK_LINEAR {
+            worst = worst.max(self.g(self.check_t(i)) / k1v);
+        }
+        if let Some(ratio) = self.check_geometric() {
+            for t in geometric_times(self.t0, ratio, CHECK_GEOMETRIC, 0.5) {
+                worst = worst.max(self.g(t) / k1v);
+            }
+        }
+        worst
+    }
+
+    /// The largest g/K1 on the check grid in closed form: first the points
+    /// likeliest to hold it (the last one, and those around the search's
+    /// maximum `t_star`), then every point not screened out. A point within
+    /// the slack counts with its bound: the result is the largest g/K1, or
+    /// above it by at most SLACK, never below.
+    fn check_closed(&self, c: &SpectralExp, k1v: f64, t_star: f64) -> f64 {
+        let (span, m_lin) = (self.span, CHECK_LINEAR);
+        let lin = c.uniform(2.0 * span / m_lin as f64, 0.5, m_lin);
+        let m_at = |i: usize| match &lin {
+            Some(u) => u.exp(i),
+            None => c.exp(self.check_t(i)),
+        };
+        let mut best: f64 = norm2_fast(&m_at(m_lin - 1));
+        if t_star.is_finite() && t_star < 2.0 * span {
+            let j = (t_star / (2.0 * span) * m_lin as f64 - 0.5)
+                .floor()
+                .max(0.0) as usize;
+            for i in [j, j + 1] {
+                if i < m_lin {
+                    best = best.max(norm2_fast(&m_at(i)));
+                }
+            }
+        }
+        let mut bound: f64 = 0.0;
+        // A point screened: its bound or its norm taken.
+        macro_rules! take {
+            ($screen:expr) => {
+                match $screen {
+                    Screen::Below => {}
+                    Screen::Near(b) => bound = bound.max(b),
+                    Screen::Exact(v) => best = best.max(v),
+                }
+            };
+        }
+        match &lin {
+            Some(u) => {
+                // Four points at a time, screened in order.
+                let mut i = 0;
+                while i + 4 <= m_lin {
+                    for (l, f2) in u.frobenius2_4(i).into_iter().enumerate() {
+                        take!(screen_f2(f2, || u.exp(i + l), best));
+                    }
+                    i += 4;
+                }
+                for i in i..m_lin {
+                    take!(screen(&u.exp(i), best));
+                }
+            }
+            None => {
+                for i in 0..m_lin {
+                    take!(screen(&m_at(i), best));
+                }
+            }
+        }
+        if let Some(ratio) = self.check_geometric() {
+            let t = geometric_times(self.t0, ratio, CHECK_GEOMETRIC, 0.5);
+            let mut chunks = t.chunks_exact(4);
+            for q in &mut chunks {
+                for m in c.exp4([q[0], q[1], q[2], q[3]]) {
+                    take!(screen(&m, best));
+                }
+            }
+            for &t in chunks.remainder() {
+                take!(screen(&c.exp(t), best));
+            }
+        }
+        best.max(bound) / k1v
     }
 }
 

@@ -1,7 +1,10 @@
 //! Terminal text of [`super::Analysis`] and [`super::RunDiagnostics`]
 //! (a child module of `analysis`, kept apart to keep the numbers readable).
 
-use super::{Analysis, Pole, RunDiagnostics, RK4_REAL_LIMIT};
+use super::{
+    Analysis, LoopAnalysis, Pole, RunDiagnostics, SurfaceAnalysis, WeightAnalysis, K1,
+    RK4_REAL_LIMIT,
+};
 use std::fmt::Write;
 
 /// `x` with `n` significant digits: fixed notation for 1e-2 ≤ |x| < 1e6
@@ -99,9 +102,21 @@ impl Analysis {
     /// Verdicts are on their own lines; warnings start with `warning:`.
     pub fn to_text(&self) -> String {
         let mut t = String::new();
-        heading(&mut t, "Plant (nominal model (9), Pl = 0)");
+        self.plant_text(&mut t);
+        surface_text(&mut t, &self.surface);
+        if let Some(w) = &self.weights {
+            weights_text(&mut t, w);
+        }
+        loop_text(&mut t, &self.closed_loop);
+        t
+    }
+
+    /// The plant's section: the nominal coefficients, b̄, d(t), the
+    /// open-loop poles.
+    fn plant_text(&self, t: &mut String) {
+        heading(t, "Plant (nominal model (9), Pl = 0)");
         row(
-            &mut t,
+            t,
             "ā1, ā2, ā3",
             &format!(
                 "{} s⁻³   {} s⁻²   {} s⁻¹",
@@ -111,12 +126,12 @@ impl Analysis {
             ),
         );
         row(
-            &mut t,
+            t,
             "b̄ at Pl = 0",
             &format!("{} s⁻³V⁻¹", sig(self.b_at_rest, 8)),
         );
         row(
-            &mut t,
+            t,
             "d(t)",
             &format!(
                 "{}·Tl + {}·Ṫl   (4βe·Kce/(Vt·Jt), 1/Jt)",
@@ -124,226 +139,232 @@ impl Analysis {
                 sig(self.d_coefficients[1], 7)
             ),
         );
-        pole_table(&mut t, "open-loop poles", &self.open_loop_poles);
+        pole_table(t, "open-loop poles", &self.open_loop_poles);
+    }
+}
 
-        let s = &self.surface;
-        heading(&mut t, "Switching surface (10) and Theorem 2");
+/// The switching surface's section and Theorem 2's verdict.
+fn surface_text(t: &mut String, s: &SurfaceAnalysis) {
+    heading(t, "Switching surface (10) and Theorem 2");
+    row(
+        t,
+        "p1, p2, p3",
+        &format!("{}, {}, {}", sig(s.p[0], 8), sig(s.p[1], 8), sig(s.p[2], 8)),
+    );
+    pole_table(t, "sliding poles (eig P)", &s.poles);
+    for (i, r) in s.p_matrix.iter().enumerate() {
+        let cells: Vec<String> = r.iter().map(|v| format!("{:>10}", sig(*v, 6))).collect();
         row(
-            &mut t,
-            "p1, p2, p3",
-            &format!("{}, {}, {}", sig(s.p[0], 8), sig(s.p[1], 8), sig(s.p[2], 8)),
+            t,
+            if i == 0 { "P of (16)" } else { "" },
+            &format!("[{} ]", cells.join("")),
         );
-        pole_table(&mut t, "sliding poles (eig P)", &s.poles);
-        for (i, r) in s.p_matrix.iter().enumerate() {
-            let cells: Vec<String> = r.iter().map(|v| format!("{:>10}", sig(*v, 6))).collect();
+    }
+    row(t, "K2 = −max Re λ(P)", &sig(s.k2, 8));
+    k1_rows(t, &s.k1);
+    row(t, "Theorem 2 bound K2/K1", &sig(s.alpha_bound, 5));
+    if let Some(a) = s.alpha {
+        row(t, "α of the scenario", &sig(a, 6));
+    }
+    let _ = writeln!(t, "  verdict: {}", s.verdict);
+}
+
+/// K1's rows: its value and where, the search, the asymptote and the
+/// proof-of-bound check; or ∞.
+fn k1_rows(t: &mut String, k: &K1) {
+    match k.value {
+        Some(v) => {
             row(
-                &mut t,
-                if i == 0 { "P of (16)" } else { "" },
-                &format!("[{} ]", cells.join("")),
+                t,
+                "K1 = sup ‖e^(Pt)‖·e^(K2 t)",
+                &format!(
+                    "{}  ({})",
+                    sig(v, 8),
+                    match k.at_t {
+                        Some(tt) => format!("reached at t = {} s", sig(tt, 6)),
+                        None => "approached as t → ∞".into(),
+                    }
+                ),
             );
-        }
-        row(&mut t, "K2 = −max Re λ(P)", &sig(s.k2, 8));
-        let k = &s.k1;
-        match k.value {
-            Some(v) => {
+            row(
+                t,
+                "  search",
+                &format!(
+                    "nalgebra exp on {} points (linear + geometric) over {} s, refined by golden section",
+                    k.grid_points,
+                    sig(k.span, 4)
+                ),
+            );
+            if let (Some(l), Some(b)) = (k.limit, k.tail_bound) {
                 row(
-                    &mut t,
-                    "K1 = sup ‖e^(Pt)‖·e^(K2 t)",
+                    t,
+                    "  asymptote (Sylvester)",
                     &format!(
-                        "{}  ({})",
-                        sig(v, 8),
-                        match k.at_t {
-                            Some(tt) => format!("reached at t = {} s", sig(tt, 6)),
-                            None => "approached as t → ∞".into(),
-                        }
-                    ),
-                );
-                row(
-                    &mut t,
-                    "  search",
-                    &format!(
-                        "nalgebra exp on {} points (linear + geometric) over {} s, refined by golden section",
-                        k.grid_points,
+                        "lim sup = {}, and g(t) ≤ {} for t ≥ {} s",
+                        sig(l, 10),
+                        sig(b, 10),
                         sig(k.span, 4)
                     ),
                 );
-                if let (Some(l), Some(b)) = (k.limit, k.tail_bound) {
-                    row(
-                        &mut t,
-                        "  asymptote (Sylvester)",
-                        &format!(
-                            "lim sup = {}, and g(t) ≤ {} for t ≥ {} s",
-                            sig(l, 10),
-                            sig(b, 10),
-                            sig(k.span, 4)
-                        ),
-                    );
-                }
-                row(
-                    &mut t,
-                    "  proof-of-bound check",
-                    &format!(
-                        "{}: {} independent points over {} s, max g/K1 = {:.12} (tolerance {})",
-                        if k.verified {
-                            "verified"
-                        } else {
-                            "NOT verified"
-                        },
-                        k.check_points,
-                        sig(2.0 * k.span, 4),
-                        k.check_max_ratio,
-                        sig(k.tolerance, 1)
-                    ),
-                );
             }
-            None => row(
-                &mut t,
-                "K1",
-                "∞ (repeated dominant pole: ‖e^(Pt)‖·e^(K2 t) grows like t)",
-            ),
-        }
-        row(&mut t, "Theorem 2 bound K2/K1", &sig(s.alpha_bound, 5));
-        if let Some(a) = s.alpha {
-            row(&mut t, "α of the scenario", &sig(a, 6));
-        }
-        let _ = writeln!(t, "  verdict: {}", s.verdict);
-
-        if let Some(w) = &self.weights {
-            heading(&mut t, "Weights: the invariant set of Remark 6");
             row(
-                &mut t,
-                "η, Wmax, ε0, ε1",
+                t,
+                "  proof-of-bound check",
                 &format!(
-                    "{}, {}, {}, {}",
-                    sig(w.eta, 6),
-                    sig(w.w_max, 6),
-                    sig(w.eps0, 6),
-                    sig(w.eps1, 6)
+                    "{}: {} independent points over {} s, max g/K1 = {:.12} (tolerance {})",
+                    if k.verified {
+                        "verified"
+                    } else {
+                        "NOT verified"
+                    },
+                    k.check_points,
+                    sig(2.0 * k.span, 4),
+                    k.check_max_ratio,
+                    sig(k.tolerance, 1)
                 ),
             );
-            row(
-                &mut t,
-                "largest ‖Φ‖",
-                &format!(
-                    "{} along the reference (‖z‖ ≤ {}), {} over Ω",
-                    sig(w.phi_norm_reference, 5),
-                    sig(w.z_norm_reference, 5),
-                    sig(w.phi_norm_omega, 5)
-                ),
-            );
-            let rad = |r: Option<f64>| r.map(|v| sig(v, 6)).unwrap_or("unbounded (η = 0)".into());
-            row(&mut t, "radius at ‖Φ‖ = 1", &rad(w.radius_min));
-            row(
-                &mut t,
-                "radius along the reference",
-                &rad(w.radius_reference),
-            );
-            row(
-                &mut t,
-                "radius at the largest ‖Φ‖",
-                &format!("{}  (from {})", rad(w.radius_max), w.phi_norm_max_from),
-            );
-            row(
-                &mut t,
-                "ball kept by (26): ‖Φ‖/η",
-                &w.law_ball
-                    .map(|v| sig(v, 5))
-                    .unwrap_or("unbounded (η = 0)".into()),
-            );
-            let _ = writeln!(t, "  note: {}", w.note);
         }
+        None => row(
+            t,
+            "K1",
+            "∞ (repeated dominant pole: ‖e^(Pt)‖·e^(K2 t) grows like t)",
+        ),
+    }
+}
 
-        let l = &self.closed_loop;
-        heading(&mut t, "The σ-loop, linearised, and the integrator");
+/// The weights' section: the invariant set of Remark 6.
+fn weights_text(t: &mut String, w: &WeightAnalysis) {
+    heading(t, "Weights: the invariant set of Remark 6");
+    row(
+        t,
+        "η, Wmax, ε0, ε1",
+        &format!(
+            "{}, {}, {}, {}",
+            sig(w.eta, 6),
+            sig(w.w_max, 6),
+            sig(w.eps0, 6),
+            sig(w.eps1, 6)
+        ),
+    );
+    row(
+        t,
+        "largest ‖Φ‖",
+        &format!(
+            "{} along the reference (‖z‖ ≤ {}), {} over Ω",
+            sig(w.phi_norm_reference, 5),
+            sig(w.z_norm_reference, 5),
+            sig(w.phi_norm_omega, 5)
+        ),
+    );
+    let rad = |r: Option<f64>| r.map(|v| sig(v, 6)).unwrap_or("unbounded (η = 0)".into());
+    row(t, "radius at ‖Φ‖ = 1", &rad(w.radius_min));
+    row(t, "radius along the reference", &rad(w.radius_reference));
+    row(
+        t,
+        "radius at the largest ‖Φ‖",
+        &format!("{}  (from {})", rad(w.radius_max), w.phi_norm_max_from),
+    );
+    row(
+        t,
+        "ball kept by (26): ‖Φ‖/η",
+        &w.law_ball
+            .map(|v| sig(v, 5))
+            .unwrap_or("unbounded (η = 0)".into()),
+    );
+    let _ = writeln!(t, "  note: {}", w.note);
+}
+
+/// The σ-loop's section: its linearisation, the integrator's stability and
+/// the verdict.
+fn loop_text(t: &mut String, l: &LoopAnalysis) {
+    heading(t, "The σ-loop, linearised, and the integrator");
+    row(
+        t,
+        "controller, mode",
+        &format!(
+            "{}, {} (h = {} s{})",
+            l.controller,
+            l.mode,
+            sig(l.step, 4),
+            if l.mode == "sampled" {
+                format!(", {} RK4 sub-step(s)", l.substeps)
+            } else {
+                String::new()
+            }
+        ),
+    );
+    row(
+        t,
+        "b/b̄ (bias; worst case)",
+        &format!(
+            "{}; {} (b_bias + |b_random|)",
+            sig(l.b_ratio, 6),
+            sig(l.b_ratio_worst, 6)
+        ),
+    );
+    if let Some([lo, hi]) = l.vsc_sat_kb {
         row(
-            &mut t,
-            "controller, mode",
+            t,
+            "kb = b̄·k along the reference",
             &format!(
-                "{}, {} (h = {} s{})",
-                l.controller,
-                l.mode,
-                sig(l.step, 4),
-                if l.mode == "sampled" {
-                    format!(", {} RK4 sub-step(s)", l.substeps)
-                } else {
-                    String::new()
-                }
+                "{} … {} s⁻³ (the check uses the largest)",
+                sig(lo, 5),
+                sig(hi, 5)
             ),
         );
+    }
+    if let (Some(g), Some(gw)) = (l.sigma_gain, l.sigma_gain_worst) {
         row(
-            &mut t,
-            "b/b̄ (bias; worst case)",
+            t,
+            if l.vsc_sat_kb.is_some() {
+                "σ-loop gain b·kb/(b̄·μ)"
+            } else {
+                "σ-loop gain b/(b̄ − β)·γ1"
+            },
+            &format!("{} s⁻¹ (worst case {})", sig(g, 6), sig(gw, 6)),
+        );
+    }
+    if !l.eigenvalues.is_empty() {
+        pole_table(t, "closed-loop eigenvalues", &l.eigenvalues);
+    }
+    if let (Some(f), Some(e), Some(fw)) = (l.fast, l.fast_estimate, l.fast_worst) {
+        row(
+            t,
+            "fast (σ) eigenvalue",
             &format!(
-                "{}; {} (b_bias + |b_random|)",
-                sig(l.b_ratio, 6),
-                sig(l.b_ratio_worst, 6)
+                "{} s⁻¹ (one-dimensional estimate {}; worst case {})",
+                sig(f, 5),
+                sig(e, 5),
+                sig(fw, 5)
             ),
         );
-        if let Some([lo, hi]) = l.vsc_sat_kb {
-            row(
-                &mut t,
-                "kb = b̄·k along the reference",
-                &format!(
-                    "{} … {} s⁻³ (the check uses the largest)",
-                    sig(lo, 5),
-                    sig(hi, 5)
-                ),
-            );
-        }
-        if let (Some(g), Some(gw)) = (l.sigma_gain, l.sigma_gain_worst) {
-            row(
-                &mut t,
-                if l.vsc_sat_kb.is_some() {
-                    "σ-loop gain b·kb/(b̄·μ)"
-                } else {
-                    "σ-loop gain b/(b̄ − β)·γ1"
-                },
-                &format!("{} s⁻¹ (worst case {})", sig(g, 6), sig(gw, 6)),
-            );
-        }
-        if !l.eigenvalues.is_empty() {
-            pole_table(&mut t, "closed-loop eigenvalues", &l.eigenvalues);
-        }
-        if let (Some(f), Some(e), Some(fw)) = (l.fast, l.fast_estimate, l.fast_worst) {
-            row(
-                &mut t,
-                "fast (σ) eigenvalue",
-                &format!(
-                    "{} s⁻¹ (one-dimensional estimate {}; worst case {})",
-                    sig(f, 5),
-                    sig(e, 5),
-                    sig(fw, 5)
-                ),
-            );
-        }
-        if let Some(hl) = l.h_lambda {
-            row(
-                &mut t,
-                "h·λ_fast (worst case)",
-                &format!(
-                    "{}  (RK4's real-axis limit {:.3})",
-                    sig(hl, 4),
-                    RK4_REAL_LIMIT
-                ),
-            );
-        }
-        if let Some(g) = l.growth {
-            row(
-                &mut t,
-                if l.mode == "sampled" {
-                    "spectral radius of the map"
-                } else {
-                    "max |R(hλ)|"
-                },
-                &sig(g, 6),
-            );
-        }
-        let _ = writeln!(t, "  check: {}", l.check);
-        let _ = writeln!(t, "  verdict: {}", l.verdict);
-        if let Some(w) = &l.warning {
-            let _ = writeln!(t, "warning: {w}");
-        }
-        t
+    }
+    if let Some(hl) = l.h_lambda {
+        row(
+            t,
+            "h·λ_fast (worst case)",
+            &format!(
+                "{}  (RK4's real-axis limit {:.3})",
+                sig(hl, 4),
+                RK4_REAL_LIMIT
+            ),
+        );
+    }
+    if let Some(g) = l.growth {
+        row(
+            t,
+            if l.mode == "sampled" {
+                "spectral radius of the map"
+            } else {
+                "max |R(hλ)|"
+            },
+            &sig(g, 6),
+        );
+    }
+    let _ = writeln!(t, "  check: {}", l.check);
+    let _ = writeln!(t, "  verdict: {}", l.verdict);
+    if let Some(w) = &l.warning {
+        let _ = writeln!(t, "warning: {w}");
     }
 }
 

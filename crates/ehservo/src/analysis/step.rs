@@ -81,37 +81,98 @@ pub fn step_metrics(
     if n < 3 {
         return Vec::new();
     }
+    let starts = step_starts(&t[..n], &y[..n], r, step_times, initial);
+    let mut out = Vec::new();
+    for (s, &(i0, t0, y0)) in starts.iter().enumerate() {
+        let end = starts.get(s + 1).map_or(n, |n1| n1.0);
+        let w = Window {
+            t,
+            y,
+            i0,
+            end,
+            t0,
+            y0,
+            target: r[i0],
+        };
+        let delta = w.target - y0;
+        if delta == 0.0 || end <= i0 + 2 {
+            continue;
+        }
+        let (ip, sp) = w.peak();
+        let (m, oscillation) = w.tail();
+        out.push(StepMetrics {
+            t0,
+            y0,
+            target: w.target,
+            rise: w.rise(),
+            peak: y[ip],
+            peak_time: t[ip] - t0,
+            overshoot_pct: (sp - 1.0).max(0.0) * 100.0,
+            settling: w.settling(),
+            oscillation,
+            offset: m - w.target,
+        });
+    }
+    out
+}
+
+/// Where each step starts: (first index, t0, y0 = y at t0). A step is a
+/// change of r (by more than 10⁻⁹ of its largest value); t0 its true time
+/// from `step_times` (in order) or its first sample; with `initial`, the
+/// start of the run too. `t` and `y` are cut to the samples analysed.
+fn step_starts(
+    t: &[f64],
+    y: &[f64],
+    r: &[f64],
+    step_times: &[f64],
+    initial: bool,
+) -> Vec<(usize, f64, f64)> {
     let scale = r.iter().fold(1.0f64, |m, v| m.max(v.abs()));
-    let mut starts: Vec<(usize, f64, f64)> = Vec::new(); // (first index, t0, y0)
+    let mut starts: Vec<(usize, f64, f64)> = Vec::new();
     if initial {
         starts.push((0, t[0], y[0]));
     }
     let mut k = 0;
-    for i in 1..n {
+    for i in 1..t.len() {
         if (r[i] - r[i - 1]).abs() > 1e-9 * scale {
             let t0 = step_times.get(k).copied().unwrap_or(t[i]);
             k += 1;
-            starts.push((i, t0, at(&t[..n], &y[..n], t0)));
+            starts.push((i, t0, at(t, y, t0)));
         }
     }
-    let mut out = Vec::new();
-    for (s, &(i0, t0, y0)) in starts.iter().enumerate() {
-        let end = starts.get(s + 1).map_or(n, |n1| n1.0);
-        let target = r[i0];
-        let delta = target - y0;
-        if delta == 0.0 || end <= i0 + 2 {
-            continue;
-        }
-        let norm = |v: f64| (v - y0) / delta;
-        // Rise times: the first crossing of each level after t0.
+    starts
+}
+
+/// One step's window of the trace: samples i0..end, from (t0, y0) towards
+/// `target`.
+struct Window<'a> {
+    t: &'a [f64],
+    y: &'a [f64],
+    i0: usize,
+    end: usize,
+    t0: f64,
+    y0: f64,
+    target: f64,
+}
+
+impl Window<'_> {
+    /// A value as a fraction of the step (0 at y0, 1 at the target).
+    fn norm(&self, v: f64) -> f64 {
+        (v - self.y0) / (self.target - self.y0)
+    }
+
+    /// The rise times to 10, 50 and 90 % of the step: the first crossing
+    /// of each level after t0.
+    fn rise(&self) -> [Option<f64>; 3] {
+        let (t, y, t0) = (self.t, self.y, self.t0);
         let mut rise = [None; 3];
         for (li, level) in [0.1, 0.5, 0.9].iter().enumerate() {
-            let mut prev = (t0, norm(y0));
-            for i in i0..end {
+            let mut prev = (t0, self.norm(self.y0));
+            for i in self.i0..self.end {
                 if t[i] < t0 {
                     continue;
                 }
-                let cur = (t[i], norm(y[i]));
+                let cur = (t[i], self.norm(y[i]));
                 if cur.1 >= *level {
                     // The bracket's level difference: > 0 unless s jumped
                     // onto the level exactly (then the sample's time).
@@ -126,32 +187,51 @@ pub fn step_metrics(
                 prev = cur;
             }
         }
-        let (mut ip, mut sp) = (i0, f64::NEG_INFINITY);
-        for (i, &v) in y.iter().enumerate().take(end).skip(i0) {
-            if norm(v) > sp {
-                sp = norm(v);
+        rise
+    }
+
+    /// The peak: its index and its value as a fraction of the step.
+    fn peak(&self) -> (usize, f64) {
+        let (mut ip, mut sp) = (self.i0, f64::NEG_INFINITY);
+        for (i, &v) in self.y.iter().enumerate().take(self.end).skip(self.i0) {
+            if self.norm(v) > sp {
+                sp = self.norm(v);
                 ip = i;
             }
         }
-        let band = 0.02 * delta.abs();
+        (ip, sp)
+    }
+
+    /// The time after t0 of the last entry into the ±2 % band (None: it
+    /// leaves the band in the window's second half).
+    fn settling(&self) -> Option<f64> {
+        let (t, y, t0, target) = (self.t, self.y, self.t0, self.target);
+        let (i0, end) = (self.i0, self.end);
+        let band = 0.02 * (target - self.y0).abs();
         let half = t0 + 0.5 * (t[end - 1] - t0);
         let inside = |i: usize| (y[i] - target).abs() <= band;
-        let settling = if (i0..end).any(|i| t[i] >= half && !inside(i)) {
-            None
-        } else {
-            // The last entry: after the last sample outside the band.
-            match (i0..end).rev().find(|&i| !inside(i)) {
-                None => Some(0.0),
-                Some(j) => {
-                    let (a, b) = ((y[j] - target).abs(), (y[j + 1] - target).abs());
-                    // a > band ≥ b: the entry is inside the interval.
-                    let w = if a <= b { 1.0 } else { (a - band) / (a - b) };
-                    Some(t[j] + w * (t[j + 1] - t[j]) - t0)
-                }
+        if (i0..end).any(|i| t[i] >= half && !inside(i)) {
+            return None;
+        }
+        // The last entry: after the last sample outside the band.
+        match (i0..end).rev().find(|&i| !inside(i)) {
+            None => Some(0.0),
+            Some(j) => {
+                let (a, b) = ((y[j] - target).abs(), (y[j + 1] - target).abs());
+                // a > band ≥ b: the entry is inside the interval.
+                let w = if a <= b { 1.0 } else { (a - band) / (a - b) };
+                Some(t[j] + w * (t[j + 1] - t[j]) - t0)
             }
-        };
-        // The tail: the window's second half.
-        let tail: Vec<usize> = (i0..end).filter(|&i| t[i] >= half).collect();
+        }
+    }
+
+    /// The tail (the window's second half): its mean, and a sustained
+    /// oscillation about it (period, amplitude) when there is one.
+    fn tail(&self) -> (f64, Option<(f64, f64)>) {
+        let (t, y, t0) = (self.t, self.y, self.t0);
+        let delta = self.target - self.y0;
+        let half = t0 + 0.5 * (t[self.end - 1] - t0);
+        let tail: Vec<usize> = (self.i0..self.end).filter(|&i| t[i] >= half).collect();
         let m = tail.iter().map(|&i| y[i]).sum::<f64>() / tail.len().max(1) as f64;
         let mut cross = Vec::new();
         for w in tail.windows(2) {
@@ -181,20 +261,8 @@ pub fn step_metrics(
         } else {
             None
         };
-        out.push(StepMetrics {
-            t0,
-            y0,
-            target,
-            rise,
-            peak: y[ip],
-            peak_time: t[ip] - t0,
-            overshoot_pct: (sp - 1.0).max(0.0) * 100.0,
-            settling,
-            oscillation,
-            offset: m - target,
-        });
+        (m, oscillation)
     }
-    out
 }
 
 /// The RMS and the largest |a − b| of two traces at b's times (a

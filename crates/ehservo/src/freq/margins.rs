@@ -164,6 +164,82 @@ pub fn phase_margin_of(l: C64) -> f64 {
 /// delays in samples), None in continuous time.
 pub fn margins(l: &dyn Fn(f64) -> Option<C64>, lo: f64, hi: f64, h: Option<f64>) -> Margins {
     let grid = log_grid(lo, hi, POINTS_PER_DECADE);
+    let c = crossings(l, &grid);
+    let hz = |w: f64| w / (2.0 * PI);
+    let gain_crossovers: Vec<GainCrossover> = c
+        .gains
+        .iter()
+        .filter_map(|&w| {
+            let pm = phase_margin_of(l(w)?);
+            let dm = (pm >= 0.0).then(|| pm.to_radians() / w);
+            Some(GainCrossover {
+                f_hz: hz(w),
+                omega_rad_s: w,
+                phase_margin_deg: pm,
+                delay_margin_s: dm,
+                delay_margin_samples: dm.and_then(|d| h.map(|h| d / h)),
+            })
+        })
+        .collect();
+    let phase_crossovers: Vec<PhaseCrossover> = c
+        .phases
+        .iter()
+        .filter_map(|&w| {
+            let z = l(w)?;
+            let gm = 1.0 / z.norm();
+            gm.is_finite().then(|| PhaseCrossover {
+                f_hz: hz(w),
+                omega_rad_s: w,
+                gain_margin: gm,
+                gain_margin_db: 20.0 * gm.log10(),
+            })
+        })
+        .collect();
+    let stability_margin = stability_margin(l, &c.minima, &grid);
+    let gain_margin = phase_crossovers.iter().copied().min_by(|a, b| {
+        a.gain_margin
+            .ln()
+            .abs()
+            .total_cmp(&b.gain_margin.ln().abs())
+    });
+    let phase_margin = gain_crossovers.iter().copied().min_by(|a, b| {
+        a.phase_margin_deg
+            .abs()
+            .total_cmp(&b.phase_margin_deg.abs())
+    });
+    let delay_margin = gain_crossovers
+        .iter()
+        .copied()
+        .filter(|g| g.delay_margin_s.is_some())
+        .min_by(|a, b| {
+            a.delay_margin_s
+                .unwrap_or(f64::INFINITY)
+                .total_cmp(&b.delay_margin_s.unwrap_or(f64::INFINITY))
+        });
+    Margins {
+        gain_margin,
+        phase_margin,
+        delay_margin,
+        stability_margin,
+        phase_crossovers,
+        gain_crossovers,
+        searched_rad_s: [lo, hi],
+    }
+}
+
+/// Where L crosses what the margins read, found on a grid and refined.
+struct Crossings {
+    /// Gain crossovers, |L| = 1 (rad/s).
+    gains: Vec<f64>,
+    /// Phase crossovers, Im L = 0 with Re L ≤ 0 (rad/s).
+    phases: Vec<f64>,
+    /// Brackets (rad/s) of the local minima of |1 + L| inside the grid.
+    minima: Vec<(f64, f64)>,
+}
+
+/// The crossings of `l` between neighbours of `grid`: the gain and phase
+/// crossovers refined by bisection, the minima of |1 + L| bracketed.
+fn crossings(l: &dyn Fn(f64) -> Option<C64>, grid: &[f64]) -> Crossings {
     let vals: Vec<Option<C64>> = grid.iter().map(|&w| l(w)).collect();
     let mag = |w: f64| l(w).map_or(f64::NAN, |z| z.norm() - 1.0);
     let imag = |w: f64| l(w).map_or(f64::NAN, |z| z.im);
@@ -207,36 +283,23 @@ pub fn margins(l: &dyn Fn(f64) -> Option<C64>, lo: f64, hi: f64, h: Option<f64>)
             }
         }
     }
+    Crossings {
+        gains,
+        phases,
+        minima,
+    }
+}
+
+/// The least distance of L from −1: over the bracketed minima (refined by
+/// golden section) and the ends of the band.
+fn stability_margin(
+    l: &dyn Fn(f64) -> Option<C64>,
+    minima: &[(f64, f64)],
+    grid: &[f64],
+) -> Option<StabilityMargin> {
     let hz = |w: f64| w / (2.0 * PI);
-    let gain_crossovers: Vec<GainCrossover> = gains
-        .iter()
-        .filter_map(|&w| {
-            let pm = phase_margin_of(l(w)?);
-            let dm = (pm >= 0.0).then(|| pm.to_radians() / w);
-            Some(GainCrossover {
-                f_hz: hz(w),
-                omega_rad_s: w,
-                phase_margin_deg: pm,
-                delay_margin_s: dm,
-                delay_margin_samples: dm.and_then(|d| h.map(|h| d / h)),
-            })
-        })
-        .collect();
-    let phase_crossovers: Vec<PhaseCrossover> = phases
-        .iter()
-        .filter_map(|&w| {
-            let z = l(w)?;
-            let gm = 1.0 / z.norm();
-            gm.is_finite().then(|| PhaseCrossover {
-                f_hz: hz(w),
-                omega_rad_s: w,
-                gain_margin: gm,
-                gain_margin_db: 20.0 * gm.log10(),
-            })
-        })
-        .collect();
     let dist = |w: f64| l(w).map_or(f64::INFINITY, |z| (z + 1.0).norm());
-    let stability_margin = minima
+    minima
         .iter()
         .map(|&(a, b)| {
             let w = golden(&dist, a, b);
@@ -257,36 +320,7 @@ pub fn margins(l: &dyn Fn(f64) -> Option<C64>, lo: f64, hi: f64, h: Option<f64>)
                 }),
         )
         .filter(|s| s.distance.is_finite())
-        .min_by(|a, b| a.distance.total_cmp(&b.distance));
-    let gain_margin = phase_crossovers.iter().copied().min_by(|a, b| {
-        a.gain_margin
-            .ln()
-            .abs()
-            .total_cmp(&b.gain_margin.ln().abs())
-    });
-    let phase_margin = gain_crossovers.iter().copied().min_by(|a, b| {
-        a.phase_margin_deg
-            .abs()
-            .total_cmp(&b.phase_margin_deg.abs())
-    });
-    let delay_margin = gain_crossovers
-        .iter()
-        .copied()
-        .filter(|g| g.delay_margin_s.is_some())
-        .min_by(|a, b| {
-            a.delay_margin_s
-                .unwrap_or(f64::INFINITY)
-                .total_cmp(&b.delay_margin_s.unwrap_or(f64::INFINITY))
-        });
-    Margins {
-        gain_margin,
-        phase_margin,
-        delay_margin,
-        stability_margin,
-        phase_crossovers,
-        gain_crossovers,
-        searched_rad_s: [lo, hi],
-    }
+        .min_by(|a, b| a.distance.total_cmp(&b.distance))
 }
 
 /// The first frequency in `[lo, hi]` (rad/s) where `|H|` falls below `dc`

@@ -207,32 +207,7 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
     )?;
     let mf_max = o.measure_f_max.unwrap_or(0.9 * nyq);
     if !o.methods.is_empty() {
-        check_range(
-            file,
-            ("--measure-f-min", o.measure_f_min),
-            ("--measure-f-max", mf_max),
-            ("--measure-points", o.measure_points, MAX_MEASURE_POINTS),
-            nyq,
-            h,
-        )?;
-        let st = &o.settings;
-        for (k, v) in [
-            ("--amplitude-deg", st.amplitude),
-            ("--disturbance", st.disturbance),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                Err(super::bad(file, k, format!("{v}: must be > 0")))?;
-            }
-        }
-        if !(st.settle_s.is_finite() && st.settle_s >= 0.0) {
-            Err(super::bad(file, "--settle", "must be finite and >= 0"))?;
-        }
-        if st.cycles == 0 || st.cycles > 10_000 {
-            Err(super::bad(file, "--cycles", "must be between 1 and 10000"))?;
-        }
-        if o.periods < 2 || o.periods > 10_000 {
-            Err(super::bad(file, "--periods", "must be between 2 and 10000"))?;
-        }
+        check_measure_options(file, o, mf_max, h)?;
     }
     // The computed part, where the plant is linearised.
     let computed = match super::oppoint::LinPlant::of(setup) {
@@ -262,16 +237,7 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
         ..o.settings
     };
     // The measured frequencies and the work, bounded before any run.
-    let mgrid: Vec<f64> = if o.methods.is_empty() {
-        Vec::new()
-    } else {
-        (0..o.measure_points)
-            .map(|i| {
-                o.measure_f_min
-                    * (mf_max / o.measure_f_min).powf(i as f64 / (o.measure_points - 1) as f64)
-            })
-            .collect()
-    };
+    let mgrid = measure_grid(o, mf_max);
     let mut total = 0.0;
     let welch_plan = |kind| {
         measure::plan_welch(
@@ -348,6 +314,54 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
         sets.push(set);
     }
     write(setup, o, &computed, &sets, f_max, settings, stage)
+}
+
+/// The measurement's options: its frequency range and points, the
+/// excitation's amplitudes, the settling time, the cycles and the Welch
+/// periods (`mf_max` the highest measured frequency, `h` the period).
+fn check_measure_options(file: &str, o: &FreqOptions, mf_max: f64, h: f64) -> Result<()> {
+    let nyq = 0.5 / h;
+    check_range(
+        file,
+        ("--measure-f-min", o.measure_f_min),
+        ("--measure-f-max", mf_max),
+        ("--measure-points", o.measure_points, MAX_MEASURE_POINTS),
+        nyq,
+        h,
+    )?;
+    let st = &o.settings;
+    for (k, v) in [
+        ("--amplitude-deg", st.amplitude),
+        ("--disturbance", st.disturbance),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            Err(super::bad(file, k, format!("{v}: must be > 0")))?;
+        }
+    }
+    if !(st.settle_s.is_finite() && st.settle_s >= 0.0) {
+        Err(super::bad(file, "--settle", "must be finite and >= 0"))?;
+    }
+    if st.cycles == 0 || st.cycles > 10_000 {
+        Err(super::bad(file, "--cycles", "must be between 1 and 10000"))?;
+    }
+    if o.periods < 2 || o.periods > 10_000 {
+        Err(super::bad(file, "--periods", "must be between 2 and 10000"))?;
+    }
+    Ok(())
+}
+
+/// The measured frequencies (Hz), log-spaced up to `mf_max`; none without
+/// a measurement.
+fn measure_grid(o: &FreqOptions, mf_max: f64) -> Vec<f64> {
+    if o.methods.is_empty() {
+        return Vec::new();
+    }
+    (0..o.measure_points)
+        .map(|i| {
+            o.measure_f_min
+                * (mf_max / o.measure_f_min).powf(i as f64 / (o.measure_points - 1) as f64)
+        })
+        .collect()
 }
 
 impl At {

@@ -143,6 +143,110 @@ impl Responses {
     }
 }
 
+/// Notes on the stages the linear model leaves out or takes as the
+/// identity: a quantising sensor, sensor noise, Levant's differentiator.
+fn unmodelled_notes(setup: &Loop) -> Vec<String> {
+    let mut notes = Vec::new();
+    let sc = setup.stages().sensor.config();
+    if sc.resolution.iter().any(|&r| r > 0.0) {
+        notes.push(
+            "sensor.resolution: the quantiser is taken as the identity (its slope is 0 between steps and undefined at them; 1 on average)"
+                .into(),
+        );
+    }
+    if sc.noise.iter().any(|&v| v > 0.0) {
+        notes.push("sensor.noise: left out of the linear model".into());
+    }
+    if matches!(setup.stages().estimator, Some(AnyEstimator::Levant(_))) {
+        notes.push(
+            "estimator: Levant's differentiator is nonlinear and not linearised; PID and ADRC read θ only, so it is outside their loop"
+                .into(),
+        );
+    }
+    notes
+}
+
+/// The linear controller's models, as [`LoopModel`] holds them (each None for a
+/// nonlinear kind).
+struct ControllerModels {
+    controller: Option<ControllerModel>,
+    controller_loop: Option<StateSpace>,
+    feedback: Option<StateSpace>,
+}
+
+/// The linear controller's models: as built, in the loop's time base, and
+/// as the feedback C = −u/θm.
+fn controller_models(setup: &Loop, sampled: bool) -> Result<ControllerModels, KeyError> {
+    let h = setup.sim().step;
+    let controller = match controller_model(setup.controller(), setup.design()) {
+        None => None,
+        Some(r) => Some(r.map_err(|e| {
+            KeyError::new(
+                format!("controller.{}", e.name),
+                format!("{} (got {:?})", e.reason, e.value),
+            )
+        })?),
+    };
+    let controller_loop = controller
+        .as_ref()
+        .map(|c| c.for_mode(sampled.then_some(h)));
+    let feedback = controller_loop.as_ref().map(|c| {
+        c.siso(0, 0)
+            .scaled_output(-1.0, vec![Quantity::new("minus_u", "V")])
+    });
+    Ok(ControllerModels {
+        controller,
+        controller_loop,
+        feedback,
+    })
+}
+
+/// The loop's delays: the sample period and the samples of the sensor's
+/// and the computation's delays.
+struct Delays {
+    h: f64,
+    sensor: usize,
+    computation: usize,
+}
+
+/// L as one model, when the law is linear: C ∘ z^{−n_s} ∘ G_d ∘ z^{−n_c}
+/// in sampled mode, C ∘ G in continuous time.
+fn open_loop(
+    g: &StateSpace,
+    g_d: Option<&StateSpace>,
+    feedback: Option<&StateSpace>,
+    delays: &Delays,
+) -> Result<Option<StateSpace>, KeyError> {
+    let h = delays.h;
+    Ok(match (feedback, g_d) {
+        (Some(c), Some(gd)) => {
+            let theta = Quantity::new("theta", "rad");
+            let u = Quantity::new("u", "V");
+            let comp = Delay {
+                n: delays.computation,
+                h,
+                signal: u.clone(),
+            };
+            let sens = Delay {
+                n: delays.sensor,
+                h,
+                signal: theta.clone(),
+            };
+            let comp_m = StateSpace::delay(comp.n, h, &u);
+            let sens_m = StateSpace::delay(sens.n, h, &theta);
+            Some(
+                comp_m
+                    .series(gd)
+                    .and_then(|m| m.series(&sens_m))
+                    .and_then(|m| m.series(c))
+                    .map_err(|e| KeyError::new("loop", e.0))?,
+            )
+        }
+        (Some(c), None) => Some(g.series(c).map_err(|e| KeyError::new("loop", e.0))?),
+        _ => None,
+    })
+}
+
 impl LoopModel {
     /// The loop of `setup` at the operating point `op`, on `side` at a kink.
     pub fn new(
@@ -163,22 +267,7 @@ impl LoopModel {
         let p = Point { x: &x, u: op.u, v };
         let kinks = chain.kinks(&p);
         let mut notes = chain.notes(&p);
-        let sc = setup.stages().sensor.config();
-        if sc.resolution.iter().any(|&r| r > 0.0) {
-            notes.push(
-                "sensor.resolution: the quantiser is taken as the identity (its slope is 0 between steps and undefined at them; 1 on average)"
-                    .into(),
-            );
-        }
-        if sc.noise.iter().any(|&v| v > 0.0) {
-            notes.push("sensor.noise: left out of the linear model".into());
-        }
-        if matches!(setup.stages().estimator, Some(AnyEstimator::Levant(_))) {
-            notes.push(
-                "estimator: Levant's differentiator is nonlinear and not linearised; PID and ADRC read θ only, so it is outside their loop"
-                    .into(),
-            );
-        }
+        notes.extend(unmodelled_notes(setup));
         let g = chain.model(&p, side);
         let pp = Point {
             x: &op.plant_state,
@@ -226,51 +315,17 @@ impl LoopModel {
             0
         };
         let computation_delay = usize::from(sampled && setup.sim().computation_delay);
-        let controller = match controller_model(setup.controller(), setup.design()) {
-            None => None,
-            Some(r) => Some(r.map_err(|e| {
-                KeyError::new(
-                    format!("controller.{}", e.name),
-                    format!("{} (got {:?})", e.reason, e.value),
-                )
-            })?),
+        let ControllerModels {
+            controller,
+            controller_loop,
+            feedback,
+        } = controller_models(setup, sampled)?;
+        let delays = Delays {
+            h,
+            sensor: sensor_delay,
+            computation: computation_delay,
         };
-        let controller_loop = controller
-            .as_ref()
-            .map(|c| c.for_mode(sampled.then_some(h)));
-        let feedback = controller_loop.as_ref().map(|c| {
-            c.siso(0, 0)
-                .scaled_output(-1.0, vec![Quantity::new("minus_u", "V")])
-        });
-        let loop_l = match (&feedback, &g_d) {
-            (Some(c), Some(gd)) => {
-                let theta = Quantity::new("theta", "rad");
-                let u = Quantity::new("u", "V");
-                let comp = Delay {
-                    n: computation_delay,
-                    h,
-                    signal: u.clone(),
-                };
-                let sens = Delay {
-                    n: sensor_delay,
-                    h,
-                    signal: theta.clone(),
-                };
-                let origin = Point { x: &[], u: 0.0, v };
-                let comp_m = StateSpace::delay(comp.n, h, &u);
-                let sens_m = StateSpace::delay(sens.n, h, &theta);
-                let _ = origin;
-                Some(
-                    comp_m
-                        .series(gd)
-                        .and_then(|m| m.series(&sens_m))
-                        .and_then(|m| m.series(c))
-                        .map_err(|e| KeyError::new("loop", e.0))?,
-                )
-            }
-            (Some(c), None) => Some(g.series(c).map_err(|e| KeyError::new("loop", e.0))?),
-            _ => None,
-        };
+        let loop_l = open_loop(&g, g_d.as_ref(), feedback.as_ref(), &delays)?;
         let observer = match &setup.stages().estimator {
             Some(AnyEstimator::Linear(o)) if sampled => Some(observer_model(o, h)),
             _ => None,

@@ -285,10 +285,69 @@ pub fn parse(
             "{file}: line {hl}: the first row is numbers, not a header: name the columns (t_s, u_V, theta_rad, …)"
         )));
     }
-    let ti = pick(&header, file, "time", "--time", &map.time, TIME, true)?.unwrap_or(0);
-    let ui = pick(&header, file, "command", "--input", &map.input, INPUT, true)?.unwrap_or(0);
+    let c = columns(&header, file, map)?;
+    let cols: Vec<(usize, &str)> = [Some(c.ti), Some(c.ui), Some(c.yi), c.ri, c.pi, c.vi]
+        .into_iter()
+        .flatten()
+        .map(|i| (i, header[i]))
+        .collect();
+    let (data, line_of) = read_rows(lines, file, header.len(), &cols)?;
+    let n = line_of.len();
+    if n < opts.min_rows.max(2) {
+        return Err(bad(format!(
+            "{file}: {n} data rows: at least {} are needed",
+            opts.min_rows.max(2)
+        )));
+    }
+    // Time: strictly increasing and uniform.
+    let tname = header[c.ti];
+    let tf = unit_of(tname).map_or(1.0, |u| u.factor);
+    let t: Vec<f64> = data[0].iter().map(|v| v * tf).collect();
+    for k in 1..n {
+        if t[k] <= t[k - 1] {
+            return Err(bad(format!(
+                "{file}: line {} (row {}), column `{tname}`: time does not increase (t = {} after {})",
+                line_of[k],
+                k + 1,
+                data[0][k],
+                data[0][k - 1]
+            )));
+        }
+    }
+    let rows = Rows {
+        t,
+        data,
+        row_of: (1..=n).collect(),
+        line_of,
+    };
+    let rows = match opts.window {
+        None => rows,
+        Some(w) => rows.window(w, file, tname, opts.min_rows.max(2))?,
+    };
+    let h = rows.uniform_period(file, tname, opts.tolerance)?;
+    experiment(file, &cols, &rows, h, &c)
+}
+
+/// The columns of an experiment, by index into the header: time, command
+/// and position, and the optional reference, pressure and velocity.
+struct Columns {
+    ti: usize,
+    ui: usize,
+    yi: usize,
+    ri: Option<usize>,
+    pi: Option<usize>,
+    vi: Option<usize>,
+    /// Rotary or linear, from the position's unit.
+    axis: Axis,
+}
+
+/// Finds the columns the map asks for (or the defaults) in the header; the
+/// position must be an angle or a length.
+fn columns(header: &[&str], file: &str, map: &ColumnMap) -> anyhow::Result<Columns> {
+    let ti = pick(header, file, "time", "--time", &map.time, TIME, true)?.unwrap_or(0);
+    let ui = pick(header, file, "command", "--input", &map.input, INPUT, true)?.unwrap_or(0);
     let yi = pick(
-        &header,
+        header,
         file,
         "position",
         "--output",
@@ -298,7 +357,7 @@ pub fn parse(
     )?
     .unwrap_or(0);
     let ri = pick(
-        &header,
+        header,
         file,
         "reference",
         "--reference",
@@ -307,7 +366,7 @@ pub fn parse(
         false,
     )?;
     let pi = pick(
-        &header,
+        header,
         file,
         "pressure",
         "--pressure",
@@ -317,7 +376,7 @@ pub fn parse(
     )?;
     let vi = match &map.velocity {
         None => None,
-        v => pick(&header, file, "velocity", "--velocity", v, &[], false)?,
+        v => pick(header, file, "velocity", "--velocity", v, &[], false)?,
     };
     let y_unit = unit_of(header[yi]);
     let axis = y_unit.and_then(|u| u.axis).unwrap_or(Axis::Rotary);
@@ -329,11 +388,25 @@ pub fn parse(
             )));
         }
     }
-    let cols: Vec<(usize, &str)> = [Some(ti), Some(ui), Some(yi), ri, pi, vi]
-        .into_iter()
-        .flatten()
-        .map(|i| (i, header[i]))
-        .collect();
+    Ok(Columns {
+        ti,
+        ui,
+        yi,
+        ri,
+        pi,
+        vi,
+        axis,
+    })
+}
+
+/// Reads the data rows: each one's values of the columns `cols` (finite
+/// numbers, as many fields as the header has), and each row's line.
+fn read_rows<'a>(
+    lines: impl Iterator<Item = (usize, &'a str)>,
+    file: &str,
+    fields_in_header: usize,
+    cols: &[(usize, &str)],
+) -> anyhow::Result<(Vec<Vec<f64>>, Vec<usize>)> {
     let mut data: Vec<Vec<f64>> = vec![Vec::new(); cols.len()];
     let mut line_of: Vec<usize> = Vec::new();
     for (row, (line, l)) in lines.enumerate() {
@@ -344,11 +417,11 @@ pub fn parse(
             )));
         }
         let fields: Vec<&str> = l.split(',').map(str::trim).collect();
-        if fields.len() != header.len() {
+        if fields.len() != fields_in_header {
             return Err(bad(format!(
                 "{file}: line {line} (row {row}): {} fields, the header has {}",
                 fields.len(),
-                header.len()
+                fields_in_header
             )));
         }
         for (j, &(c, name)) in cols.iter().enumerate() {
@@ -372,67 +445,81 @@ pub fn parse(
         }
         line_of.push(line);
     }
-    let n = line_of.len();
-    if n < opts.min_rows.max(2) {
-        return Err(bad(format!(
-            "{file}: {n} data rows: at least {} are needed",
-            opts.min_rows.max(2)
-        )));
-    }
-    // Time: strictly increasing and uniform.
-    let tname = header[ti];
-    let tf = unit_of(tname).map_or(1.0, |u| u.factor);
-    let t: Vec<f64> = data[0].iter().map(|v| v * tf).collect();
-    for k in 1..n {
-        if t[k] <= t[k - 1] {
+    Ok((data, line_of))
+}
+
+/// The rows kept: the times (s), the columns' values as read, and each
+/// row's line in the file and its number among the data rows.
+struct Rows {
+    t: Vec<f64>,
+    data: Vec<Vec<f64>>,
+    line_of: Vec<usize>,
+    row_of: Vec<usize>,
+}
+
+impl Rows {
+    /// The rows with t in the window [a, b] (`--from`, `--to`), at least
+    /// `min_rows` of them.
+    fn window(
+        self,
+        [a, b]: [f64; 2],
+        file: &str,
+        tname: &str,
+        min_rows: usize,
+    ) -> anyhow::Result<Rows> {
+        let (t, n) = (&self.t, self.t.len());
+        let keep: Vec<usize> = (0..n).filter(|&k| t[k] >= a && t[k] <= b).collect();
+        if keep.len() < min_rows {
             return Err(bad(format!(
-                "{file}: line {} (row {}), column `{tname}`: time does not increase (t = {} after {})",
-                line_of[k],
-                k + 1,
-                data[0][k],
-                data[0][k - 1]
+                "{file}: column `{tname}`: the window [{a}, {b}] s (--from, --to) keeps {} rows of {n} (t from {} to {} s): at least {} are needed",
+                keep.len(),
+                t[0],
+                t[n - 1],
+                min_rows
             )));
         }
+        let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+        Ok(Rows {
+            t: pick(t),
+            data: self.data.iter().map(|c| pick(c)).collect(),
+            line_of: keep.iter().map(|&k| self.line_of[k]).collect(),
+            row_of: keep.iter().map(|&k| k + 1).collect(),
+        })
     }
-    // The window: the rows kept, by index into the file's.
-    let (t, data, line_of, row_of, n) = match opts.window {
-        None => (t, data, line_of, (1..=n).collect::<Vec<usize>>(), n),
-        Some([a, b]) => {
-            let keep: Vec<usize> = (0..n).filter(|&k| t[k] >= a && t[k] <= b).collect();
-            if keep.len() < opts.min_rows.max(2) {
+
+    /// The sample period h from the first and last times; every time must
+    /// lie within `tolerance`·h of the uniform grid.
+    fn uniform_period(&self, file: &str, tname: &str, tolerance: f64) -> anyhow::Result<f64> {
+        let (t, n) = (&self.t, self.t.len());
+        let h = (t[n - 1] - t[0]) / (n - 1) as f64;
+        for k in 0..n {
+            let dev = t[k] - (t[0] + k as f64 * h);
+            if dev.abs() > tolerance * h {
                 return Err(bad(format!(
-                    "{file}: column `{tname}`: the window [{a}, {b}] s (--from, --to) keeps {} rows of {n} (t from {} to {} s): at least {} are needed",
-                    keep.len(),
-                    t[0],
-                    t[n - 1],
-                    opts.min_rows.max(2)
+                    "{file}: line {} (row {}), column `{tname}`: non-uniform sample period: t = {} s where a uniform grid of period {h:.6e} s puts {:.6e} s (off by {:.1} % of a period; the limit is {:.1} %)",
+                    self.line_of[k],
+                    self.row_of[k],
+                    t[k],
+                    t[0] + k as f64 * h,
+                    100.0 * dev.abs() / h,
+                    100.0 * tolerance
                 )));
             }
-            let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
-            (
-                pick(&t),
-                data.iter().map(|c| pick(c)).collect::<Vec<_>>(),
-                keep.iter().map(|&k| line_of[k]).collect::<Vec<_>>(),
-                keep.iter().map(|&k| k + 1).collect::<Vec<_>>(),
-                keep.len(),
-            )
         }
-    };
-    let h = (t[n - 1] - t[0]) / (n - 1) as f64;
-    for k in 0..n {
-        let dev = t[k] - (t[0] + k as f64 * h);
-        if dev.abs() > opts.tolerance * h {
-            return Err(bad(format!(
-                "{file}: line {} (row {}), column `{tname}`: non-uniform sample period: t = {} s where a uniform grid of period {h:.6e} s puts {:.6e} s (off by {:.1} % of a period; the limit is {:.1} %)",
-                line_of[k],
-                row_of[k],
-                t[k],
-                t[0] + k as f64 * h,
-                100.0 * dev.abs() / h,
-                100.0 * opts.tolerance
-            )));
-        }
+        Ok(h)
     }
+}
+
+/// The experiment from its rows: each channel in SI units; the command
+/// must move and a pressure be in Pa.
+fn experiment(
+    file: &str,
+    cols: &[(usize, &str)],
+    rows: &Rows,
+    h: f64,
+    c: &Columns,
+) -> anyhow::Result<Experiment> {
+    let data = &rows.data;
     let channel = |j: usize| -> Channel {
         let name = cols[j].1;
         let u = unit_of(name);
@@ -465,9 +552,9 @@ pub fn parse(
             None
         }
     };
-    let reference = next(ri.is_some());
-    let pressure = next(pi.is_some());
-    let velocity = next(vi.is_some());
+    let reference = next(c.ri.is_some());
+    let pressure = next(c.pi.is_some());
+    let velocity = next(c.vi.is_some());
     if let Some(p) = &pressure {
         if !p.unit.is_empty() && p.unit != "Pa" {
             return Err(bad(format!(
@@ -478,14 +565,14 @@ pub fn parse(
     }
     Ok(Experiment {
         file: file.to_string(),
-        t0: t[0],
+        t0: rows.t[0],
         h,
         u,
         y: channel(2),
         reference,
         pressure,
         velocity,
-        axis,
+        axis: c.axis,
     })
 }
 

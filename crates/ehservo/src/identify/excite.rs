@@ -40,7 +40,6 @@
 use super::oe::rk4;
 use crate::error::InputError;
 use crate::output::Staging;
-use crate::scenario::Scenario;
 use anyhow::{Context, Result};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -274,101 +273,10 @@ pub fn design(s: &Spec) -> Result<Design> {
     let n = check(s)?;
     let h = 1.0 / s.rate;
     let (mut values, freqs, phases, iterations) = match s.signal {
-        Signal::Chirp => {
-            let c = ehservo_core::reference::Chirp::try_new(1.0, s.f0, s.f1, s.duration)
-                .map_err(|e| bad(format!("chirp: {e}")))?;
-            use ehservo_core::reference::Reference;
-            (
-                (0..n).map(|k| c.z(k as f64 * h)[0]).collect::<Vec<f64>>(),
-                vec![],
-                vec![],
-                0,
-            )
-        }
-        Signal::Multisine => {
-            let l = s.period;
-            let fr = s.rate / l as f64;
-            let ks: Vec<usize> = ((s.f0 / fr).ceil() as usize..=(s.f1 / fr).floor() as usize)
-                .filter(|&k| k >= 1 && k < l / 2)
-                .collect();
-            let kk = ks.len() as f64;
-            let mut ph: Vec<f64> = (1..=ks.len())
-                .map(|i| -std::f64::consts::PI * (i as f64) * (i as f64 - 1.0) / kk)
-                .collect();
-            let mut iters = 0;
-            if s.phases == Phases::Crest {
-                let mut planner = RealFftPlanner::<f64>::new();
-                let fwd = planner.plan_fft_forward(l);
-                let mut best = (
-                    peak(&period_of(l, &ks, &ph)) / rms(&period_of(l, &ks, &ph)),
-                    ph.clone(),
-                );
-                for it in 0..200 {
-                    iters = it + 1;
-                    let mut x = period_of(l, &ks, &ph);
-                    let (p, r) = (peak(&x), rms(&x));
-                    if p / r < best.0 {
-                        best = (p / r, ph.clone());
-                    }
-                    // Clip at 90 % of the peak, keep the phases the clipping gives.
-                    let c = 0.9 * p;
-                    for v in x.iter_mut() {
-                        *v = v.clamp(-c, c);
-                    }
-                    let mut spec = fwd.make_output_vec();
-                    fwd.process(&mut x, &mut spec)
-                        .expect("buffers of the plan's length");
-                    for (i, &k) in ks.iter().enumerate() {
-                        ph[i] = spec[k].arg() + std::f64::consts::FRAC_PI_2;
-                    }
-                }
-                let x = period_of(l, &ks, &ph);
-                if peak(&x) / rms(&x) < best.0 {
-                    best = (peak(&x) / rms(&x), ph.clone());
-                }
-                ph = best.1;
-            }
-            let one = period_of(l, &ks, &ph);
-            (
-                (0..n).map(|k| one[k % l]).collect(),
-                ks.iter().map(|&k| k as f64 * fr).collect(),
-                ph,
-                iters,
-            )
-        }
-        Signal::Prbs => {
-            let taps = TAPS
-                .iter()
-                .find(|t| t.0 == s.order)
-                .map(|t| t.1)
-                .unwrap_or(&[]);
-            let mut reg: u32 = (1u32 << s.order) - 1;
-            let mut bits = Vec::with_capacity(n / s.clock + 1);
-            while bits.len() * s.clock < n {
-                bits.push(reg & 1);
-                // XOR of the taps (1-based from the output end), shifted in.
-                let fb = taps
-                    .iter()
-                    .fold(0u32, |a, &t| a ^ ((reg >> (s.order - t)) & 1));
-                reg = (reg >> 1) | (fb << (s.order - 1));
-            }
-            (
-                (0..n)
-                    .map(|k| if bits[k / s.clock] == 1 { 1.0 } else { -1.0 })
-                    .collect(),
-                vec![],
-                vec![],
-                0,
-            )
-        }
-        Signal::Steps => {
-            let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
-            let per = (s.hold * s.rate).round().max(1.0) as usize;
-            let levels: Vec<f64> = (0..n / per + 1)
-                .map(|_| 2.0 * rng.random::<f64>() - 1.0)
-                .collect();
-            ((0..n).map(|k| levels[k / per]).collect(), vec![], vec![], 0)
-        }
+        Signal::Chirp => (chirp(s, n, h)?, vec![], vec![], 0),
+        Signal::Multisine => multisine(s, n),
+        Signal::Prbs => (prbs(s, n), vec![], vec![], 0),
+        Signal::Steps => (steps(s, n), vec![], vec![], 0),
     };
     // Scaled to the peak A (a chirp is A·sin φ as its reference kind is).
     let pk = if s.signal == Signal::Chirp {
@@ -392,6 +300,112 @@ pub fn design(s: &Spec) -> Result<Design> {
         crest_factor: p / r,
         iterations,
     })
+}
+
+/// `n` samples of the unit chirp from f0 to f1, as the chirp reference is.
+fn chirp(s: &Spec, n: usize, h: f64) -> Result<Vec<f64>> {
+    let c = ehservo_core::reference::Chirp::try_new(1.0, s.f0, s.f1, s.duration)
+        .map_err(|e| bad(format!("chirp: {e}")))?;
+    use ehservo_core::reference::Reference;
+    Ok((0..n).map(|k| c.z(k as f64 * h)[0]).collect::<Vec<f64>>())
+}
+
+/// `n` samples of the multisine: the harmonics of the period between f0
+/// and f1 with Schroeder's phases, or the crest-minimised ones; also its
+/// frequencies (Hz), phases (rad) and the iterations that minimised them.
+fn multisine(s: &Spec, n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize) {
+    let l = s.period;
+    let fr = s.rate / l as f64;
+    let ks: Vec<usize> = ((s.f0 / fr).ceil() as usize..=(s.f1 / fr).floor() as usize)
+        .filter(|&k| k >= 1 && k < l / 2)
+        .collect();
+    let kk = ks.len() as f64;
+    let mut ph: Vec<f64> = (1..=ks.len())
+        .map(|i| -std::f64::consts::PI * (i as f64) * (i as f64 - 1.0) / kk)
+        .collect();
+    let mut iters = 0;
+    if s.phases == Phases::Crest {
+        (ph, iters) = crest_phases(l, &ks, ph);
+    }
+    let one = period_of(l, &ks, &ph);
+    (
+        (0..n).map(|k| one[k % l]).collect(),
+        ks.iter().map(|&k| k as f64 * fr).collect(),
+        ph,
+        iters,
+    )
+}
+
+/// The phases of harmonics `ks` of period `l` that minimise the crest
+/// factor, from Schroeder's `ph`: 200 rounds of clipping at 90 % of the
+/// peak and keeping the phases the clipping gives; the best seen, and the
+/// rounds made.
+fn crest_phases(l: usize, ks: &[usize], mut ph: Vec<f64>) -> (Vec<f64>, usize) {
+    let mut iters = 0;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(l);
+    let mut best = (
+        peak(&period_of(l, ks, &ph)) / rms(&period_of(l, ks, &ph)),
+        ph.clone(),
+    );
+    for it in 0..200 {
+        iters = it + 1;
+        let mut x = period_of(l, ks, &ph);
+        let (p, r) = (peak(&x), rms(&x));
+        if p / r < best.0 {
+            best = (p / r, ph.clone());
+        }
+        // Clip at 90 % of the peak, keep the phases the clipping gives.
+        let c = 0.9 * p;
+        for v in x.iter_mut() {
+            *v = v.clamp(-c, c);
+        }
+        let mut spec = fwd.make_output_vec();
+        fwd.process(&mut x, &mut spec)
+            .expect("buffers of the plan's length");
+        for (i, &k) in ks.iter().enumerate() {
+            ph[i] = spec[k].arg() + std::f64::consts::FRAC_PI_2;
+        }
+    }
+    let x = period_of(l, ks, &ph);
+    if peak(&x) / rms(&x) < best.0 {
+        best = (peak(&x) / rms(&x), ph.clone());
+    }
+    (best.1, iters)
+}
+
+/// `n` samples of the maximum-length sequence of the register's order,
+/// ±1, each bit held `clock` samples.
+fn prbs(s: &Spec, n: usize) -> Vec<f64> {
+    let taps = TAPS
+        .iter()
+        .find(|t| t.0 == s.order)
+        .map(|t| t.1)
+        .unwrap_or(&[]);
+    let mut reg: u32 = (1u32 << s.order) - 1;
+    let mut bits = Vec::with_capacity(n / s.clock + 1);
+    while bits.len() * s.clock < n {
+        bits.push(reg & 1);
+        // XOR of the taps (1-based from the output end), shifted in.
+        let fb = taps
+            .iter()
+            .fold(0u32, |a, &t| a ^ ((reg >> (s.order - t)) & 1));
+        reg = (reg >> 1) | (fb << (s.order - 1));
+    }
+    (0..n)
+        .map(|k| if bits[k / s.clock] == 1 { 1.0 } else { -1.0 })
+        .collect()
+}
+
+/// `n` samples of random levels in [−1, 1), each held `hold` seconds
+/// (seeded ChaCha8).
+fn steps(s: &Spec, n: usize) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    let per = (s.hold * s.rate).round().max(1.0) as usize;
+    let levels: Vec<f64> = (0..n / per + 1)
+        .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+        .collect();
+    (0..n).map(|k| levels[k / per]).collect()
 }
 
 /// The default proportional gain: a fifth of (a2·a3 − a1)/b.
@@ -452,21 +466,8 @@ pub fn excite_to_dir(
         }
     };
     let d = design(spec)?;
-    let h = 1.0 / spec.rate;
-    let pm = prior.model();
-    let a = super::greybox::effective(&pm.params, &pm.load);
-    let b = pm.b_at_rest();
-    let kp = match spec.loop_kind {
-        Loop::Open => None,
-        Loop::Closed => Some(spec.kp.unwrap_or_else(|| default_kp(a, b))),
-    };
-    let pk = predicted_peak(a, b, &d.values, h, kp);
-    if !pk.is_finite() {
-        return Err(bad(format!(
-            "the experiment diverges on the prior's linear model{}: lower --kp",
-            kp.map_or(String::new(), |k| format!(" under kp = {k} V/rad"))
-        )));
-    }
+    let plan = Plan::on(&prior, spec, &d)?;
+    let (h, kp, pk) = (plan.h, plan.kp, plan.pk);
     let stage = Staging::new(out)?;
     let dir = stage.path().to_path_buf();
     let mut files = Vec::new();
@@ -482,113 +483,23 @@ pub fn excite_to_dir(
     }
     std::fs::write(dir.join("excitation.csv"), &csv).context("writing excitation.csv")?;
     files.push(out.join("excitation.csv"));
-    // The scenario's reference, in degrees: the command at 1 V/° in open
-    // loop, the reference itself in closed loop.
-    let to_deg = |v: f64| match spec.loop_kind {
-        Loop::Open => v,
-        Loop::Closed => v.to_degrees(),
-    };
-    let mut reference = toml::Table::new();
-    if spec.signal == Signal::Chirp {
-        reference.insert("kind".into(), "chirp".into());
-        reference.insert("amplitude_deg".into(), to_deg(spec.amplitude).into());
-        reference.insert("f0_hz".into(), spec.f0.into());
-        reference.insert("f1_hz".into(), spec.f1.into());
-        reference.insert("duration".into(), spec.duration.into());
+    let reference = if spec.signal == Signal::Chirp {
+        chirp_reference(spec)
     } else {
-        // Knots at every sample (multisine), or at each level's first and
-        // last sample (piecewise constant): the table's linear
-        // interpolation is then the zero-order hold at every sample instant.
-        let mut t = String::from("t,theta_deg\n");
-        let piecewise = spec.signal != Signal::Multisine;
-        let n = d.values.len();
-        for k in 0..n {
-            let first = k == 0 || d.values[k].to_bits() != d.values[k - 1].to_bits();
-            let last = k + 1 == n || d.values[k + 1].to_bits() != d.values[k].to_bits();
-            if !piecewise || first || last {
-                let tk = k as f64 * h;
-                let tk = if piecewise && last && !first && k + 1 < n {
-                    tk + 0.999 * h
-                } else {
-                    tk
-                };
-                let _ = writeln!(t, "{},{}", tk, to_deg(d.values[k]));
-            }
-        }
-        if t.len() as u64 > crate::input::MAX_INPUT_BYTES {
-            return Err(bad(format!(
-                "the scenario's reference table would be {} bytes, more than an input file's {} bytes: shorten --duration or lower --rate",
-                t.len(),
-                crate::input::MAX_INPUT_BYTES
-            )));
-        }
+        let t = reference_csv(spec, &d.values, h)?;
         std::fs::write(dir.join("reference.csv"), &t).context("writing reference.csv")?;
         files.push(out.join("reference.csv"));
+        let mut reference = toml::Table::new();
         reference.insert("kind".into(), "csv".into());
         reference.insert("file".into(), "reference.csv".into());
         // Four lags of 10⁻⁶ of a period: the hold, delayed by 4·10⁻⁶ h.
         reference.insert("prefilter_tau".into(), (1e-6 * h).into());
-    }
-    let mut table = prior.table()?;
-    table.insert("name".into(), "excite".into());
-    table.insert(
-        "description".into(),
-        format!(
-            "An identification experiment designed by `ehservo excite`: {:?} signal, {} loop, peak {} {}.",
-            spec.signal,
-            match spec.loop_kind {
-                Loop::Open => "open",
-                Loop::Closed => "closed",
-            },
-            spec.amplitude,
-            if spec.loop_kind == Loop::Open { "V" } else { "rad" }
-        )
-        .into(),
-    );
-    table.insert("reference".into(), toml::Value::Table(reference));
-    let mut ctrl = toml::Table::new();
-    match kp {
-        None => {
-            ctrl.insert("kind".into(), "open-loop".into());
-            ctrl.insert("volts_per_deg".into(), 1.0.into());
-        }
-        Some(k) => {
-            ctrl.insert("kind".into(), "pid".into());
-            ctrl.insert("kp".into(), k.into());
-            ctrl.insert("ki".into(), 0.0.into());
-            ctrl.insert("kd".into(), 0.0.into());
-            ctrl.insert("feedforward".into(), false.into());
-        }
-    }
-    table.insert("controller".into(), toml::Value::Table(ctrl));
-    let sim = table
-        .entry("simulation")
-        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-    if let toml::Value::Table(sim) = sim {
-        sim.insert("step".into(), h.into());
-        sim.insert("horizon".into(), ((d.values.len() - 1) as f64 * h).into());
-        sim.insert("mode".into(), "sampled".into());
-        sim.insert("settle".into(), 0.0.into());
-        let lim = sim
-            .get("theta_limit")
-            .and_then(|v| v.as_float())
-            .unwrap_or(1.0);
-        sim.insert("theta_limit".into(), lim.max(3.0 * pk).into());
-    }
-    // The plant as it is (no parameter variation) unless the prior's --set says otherwise.
-    if !set
-        .iter()
-        .any(|s| s.trim_start().starts_with("uncertainty"))
-    {
-        table.insert(
-            "uncertainty".into(),
-            toml::Value::try_from(ehservo_sim::plant::UncertaintySpec::NONE)
-                .context("uncertainty table")?,
-        );
-    }
+        reference
+    };
+    let table = scenario_table(&prior, spec, set, &plan, d.values.len(), reference)?;
     let text = toml::to_string_pretty(&table).context("the scenario as TOML")?;
     // Checked as `run` will read it, its reference table from the stage.
-    Scenario::parse_in(&text, "scenario.toml", &[], Some(dir.clone()))?;
+    crate::scenario::Loop::parse_in(&text, "scenario.toml", &[], Some(dir.clone()))?;
     std::fs::write(dir.join("scenario.toml"), &text).context("writing scenario.toml")?;
     files.push(out.join("scenario.toml"));
     let w = Written {
@@ -616,6 +527,160 @@ pub fn excite_to_dir(
     w.files.push(out.join("excite.json"));
     stage.commit()?;
     Ok(w)
+}
+
+/// The experiment on the prior: its sample period, the gain of a closed
+/// loop, and the peak |θ| (rad) the prior's linear model predicts.
+struct Plan {
+    h: f64,
+    kp: Option<f64>,
+    pk: f64,
+}
+
+impl Plan {
+    /// The plan of design `d` on the prior's effective linear model, which
+    /// must not diverge under it.
+    fn on(prior: &crate::scenario::Loop, spec: &Spec, d: &Design) -> Result<Plan> {
+        let h = 1.0 / spec.rate;
+        let pm = prior.model();
+        let a = super::greybox::effective(&pm.params, &pm.load);
+        let b = pm.b_at_rest();
+        let kp = match spec.loop_kind {
+            Loop::Open => None,
+            Loop::Closed => Some(spec.kp.unwrap_or_else(|| default_kp(a, b))),
+        };
+        let pk = predicted_peak(a, b, &d.values, h, kp);
+        if !pk.is_finite() {
+            return Err(bad(format!(
+                "the experiment diverges on the prior's linear model{}: lower --kp",
+                kp.map_or(String::new(), |k| format!(" under kp = {k} V/rad"))
+            )));
+        }
+        Ok(Plan { h, kp, pk })
+    }
+}
+
+/// The scenario's reference value of a designed value, in degrees: the
+/// command at 1 V/° in open loop, the reference itself in closed loop.
+fn to_deg(spec: &Spec, v: f64) -> f64 {
+    match spec.loop_kind {
+        Loop::Open => v,
+        Loop::Closed => v.to_degrees(),
+    }
+}
+
+/// The scenario's `[reference]` of a chirp: the chirp itself.
+fn chirp_reference(spec: &Spec) -> toml::Table {
+    let mut reference = toml::Table::new();
+    reference.insert("kind".into(), "chirp".into());
+    reference.insert("amplitude_deg".into(), to_deg(spec, spec.amplitude).into());
+    reference.insert("f0_hz".into(), spec.f0.into());
+    reference.insert("f1_hz".into(), spec.f1.into());
+    reference.insert("duration".into(), spec.duration.into());
+    reference
+}
+
+/// The scenario's reference table (reference.csv) of a sampled signal:
+/// knots at every sample (multisine), or at each level's first and last
+/// sample (piecewise constant), so that the table's linear interpolation is
+/// the zero-order hold at every sample instant. It must fit an input file.
+fn reference_csv(spec: &Spec, values: &[f64], h: f64) -> Result<String> {
+    let mut t = String::from("t,theta_deg\n");
+    let piecewise = spec.signal != Signal::Multisine;
+    let n = values.len();
+    for k in 0..n {
+        let first = k == 0 || values[k].to_bits() != values[k - 1].to_bits();
+        let last = k + 1 == n || values[k + 1].to_bits() != values[k].to_bits();
+        if !piecewise || first || last {
+            let tk = k as f64 * h;
+            let tk = if piecewise && last && !first && k + 1 < n {
+                tk + 0.999 * h
+            } else {
+                tk
+            };
+            let _ = writeln!(t, "{},{}", tk, to_deg(spec, values[k]));
+        }
+    }
+    if t.len() as u64 > crate::input::MAX_INPUT_BYTES {
+        return Err(bad(format!(
+            "the scenario's reference table would be {} bytes, more than an input file's {} bytes: shorten --duration or lower --rate",
+            t.len(),
+            crate::input::MAX_INPUT_BYTES
+        )));
+    }
+    Ok(t)
+}
+
+/// The experiment's scenario: the prior's, with the designed reference,
+/// the open loop (1 V/°) or the proportional loop, the sampled simulation
+/// of the `n` samples, and the plant as it is unless `--set` varies it.
+fn scenario_table(
+    prior: &crate::scenario::Loop,
+    spec: &Spec,
+    set: &[String],
+    plan: &Plan,
+    n: usize,
+    reference: toml::Table,
+) -> Result<toml::Table> {
+    let (h, pk) = (plan.h, plan.pk);
+    let mut table = prior.table()?;
+    table.insert("name".into(), "excite".into());
+    table.insert(
+        "description".into(),
+        format!(
+            "An identification experiment designed by `ehservo excite`: {:?} signal, {} loop, peak {} {}.",
+            spec.signal,
+            match spec.loop_kind {
+                Loop::Open => "open",
+                Loop::Closed => "closed",
+            },
+            spec.amplitude,
+            if spec.loop_kind == Loop::Open { "V" } else { "rad" }
+        )
+        .into(),
+    );
+    table.insert("reference".into(), toml::Value::Table(reference));
+    let mut ctrl = toml::Table::new();
+    match plan.kp {
+        None => {
+            ctrl.insert("kind".into(), "open-loop".into());
+            ctrl.insert("volts_per_deg".into(), 1.0.into());
+        }
+        Some(k) => {
+            ctrl.insert("kind".into(), "pid".into());
+            ctrl.insert("kp".into(), k.into());
+            ctrl.insert("ki".into(), 0.0.into());
+            ctrl.insert("kd".into(), 0.0.into());
+            ctrl.insert("feedforward".into(), false.into());
+        }
+    }
+    table.insert("controller".into(), toml::Value::Table(ctrl));
+    let sim = table
+        .entry("simulation")
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    if let toml::Value::Table(sim) = sim {
+        sim.insert("step".into(), h.into());
+        sim.insert("horizon".into(), ((n - 1) as f64 * h).into());
+        sim.insert("mode".into(), "sampled".into());
+        sim.insert("settle".into(), 0.0.into());
+        let lim = sim
+            .get("theta_limit")
+            .and_then(|v| v.as_float())
+            .unwrap_or(1.0);
+        sim.insert("theta_limit".into(), lim.max(3.0 * pk).into());
+    }
+    // The plant as it is (no parameter variation) unless the prior's --set says otherwise.
+    if !set
+        .iter()
+        .any(|s| s.trim_start().starts_with("uncertainty"))
+    {
+        table.insert(
+            "uncertainty".into(),
+            toml::Value::try_from(ehservo_sim::plant::UncertaintySpec::NONE)
+                .context("uncertainty table")?,
+        );
+    }
+    Ok(table)
 }
 
 #[cfg(test)]

@@ -344,35 +344,15 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
                 false,
             );
         }
-        let norm0 = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let m = r0.len();
-        let round = Round {
-            problem,
-            params: &params,
-            base,
-            free: &free,
-            x: DVector::from_vec(x0),
-            penalty: 10.0 * norm0 / (m as f64).sqrt() + 1.0,
-            m,
-        };
-        let patience = (opts.max_evaluations / (free.len() + 1)).max(1);
-        let (done, rep) = LevenbergMarquardt::new()
-            .with_patience(patience)
-            .with_ftol(1e-10)
-            .with_xtol(1e-10)
-            .minimize(round);
-        evaluations += rep.number_of_evaluations;
-        termination = format!("{:?}", rep.termination);
-        let xs = done.x.as_slice().to_vec();
-        let r_opt = done.eval(&xs);
-        let jac_opt = r_opt.as_ref().and_then(|_| done.jacobian_at(&xs));
-        drop(done);
-        if r_opt.is_some() {
+        let min = minimise(problem, &params, &free, base, x0, &r0, opts);
+        evaluations += min.evaluations;
+        termination = min.termination;
+        if min.r.is_some() {
             for (i, &j) in free.iter().enumerate() {
-                params[j].value = params[j].value_at(xs[i]);
+                params[j].value = params[j].value_at(min.x[i]);
             }
         }
-        let (Some(r), Some(jac)) = (r_opt, jac_opt) else {
+        let (Some(r), Some(jac)) = (min.r, min.jac) else {
             return report(
                 problem,
                 params,
@@ -383,27 +363,8 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
                 false,
             );
         };
-        let dof = (r.len().saturating_sub(free.len())).max(1) as f64;
-        let s_hat = (r.iter().map(|v| v * v).sum::<f64>() / dof).sqrt();
-        let svd = jac.clone().svd(false, true);
-        let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
-        let (imin, smin) =
-            sv.iter().enumerate().fold(
-                (0, f64::INFINITY),
-                |a, (i, &s)| if s < a.1 { (i, s) } else { a },
-            );
-        let smax = sv.iter().fold(0.0f64, |a, &s| a.max(s));
-        let weak = smin <= 1e-9 * smax || s_hat / smin > opts.ident_threshold;
-        if weak {
-            let vt = svd.v_t.as_ref().expect("V asked for");
-            let row = vt.row(imin);
-            let (k, _) = row.iter().enumerate().fold((0, -1.0), |a, (i, v)| {
-                if v.abs() > a.1 {
-                    (i, v.abs())
-                } else {
-                    a
-                }
-            });
+        let (s_hat, weak) = weakest(&jac, &r, free.len(), opts.ident_threshold);
+        if let Some(k) = weak {
             let j = free[k];
             // Back to where the round started: along a direction the data
             // do not fix, the others may have wandered with it.
@@ -436,6 +397,97 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
         termination,
         false,
     )
+}
+
+/// Where a round of Levenberg–Marquardt ended.
+struct Minimum {
+    /// The free parameters' internal values.
+    x: Vec<f64>,
+    /// The residuals there (None: the model diverged).
+    r: Option<Vec<f64>>,
+    /// Their Jacobian in x (None: the model diverged).
+    jac: Option<DMatrix<f64>>,
+    /// The evaluations the round made.
+    evaluations: usize,
+    /// Why it stopped.
+    termination: String,
+}
+
+/// One round: Levenberg–Marquardt over the `free` parameters from `x0`
+/// (the others at `base`; `r0` the residuals there), with patience for
+/// `opts.max_evaluations` evaluations.
+fn minimise(
+    problem: &dyn Problem,
+    params: &[Param],
+    free: &[usize],
+    base: Vec<f64>,
+    x0: Vec<f64>,
+    r0: &[f64],
+    opts: &FitOptions,
+) -> Minimum {
+    let norm0 = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let m = r0.len();
+    let round = Round {
+        problem,
+        params,
+        base,
+        free,
+        x: DVector::from_vec(x0),
+        penalty: 10.0 * norm0 / (m as f64).sqrt() + 1.0,
+        m,
+    };
+    let patience = (opts.max_evaluations / (free.len() + 1)).max(1);
+    let (done, rep) = LevenbergMarquardt::new()
+        .with_patience(patience)
+        .with_ftol(1e-10)
+        .with_xtol(1e-10)
+        .minimize(round);
+    let xs = done.x.as_slice().to_vec();
+    let r = done.eval(&xs);
+    let jac = r.as_ref().and_then(|_| done.jacobian_at(&xs));
+    Minimum {
+        x: xs,
+        r,
+        jac,
+        evaluations: rep.number_of_evaluations,
+        termination: format!("{:?}", rep.termination),
+    }
+}
+
+/// The residuals' standard deviation ŝ (with `n_free` parameters fitted)
+/// and, when the Jacobian leaves a direction unfixed (its smallest
+/// singular value at most 10⁻⁹ of the largest, or ŝ over it above
+/// `threshold`), the free parameter (by index among the free ones) that
+/// weighs most in that direction.
+fn weakest(jac: &DMatrix<f64>, r: &[f64], n_free: usize, threshold: f64) -> (f64, Option<usize>) {
+    let dof = (r.len().saturating_sub(n_free)).max(1) as f64;
+    let s_hat = (r.iter().map(|v| v * v).sum::<f64>() / dof).sqrt();
+    let svd = jac.clone().svd(false, true);
+    let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
+    let (imin, smin) =
+        sv.iter().enumerate().fold(
+            (0, f64::INFINITY),
+            |a, (i, &s)| if s < a.1 { (i, s) } else { a },
+        );
+    let smax = sv.iter().fold(0.0f64, |a, &s| a.max(s));
+    let weak = smin <= 1e-9 * smax || s_hat / smin > threshold;
+    if !weak {
+        return (s_hat, None);
+    }
+    let vt = svd.v_t.as_ref().expect("V asked for");
+    let row = vt.row(imin);
+    let (k, _) =
+        row.iter().enumerate().fold(
+            (0, -1.0),
+            |a, (i, v)| {
+                if v.abs() > a.1 {
+                    (i, v.abs())
+                } else {
+                    a
+                }
+            },
+        );
+    (s_hat, Some(k))
 }
 
 /// The report at the final values, with the covariance from `jac`.

@@ -45,9 +45,10 @@ pub use bounds::Bounds;
 
 use crate::error::InputError;
 use crate::scenario::{Loop, Scenario};
-use bounds::spread;
+use bounds::{spread, Fitted};
 use data::{Axis, ColumnMap, Experiment, ReadOptions};
 use derived::{greybox_derived, linear_derived};
+use ehservo_core::servo::{Load, ServoParams};
 use fit::{FitOptions, FitReport, Param, Problem, Status};
 use frf::Frf;
 use model::{OutputError, SimOut, Weights};
@@ -254,8 +255,71 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let (exps, vals) = read_all(opts)?;
     let prior = prior(opts)?;
     let axis = exps[0].axis;
-    let unit = axis.unit();
     let mut notes = Vec::new();
+    let seg = welch_segment(opts, &exps)?;
+    // 1. Nonparametric estimates.
+    let frfs = nonparametric(&exps, seg);
+    // 2. The linear model.
+    let k = prior.model().load.wavenumber;
+    if opts.load_terms && !(k.is_finite() && k > 0.0) {
+        return Err(bad(format!(
+            "--load-terms: the prior's load.wavenumber is {k}: the load terms need k > 0 (set it with --set load.wavenumber=K)"
+        )));
+    }
+    let job = Job {
+        opts,
+        exps: &exps,
+        vals: &vals,
+        unit: axis.unit(),
+        pp: prior.model().params,
+        pl: prior.model().load,
+    };
+    let (linear, linear_result) = job.fit_linear(&frfs, &mut notes)?;
+    // 3. The grey-box model.
+    let mut greybox_result = None;
+    let mut gb_model = None;
+    if axis == Axis::Linear {
+        notes.push("linear-axis data: the grey-box fit is of the paper's rotary model (1)-(6) and is not made for a cylinder (the cylinder plant exists, a grey-box of it does not yet), so neither is the identified scenario; the linear model is fitted".into());
+    } else if !opts.no_greybox {
+        let (model, result) = job.fit_greybox(&linear, &linear_result, &mut notes)?;
+        greybox_result = Some(result);
+        gb_model = Some(model);
+    }
+    // 4. The spread and the bounds.
+    let fitted = Fitted {
+        linear: &linear,
+        lin: &linear_result,
+        gb: gb_model.as_ref(),
+        gbr: greybox_result.as_ref(),
+    };
+    let bounds = spread(opts, &exps, &fitted, &job.pl, opts.load_terms, k)?;
+    // 5. The scenario.
+    let scenario = match &greybox_result {
+        Some(g) if !g.fit.diverged => Some(identified_scenario(
+            &prior,
+            g,
+            bounds.as_ref(),
+            &opts.files,
+        )?),
+        _ => None,
+    };
+    Ok(Outcome {
+        experiments: exps,
+        validation: vals,
+        frf: frfs,
+        linear: linear_result,
+        greybox: greybox_result,
+        bounds,
+        scenario,
+        prior,
+        notes,
+        linear_model: linear,
+    })
+}
+
+/// The Welch segment length (`--segment`, or the default for the shortest
+/// file), which every estimation file must hold at least once.
+fn welch_segment(opts: &Options, exps: &[Experiment]) -> anyhow::Result<usize> {
     let min_n = exps.iter().map(Experiment::len).min().unwrap_or(0);
     let seg = opts.segment.unwrap_or_else(|| frf::default_segment(min_n));
     if !(16..=1 << 20).contains(&seg) {
@@ -270,9 +334,13 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
             e.len()
         )));
     }
-    // 1. Nonparametric estimates.
-    let frfs: Vec<(Frf, Option<Frf>)> = exps
-        .iter()
+    Ok(seg)
+}
+
+/// The nonparametric estimates of each estimation file: H1, and the
+/// indirect estimate when the file has a reference that moves.
+fn nonparametric(exps: &[Experiment], seg: usize) -> Vec<(Frf, Option<Frf>)> {
+    exps.iter()
         .map(|e| {
             let h1 = frf::h1(&e.u.values, &e.y.values, e.h, seg);
             let ind = e
@@ -282,192 +350,225 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
                 .map(|r| frf::indirect(&r.values, &e.u.values, &e.y.values, e.h, seg));
             (h1, ind)
         })
-        .collect();
-    // 2. The linear model.
-    let load_terms = opts.load_terms;
-    let k = prior.model().load.wavenumber;
-    if load_terms && !(k.is_finite() && k > 0.0) {
-        return Err(bad(format!(
-            "--load-terms: the prior's load.wavenumber is {k}: the load terms need k > 0 (set it with --set load.wavenumber=K)"
-        )));
-    }
-    let pm = *prior.model();
-    let (pp, pl) = (pm.params, pm.load);
-    let prior_eff = greybox::effective(&pp, &pl);
-    let prior_d = [
-        pp.d_per_torque() * pl.amplitude,
-        pl.amplitude * pl.wavenumber / pp.jt,
-    ];
-    let prior_lin: [f64; 4] = if load_terms {
-        let c = pp.coefficients();
-        [c.a1, c.a2, c.a3, pm.b_at_rest()]
-    } else {
-        [prior_eff[0], prior_eff[1], prior_eff[2], pm.b_at_rest()]
-    };
-    let primary = |i: usize| frfs[i].1.as_ref().unwrap_or(&frfs[i].0);
-    let levy = oe::frequency_fit(primary(0), exps[0].h).map(|mut p| {
-        if load_terms {
-            p[0] -= prior_d[0] * k;
-            p[1] -= prior_d[1];
-        }
-        p
-    });
-    // The command's unit (V, A, or m for a spool position; V without a suffix).
-    let u_unit = match exps[0].u.unit {
-        "" => "V",
-        u => u,
-    };
-    let lin_params = |start: [f64; 4]| -> Vec<Param> {
-        let [a1, a2, a3, b] = start;
-        let mut v = vec![
-            Param {
-                prior: 0.0,
-                ..Param::signed("a1", "1/s^3", a1, a1.abs().max(1e-9 * a2.abs().max(1.0)))
-            },
-            Param::new("a2", "1/s^2", a2.max(1e-9), 1.0),
-            Param::new("a3", "1/s", a3.max(1e-9), 1.0),
-            Param::signed(
-                "b",
-                &format!("{unit}/({u_unit}*s^3)"),
-                b,
-                b.abs().max(1e-300),
-            ),
-        ];
-        if load_terms {
-            v.push(Param {
-                prior: 0.0,
-                ..Param::signed(
-                    "d1",
-                    &format!("{unit}/s^3"),
-                    prior_d[0],
-                    prior_d[0].abs().max(1e-6 * a2.abs()),
-                )
-            });
-            v.push(Param {
-                prior: 0.0,
-                ..Param::signed(
-                    "d2",
-                    "1/s^2",
-                    prior_d[1],
-                    prior_d[1].abs().max(1e-3 * a2.abs()),
-                )
-            });
-        }
-        v.extend(nuisance(&exps, unit));
-        v
-    };
-    // Each start: its (a1, a2, a3, b) and, when it has them, u_offset and
-    // the θ0s.
-    type Start = (&'static str, [f64; 4], Option<(f64, Vec<f64>)>);
-    let mut candidates: Vec<Start> = vec![("the prior scenario's coefficients", prior_lin, None)];
-    if let Some(l) = levy {
-        candidates.insert(
-            0,
-            (
-                "the frequency-domain fit (Levy/Sanathanan-Koerner)",
-                l,
-                None,
-            ),
+        .collect()
+}
+
+/// One identification's request, its data and the prior's physical
+/// parameters: what both models' fits read.
+struct Job<'a> {
+    opts: &'a Options,
+    exps: &'a [Experiment],
+    vals: &'a [Experiment],
+    /// The position's unit (rad or m).
+    unit: &'static str,
+    /// The prior's servo parameters.
+    pp: ServoParams,
+    /// The prior's load.
+    pl: Load,
+}
+
+/// A start of the linear fit: its name, its (a1, a2, a3, b) and, when it
+/// has them, u_offset and the θ0s.
+type Start = (&'static str, [f64; 4], Option<(f64, Vec<f64>)>);
+
+/// What the linear model's starts share: the data, the load terms and the
+/// prior's, and the substeps of the prior's dynamics.
+struct LinearStarts<'a> {
+    exps: &'a [Experiment],
+    load_terms: bool,
+    /// The load's wavenumber.
+    k: f64,
+    /// The prior's load terms (d1, d2).
+    prior_d: [f64; 2],
+    /// The position's unit and the command's.
+    unit: &'static str,
+    u_unit: &'static str,
+    /// The model at the prior's coefficients.
+    prior_model: oe::Linear,
+}
+
+impl Job<'_> {
+    /// The linear model (8): the best of its starts, fitted, with its
+    /// derived quantities and its fit on every file.
+    fn fit_linear(
+        &self,
+        frfs: &[(Frf, Option<Frf>)],
+        notes: &mut Vec<String>,
+    ) -> anyhow::Result<(oe::Linear, ModelResult)> {
+        let (opts, exps) = (self.opts, self.exps);
+        let (load_terms, k) = (opts.load_terms, self.pl.wavenumber);
+        let (prior_lin, prior_d) = self.prior_linear();
+        let candidates = self.linear_candidates(frfs, prior_lin, prior_d);
+        // The work, checked before any fit: one evaluation's RK4 steps at the
+        // prior's dynamics.
+        let prior_model = oe::Linear::new(
+            exps,
+            load_terms,
+            k,
+            [prior_lin[0], prior_lin[1], prior_lin[2]],
         );
-    }
-    if !load_terms {
-        if let Some((c, uo, th)) = oe::grid_start(&exps) {
-            candidates.push((
-                "the grid of denominators s(s^2 + 2 zeta omega s + omega^2), b by least squares",
-                c,
-                Some((uo, th)),
-            ));
+        check_linear_work(exps, &prior_model)?;
+        let starts = LinearStarts {
+            exps,
+            load_terms,
+            k,
+            prior_d,
+            unit: self.unit,
+            // The command's unit (V, A, or m for a spool position; V without a suffix).
+            u_unit: match exps[0].u.unit {
+                "" => "V",
+                u => u,
+            },
+            prior_model,
+        };
+        let w0 = OutputError::initial_weights(&starts.prior_model, exps);
+        let best = candidates
+            .iter()
+            .min_by(|a, b| starts.cost(a, w0).total_cmp(&starts.cost(b, w0)))
+            .expect("at least the prior");
+        let (start_name, mut lp) = (best.0, starts.start_params(best));
+        let linear = starts.model_for(best.1);
+        let other_keys: Vec<&str> = greybox::KEYS.iter().map(|k| k.0).collect();
+        apply_fix(&mut lp, &opts.fix, &other_keys)?;
+        let nl = linear.n_model();
+        let (lrep, lw, _) = fit_weighted(&linear, exps, lp, &opts.fit);
+        if lrep.diverged {
+            notes.push("the linear model diverged on the data from every start".into());
         }
+        let lv = lrep.values();
+        let linear_result = ModelResult {
+            model: "linear",
+            derived: linear_derived(&lrep, load_terms, k),
+            estimation: exps
+                .iter()
+                .enumerate()
+                .map(|(i, e)| experiment_fit(&linear, &lv, i, e, opts.lags))
+                .collect(),
+            validation: validate(
+                &linear, &lv, nl, self.vals, lw, &opts.fit, opts.lags, self.unit,
+            ),
+            weights: lw,
+            start: start_name.into(),
+            fit: lrep,
+        };
+        Ok((linear, linear_result))
     }
-    let start_params = |s: &Start| -> Vec<Param> {
-        let mut ps = lin_params(s.1);
-        if let Some((uo, th)) = &s.2 {
-            let n = ps.len() - exps.len() - 1;
-            ps[n].value = *uo;
-            for (j, t) in th.iter().enumerate() {
-                ps[n + 1 + j].value = *t;
+
+    /// The prior's coefficients of the linear model, (a1, a2, a3, b) (the
+    /// load's share in them unless `--load-terms` fits it apart), and its
+    /// load terms (d1, d2).
+    fn prior_linear(&self) -> ([f64; 4], [f64; 2]) {
+        let (pp, pl) = (self.pp, self.pl);
+        let pm = ehservo_core::servo::NominalModel::new(pp, pl);
+        let prior_eff = greybox::effective(&pp, &pl);
+        let prior_d = [
+            pp.d_per_torque() * pl.amplitude,
+            pl.amplitude * pl.wavenumber / pp.jt,
+        ];
+        let prior_lin: [f64; 4] = if self.opts.load_terms {
+            let c = pp.coefficients();
+            [c.a1, c.a2, c.a3, pm.b_at_rest()]
+        } else {
+            [prior_eff[0], prior_eff[1], prior_eff[2], pm.b_at_rest()]
+        };
+        (prior_lin, prior_d)
+    }
+
+    /// The linear fit's starts: the frequency-domain fit of the first
+    /// file's response (when it has one), the prior's coefficients, and the
+    /// grid of denominators (without load terms).
+    fn linear_candidates(
+        &self,
+        frfs: &[(Frf, Option<Frf>)],
+        prior_lin: [f64; 4],
+        prior_d: [f64; 2],
+    ) -> Vec<Start> {
+        let (load_terms, k) = (self.opts.load_terms, self.pl.wavenumber);
+        let primary = |i: usize| frfs[i].1.as_ref().unwrap_or(&frfs[i].0);
+        let levy = oe::frequency_fit(primary(0), self.exps[0].h).map(|mut p| {
+            if load_terms {
+                p[0] -= prior_d[0] * k;
+                p[1] -= prior_d[1];
+            }
+            p
+        });
+        let mut candidates: Vec<Start> =
+            vec![("the prior scenario's coefficients", prior_lin, None)];
+        if let Some(l) = levy {
+            candidates.insert(
+                0,
+                (
+                    "the frequency-domain fit (Levy/Sanathanan-Koerner)",
+                    l,
+                    None,
+                ),
+            );
+        }
+        if !load_terms {
+            if let Some((c, uo, th)) = oe::grid_start(self.exps) {
+                candidates.push((
+                    "the grid of denominators s(s^2 + 2 zeta omega s + omega^2), b by least squares",
+                    c,
+                    Some((uo, th)),
+                ));
             }
         }
-        ps
-    };
-    // The work, checked before any fit: one evaluation's RK4 steps at the
-    // prior's dynamics.
-    let prior_model = oe::Linear::new(
-        &exps,
-        load_terms,
-        k,
-        [prior_lin[0], prior_lin[1], prior_lin[2]],
-    );
-    let steps: usize = exps
-        .iter()
-        .zip(&prior_model.substeps)
-        .map(|(e, m)| e.len() * m)
-        .sum();
-    if steps > MAX_STEPS_PER_EVALUATION {
-        return Err(bad(format!(
-            "identify: {steps} RK4 steps per evaluation ({} substeps a sample for the prior's dynamics), more than the limit of {MAX_STEPS_PER_EVALUATION}",
-            prior_model.substeps.iter().max().unwrap_or(&1)
-        )));
+        candidates
     }
-    // The model integrated with the substeps of the faster of the prior's
-    // and the start's dynamics.
-    let model_for = |a: [f64; 4]| -> oe::Linear {
-        let mut m = oe::Linear::new(&exps, load_terms, k, [a[0], a[1], a[2]]);
-        for (s, p) in m.substeps.iter_mut().zip(&prior_model.substeps) {
-            *s = (*s).max(*p);
-        }
-        m
-    };
-    let w0 = OutputError::initial_weights(&prior_model, &exps);
-    let cost = |s: &Start| -> f64 {
-        let m = model_for(s.1);
-        let prob = OutputError {
-            model: &m,
-            experiments: &exps,
-            weights: w0,
-        };
-        let mut r = Vec::new();
-        let v: Vec<f64> = start_params(s).iter().map(|p| p.value).collect();
-        if prob.residuals(&v, &mut r) {
-            r.iter().map(|x| x * x).sum()
-        } else {
-            f64::INFINITY
-        }
-    };
-    let best = candidates
-        .iter()
-        .min_by(|a, b| cost(a).total_cmp(&cost(b)))
-        .expect("at least the prior");
-    let (start_name, mut lp) = (best.0, start_params(best));
-    let linear = model_for(best.1);
-    let other_keys: Vec<&str> = greybox::KEYS.iter().map(|k| k.0).collect();
-    apply_fix(&mut lp, &opts.fix, &other_keys)?;
-    let nl = linear.n_model();
-    let (lrep, lw, _) = fit_weighted(&linear, &exps, lp, &opts.fit);
-    if lrep.diverged {
-        notes.push("the linear model diverged on the data from every start".into());
-    }
-    let lv = lrep.values();
-    let linear_result = ModelResult {
-        model: "linear",
-        derived: linear_derived(&lrep, load_terms, k),
-        estimation: exps
+
+    /// The grey-box model (1)–(6): its free parameters checked, started at
+    /// the prior moved to the linear fit's coefficients, fitted, with its
+    /// derived quantities and its fit on every file.
+    fn fit_greybox(
+        &self,
+        linear: &oe::Linear,
+        linear_result: &ModelResult,
+        notes: &mut Vec<String>,
+    ) -> anyhow::Result<(greybox::Physical, ModelResult)> {
+        let (opts, exps, pl) = (self.opts, self.exps, self.pl);
+        let free = self.greybox_free()?;
+        let gp = self.greybox_start(&free, linear, linear_result)?;
+        let nk = greybox::KEYS.len();
+        let model =
+            greybox::Physical::new(exps, pl, &gp.iter().map(|p| p.value).collect::<Vec<_>>());
+        let steps: usize = exps
             .iter()
-            .enumerate()
-            .map(|(i, e)| experiment_fit(&linear, &lv, i, e, opts.lags))
-            .collect(),
-        validation: validate(&linear, &lv, nl, &vals, lw, &opts.fit, opts.lags, unit),
-        weights: lw,
-        start: start_name.into(),
-        fit: lrep,
-    };
-    // 3. The grey-box model.
-    let mut greybox_result = None;
-    let mut gb_model = None;
-    if axis == Axis::Linear {
-        notes.push("linear-axis data: the grey-box fit is of the paper's rotary model (1)-(6) and is not made for a cylinder (the cylinder plant exists, a grey-box of it does not yet), so neither is the identified scenario; the linear model is fitted".into());
-    } else if !opts.no_greybox {
-        let free: Vec<String> = opts.free.clone().unwrap_or_else(|| {
+            .zip(&model.substeps)
+            .map(|(e, m)| e.len() * m)
+            .sum();
+        if steps > MAX_STEPS_PER_EVALUATION {
+            return Err(bad(format!(
+                "identify: {steps} RK4 steps per evaluation of the grey-box, more than the limit of {MAX_STEPS_PER_EVALUATION}"
+            )));
+        }
+        let (grep, gw, _) = fit_weighted(&model, exps, gp, &opts.fit);
+        if grep.diverged {
+            notes.push("the grey-box model diverged at its start".into());
+        }
+        let gv = grep.values();
+        let result = ModelResult {
+            model: "greybox",
+            derived: greybox_derived(&grep, &pl),
+            estimation: exps
+                .iter()
+                .enumerate()
+                .map(|(i, e)| experiment_fit(&model, &gv, i, e, opts.lags))
+                .collect(),
+            validation: validate(
+                &model, &gv, nk, self.vals, gw, &opts.fit, opts.lags, self.unit,
+            ),
+            weights: gw,
+            start: "the prior scenario, moved to the linear fit's coefficients".into(),
+            fit: grep,
+        };
+        Ok((model, result))
+    }
+
+    /// The grey-box's free parameters (`--free`, or the default ones), each
+    /// one the grey-box has and the prior can start.
+    fn greybox_free(&self) -> anyhow::Result<Vec<String>> {
+        let pl = &self.pl;
+        let free: Vec<String> = self.opts.free.clone().unwrap_or_else(|| {
             greybox::DEFAULT_FREE
                 .iter()
                 .map(|s| s.to_string())
@@ -493,91 +594,142 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
                 return Err(bad("--free load.amplitude: the prior's load amplitude is 0; give a nonzero start with --set load.amplitude=A".into()));
             }
         }
-        let prior_v = greybox::to_vec(&pp, &pl);
-        let mut gp = greybox::params(&prior_v, &free);
-        gp.extend(nuisance(&exps, unit));
+        Ok(free)
+    }
+
+    /// The grey-box's parameters at their start: the prior's physical
+    /// parameters moved to match the linear fit's effective coefficients
+    /// where they can, `--fix` applied, the nuisance parameters at the
+    /// linear fit's.
+    fn greybox_start(
+        &self,
+        free: &[String],
+        linear: &oe::Linear,
+        linear_result: &ModelResult,
+    ) -> anyhow::Result<Vec<Param>> {
+        let (opts, exps) = (self.opts, self.exps);
+        let load_terms = opts.load_terms;
+        let prior_v = greybox::to_vec(&self.pp, &self.pl);
+        let mut gp = greybox::params(&prior_v, free);
+        gp.extend(nuisance(exps, self.unit));
         let lin_keys = linear_keys(load_terms);
         apply_fix(&mut gp, &opts.fix, &lin_keys)?;
-        // The start: the prior's physical parameters moved to match the
-        // linear fit's effective coefficients where they can.
-        let target = effective_linear(&linear_result, load_terms, k);
-        let start = match_coefficients(&gp, &pl, target, &opts.fit);
+        let target = effective_linear(linear_result, load_terms, self.pl.wavenumber);
+        let start = match_coefficients(&gp, &self.pl, target, &opts.fit);
         for (p, v) in gp.iter_mut().zip(&start) {
             if p.status == Status::Free {
                 p.value = *v;
             }
         }
-        // The nuisance parameters start at the linear fit's.
-        let nk = greybox::KEYS.len();
+        let (nk, nl) = (greybox::KEYS.len(), linear.n_model());
+        let lv = linear_result.fit.values();
         for j in 0..=exps.len() {
             gp[nk + j].value = lv[nl + j];
         }
-        let model =
-            greybox::Physical::new(&exps, pl, &gp.iter().map(|p| p.value).collect::<Vec<_>>());
-        let steps: usize = exps
-            .iter()
-            .zip(&model.substeps)
-            .map(|(e, m)| e.len() * m)
-            .sum();
-        if steps > MAX_STEPS_PER_EVALUATION {
-            return Err(bad(format!(
-                "identify: {steps} RK4 steps per evaluation of the grey-box, more than the limit of {MAX_STEPS_PER_EVALUATION}"
-            )));
-        }
-        let (grep, gw, _) = fit_weighted(&model, &exps, gp, &opts.fit);
-        if grep.diverged {
-            notes.push("the grey-box model diverged at its start".into());
-        }
-        let gv = grep.values();
-        greybox_result = Some(ModelResult {
-            model: "greybox",
-            derived: greybox_derived(&grep, &pl),
-            estimation: exps
-                .iter()
-                .enumerate()
-                .map(|(i, e)| experiment_fit(&model, &gv, i, e, opts.lags))
-                .collect(),
-            validation: validate(&model, &gv, nk, &vals, gw, &opts.fit, opts.lags, unit),
-            weights: gw,
-            start: "the prior scenario, moved to the linear fit's coefficients".into(),
-            fit: grep,
-        });
-        gb_model = Some(model);
+        Ok(gp)
     }
-    // 4. The spread and the bounds.
-    let bounds = spread(
-        opts,
-        &exps,
-        &linear,
-        &linear_result,
-        gb_model.as_ref(),
-        greybox_result.as_ref(),
-        &pl,
-        load_terms,
-        k,
-    )?;
-    // 5. The scenario.
-    let scenario = match &greybox_result {
-        Some(g) if !g.fit.diverged => Some(identified_scenario(
-            &prior,
-            g,
-            bounds.as_ref(),
-            &opts.files,
-        )?),
-        _ => None,
-    };
-    Ok(Outcome {
-        experiments: exps,
-        validation: vals,
-        frf: frfs,
-        linear: linear_result,
-        greybox: greybox_result,
-        bounds,
-        scenario,
-        prior,
-        notes,
-        linear_model: linear,
-    })
+}
+
+/// One evaluation of the linear model at the prior's dynamics must stay
+/// within [`MAX_STEPS_PER_EVALUATION`] RK4 steps.
+fn check_linear_work(exps: &[Experiment], prior_model: &oe::Linear) -> anyhow::Result<()> {
+    let steps: usize = exps
+        .iter()
+        .zip(&prior_model.substeps)
+        .map(|(e, m)| e.len() * m)
+        .sum();
+    if steps > MAX_STEPS_PER_EVALUATION {
+        return Err(bad(format!(
+            "identify: {steps} RK4 steps per evaluation ({} substeps a sample for the prior's dynamics), more than the limit of {MAX_STEPS_PER_EVALUATION}",
+            prior_model.substeps.iter().max().unwrap_or(&1)
+        )));
+    }
+    Ok(())
+}
+
+impl LinearStarts<'_> {
+    /// The linear model's parameters from (a1, a2, a3, b): those, the load
+    /// terms at the prior's, and the nuisance parameters.
+    fn params(&self, start: [f64; 4]) -> Vec<Param> {
+        let (unit, u_unit, prior_d) = (self.unit, self.u_unit, self.prior_d);
+        let [a1, a2, a3, b] = start;
+        let mut v = vec![
+            Param {
+                prior: 0.0,
+                ..Param::signed("a1", "1/s^3", a1, a1.abs().max(1e-9 * a2.abs().max(1.0)))
+            },
+            Param::new("a2", "1/s^2", a2.max(1e-9), 1.0),
+            Param::new("a3", "1/s", a3.max(1e-9), 1.0),
+            Param::signed(
+                "b",
+                &format!("{unit}/({u_unit}*s^3)"),
+                b,
+                b.abs().max(1e-300),
+            ),
+        ];
+        if self.load_terms {
+            v.push(Param {
+                prior: 0.0,
+                ..Param::signed(
+                    "d1",
+                    &format!("{unit}/s^3"),
+                    prior_d[0],
+                    prior_d[0].abs().max(1e-6 * a2.abs()),
+                )
+            });
+            v.push(Param {
+                prior: 0.0,
+                ..Param::signed(
+                    "d2",
+                    "1/s^2",
+                    prior_d[1],
+                    prior_d[1].abs().max(1e-3 * a2.abs()),
+                )
+            });
+        }
+        v.extend(nuisance(self.exps, unit));
+        v
+    }
+
+    /// A start's parameters, its u_offset and θ0s set when it has them.
+    fn start_params(&self, s: &Start) -> Vec<Param> {
+        let mut ps = self.params(s.1);
+        if let Some((uo, th)) = &s.2 {
+            let n = ps.len() - self.exps.len() - 1;
+            ps[n].value = *uo;
+            for (j, t) in th.iter().enumerate() {
+                ps[n + 1 + j].value = *t;
+            }
+        }
+        ps
+    }
+
+    /// The model integrated with the substeps of the faster of the prior's
+    /// and the start's dynamics.
+    fn model_for(&self, a: [f64; 4]) -> oe::Linear {
+        let mut m = oe::Linear::new(self.exps, self.load_terms, self.k, [a[0], a[1], a[2]]);
+        for (s, p) in m.substeps.iter_mut().zip(&self.prior_model.substeps) {
+            *s = (*s).max(*p);
+        }
+        m
+    }
+
+    /// A start's weighted cost (infinite where the model diverges).
+    fn cost(&self, s: &Start, w0: Weights) -> f64 {
+        let m = self.model_for(s.1);
+        let prob = OutputError {
+            model: &m,
+            experiments: self.exps,
+            weights: w0,
+        };
+        let mut r = Vec::new();
+        let v: Vec<f64> = self.start_params(s).iter().map(|p| p.value).collect();
+        if prob.residuals(&v, &mut r) {
+            r.iter().map(|x| x * x).sum()
+        } else {
+            f64::INFINITY
+        }
+    }
 }
 
 fn moves(v: &[f64]) -> bool {

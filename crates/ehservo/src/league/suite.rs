@@ -181,7 +181,7 @@ pub struct Contestant {
 pub struct Case {
     /// Its label.
     pub name: String,
-    /// The scenario (overrides applied), built.
+    /// The scenario (overrides applied).
     pub scenario: Loop,
     pub(super) table: toml::Table,
     /// The seed of each draw (None: the scenario's own).
@@ -209,7 +209,10 @@ pub const MAX_DRAWS: u64 = 10_000;
 impl League {
     /// Reads and checks a suite file and the scenarios it names.
     pub fn load(path: &Path) -> Result<League, InputError> {
-        let file = path.display().to_string();
+        let at = Loader {
+            file: path.display().to_string(),
+            dir: path.parent().unwrap_or(Path::new(".")),
+        };
         let mut sf: SuiteFile = crate::study::load_toml(path, "suite")?;
         if sf.name.is_empty() {
             sf.name = path
@@ -217,302 +220,25 @@ impl League {
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "league".into());
         }
-        let dir = path.parent().unwrap_or(Path::new("."));
-        let bad = |key: &str, reason: String| InputError::key(&file, key, reason);
         if sf.controller.is_empty() {
-            return Err(bad(
+            return Err(at.bad(
                 "controller",
                 "the suite has no [[controller]]: list at least one".into(),
             ));
         }
         if sf.scenario.is_empty() {
-            return Err(bad(
+            return Err(at.bad(
                 "scenario",
                 "the suite has no [[scenario]]: list at least one".into(),
             ));
         }
-        // A scenario that fails to load is named by its file, or by its
-        // `set` when an override is what fails.
-        let load = |key: &str, p: &Path, set: &[String]| {
-            crate::formats::load(&dir.join(p), set).map_err(|e| {
-                let msg = e.to_string();
-                let at = if msg.starts_with("--set") {
-                    "set"
-                } else {
-                    "file"
-                };
-                let key = match key.strip_suffix(".file") {
-                    Some(k) => format!("{k}.{at}"),
-                    None => key.to_string(),
-                };
-                bad(&key, msg)
-            })
-        };
-        let table_of = |key: &str, s: &Loop| s.table().map_err(|e| bad(key, e.to_string()));
-
-        // Scenarios.
-        let mut cases = Vec::new();
-        for (i, e) in sf.scenario.iter().enumerate() {
-            let key = format!("scenario[{i}]");
-            if !(1..=MAX_DRAWS).contains(&e.draws) {
-                return Err(bad(
-                    &format!("{key}.draws"),
-                    format!("must be in 1..={MAX_DRAWS} (got {})", e.draws),
-                ));
-            }
-            let scenario = load(&format!("{key}.file"), &e.file, &e.set)?;
-            let name = e.name.clone().unwrap_or_else(|| {
-                e.file
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_else(|| format!("scenario-{i}"))
-            });
-            check_label(&name).map_err(|r| bad(&format!("{key}.name"), r))?;
-            if cases.iter().any(|c: &Case| c.name == name) {
-                return Err(bad(
-                    &format!("{key}.name"),
-                    format!("`{name}` names two scenarios: give each a distinct `name`"),
-                ));
-            }
-            let seeds = if e.draws == 1 && e.first_seed.is_none() {
-                vec![None]
-            } else {
-                let first = e.first_seed.unwrap_or(0);
-                // `uncertainty.seed` is a TOML integer: at most 2⁶³ − 1.
-                let last = first
-                    .checked_add(e.draws - 1)
-                    .filter(|&l| l <= i64::MAX as u64);
-                if last.is_none() {
-                    return Err(bad(
-                        &format!("{key}.first_seed"),
-                        format!(
-                            "{first} + {} draws runs past the largest seed, 2^63 − 1 = {}: lower first_seed",
-                            e.draws,
-                            i64::MAX
-                        ),
-                    ));
-                }
-                (0..e.draws).map(|d| Some(first + d)).collect()
-            };
-            let table = table_of(&key, &scenario)?;
-            cases.push(Case {
-                name,
-                scenario,
-                table,
-                seeds,
-            });
-        }
-
-        // Controllers.
-        let mut contestants: Vec<Contestant> = Vec::new();
-        for (i, e) in sf.controller.iter().enumerate() {
-            let key = format!("controller[{i}]");
-            let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == e.kind) else {
-                return Err(bad(
-                    &format!("{key}.kind"),
-                    format!(
-                        "unknown controller kind `{}`: expected one of {}",
-                        e.kind,
-                        ControllerCfg::KINDS.join(", ")
-                    ),
-                ));
-            };
-            let name = e.name.clone().unwrap_or_else(|| kind.to_string());
-            check_label(&name).map_err(|r| bad(&format!("{key}.name"), r))?;
-            if contestants.iter().any(|c| c.name == name) {
-                return Err(bad(
-                    &format!("{key}.name"),
-                    format!("`{name}` names two controllers: give each a distinct `name`"),
-                ));
-            }
-            let mut table = ControllerCfg::default_of(kind)
-                .expect("a listed kind has defaults")
-                .to_table();
-            if e.tune && !e.params.is_empty() {
-                return Err(bad(
-                    &format!("{key}.params"),
-                    "given parameters with `tune = true`: set `tune = false` to run them as given, or drop `params` to tune".into(),
-                ));
-            }
-            if e.params.contains_key("kind") {
-                return Err(bad(
-                    &format!("{key}.params.kind"),
-                    "the kind is `kind`, not a parameter".into(),
-                ));
-            }
-            table.extend(e.params.clone());
-            // The table must build on every scenario of the suite.
-            for c in &cases {
-                build_with(c, &table, None).map_err(|r| {
-                    bad(
-                        &format!("{key}.params"),
-                        format!("on scenario `{}`: {r}", c.name),
-                    )
-                })?;
-            }
-            let source = if e.tune {
-                let Some(t) = &sf.tuning else {
-                    return Err(bad(
-                        "tuning",
-                        format!(
-                            "controller `{name}` is to be tuned (`tune` defaults to true) but the suite has no [tuning] section: add one, or set `tune = false`"
-                        ),
-                    ));
-                };
-                Source::Tuned(Box::new(tune_for(t, kind, &table, dir, &file)?))
-            } else {
-                Source::Given
-            };
-            contestants.push(Contestant {
-                name,
-                kind,
-                table,
-                source,
-            });
-        }
-        if sf.tuning.is_some()
-            && !contestants
-                .iter()
-                .any(|c| matches!(c.source, Source::Tuned(_)))
-        {
-            return Err(bad(
-                "tuning",
-                "no controller is tuned (every one has `tune = false`): drop [tuning]".into(),
-            ));
-        }
-
-        // Margin.
+        let cases = at.cases(&sf.scenario)?;
+        let contestants = at.contestants(&sf, &cases)?;
         let margin = match &sf.margin {
             None => None,
-            Some(m) => {
-                if m.keys.is_empty() {
-                    return Err(bad("margin.keys", "is empty: name the keys to vary".into()));
-                }
-                if !(m.low.is_finite() && m.high.is_finite() && m.low < m.high) {
-                    return Err(bad(
-                        "margin.high",
-                        format!("low = {} must be < high = {}, both finite", m.low, m.high),
-                    ));
-                }
-                if !(m.high - m.low).is_finite() {
-                    return Err(bad(
-                        "margin.high",
-                        format!(
-                            "high − low = {:e} − {:e} overflows: narrow the bracket",
-                            m.high, m.low
-                        ),
-                    ));
-                }
-                crate::bisection::check_tolerance(m.low, m.high, m.tolerance)
-                    .map_err(|r| bad("margin.tolerance", r.to_string()))?;
-                if !(m.scale.is_finite() && m.scale != 0.0) {
-                    return Err(bad(
-                        "margin.scale",
-                        format!("must be finite and nonzero (got {:?})", m.scale),
-                    ));
-                }
-                if !((m.scale * m.low).is_finite() && (m.scale * m.high).is_finite()) {
-                    return Err(bad(
-                        "margin.scale",
-                        format!(
-                            "scale·low and scale·high must be finite (got {:?}·[{:e}, {:e}])",
-                            m.scale, m.low, m.high
-                        ),
-                    ));
-                }
-                let scenario = load("margin.file", &m.scenario, &m.set).map_err(|e| match e {
-                    InputError::Key {
-                        file,
-                        line_col,
-                        key,
-                        reason,
-                    } => InputError::Key {
-                        file,
-                        line_col,
-                        key: key.replace("margin.file", "margin.scenario"),
-                        reason,
-                    },
-                    other => other,
-                })?;
-                // The limit's key says its unit: the one of the scenario's axis.
-                let (own, other) = match scenario.axis() {
-                    crate::axis::Axis::Rotary => {
-                        (("e_limit_deg", m.e_limit_deg), ("e_limit_mm", m.e_limit_mm))
-                    }
-                    crate::axis::Axis::Linear => {
-                        (("e_limit_mm", m.e_limit_mm), ("e_limit_deg", m.e_limit_deg))
-                    }
-                };
-                if other.1.is_some() {
-                    return Err(bad(
-                        &format!("margin.{}", other.0),
-                        format!(
-                            "the margin's scenario is on a {} axis: give its error limit as `{}`",
-                            scenario.axis().name(),
-                            own.0
-                        ),
-                    ));
-                }
-                if let Some(l) = own.1 {
-                    if !(l.is_finite() && l > 0.0) {
-                        return Err(bad(
-                            &format!("margin.{}", own.0),
-                            format!("must be finite and > 0 (got {l:?})"),
-                        ));
-                    }
-                }
-                let table = table_of("margin", &scenario)?;
-                let margin = Margin {
-                    cfg: m.clone(),
-                    scenario,
-                    table,
-                };
-                // The keys must exist and take a number at both ends.
-                for k in &m.keys {
-                    if let Some(v) = lookup(&margin.table, k) {
-                        crate::tune::numeric(v).map_err(|what| {
-                            bad(
-                                "margin.keys",
-                                format!("`{k}` is {what}, not a real number: a margin varies numeric keys"),
-                            )
-                        })?;
-                    }
-                }
-                for x in [m.low, m.high] {
-                    for c in &contestants {
-                        if let Err(e) = margin.build(&c.table, x) {
-                            let r = e.to_string();
-                            if r.contains("unknown") || crate::tune::not_a_result(&e.reason) {
-                                return Err(bad("margin.keys", r));
-                            }
-                        }
-                    }
-                }
-                Some(margin)
-            }
+            Some(m) => Some(at.margin(m, &contestants)?),
         };
-        // One league, one unit: every scenario on the first one's axis.
-        let axis = cases[0].scenario.axis();
-        let mut axes: Vec<(String, &Loop)> = cases
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (format!("scenario[{i}].file"), &c.scenario))
-            .collect();
-        if let Some(m) = &margin {
-            axes.push(("margin.scenario".into(), &m.scenario));
-        }
-        if let Some((key, s)) = axes.iter().find(|(_, s)| s.axis() != axis) {
-            return Err(bad(
-                key,
-                format!(
-                    "`{}` is on a {} axis, `{}` on a {} one: a league's errors share one unit",
-                    s.name(),
-                    s.axis().name(),
-                    cases[0].scenario.name(),
-                    axis.name()
-                ),
-            ));
-        }
+        let axis = at.one_axis(&cases, margin.as_ref())?;
         let league = League {
             file: sf,
             contestants,
@@ -523,7 +249,7 @@ impl League {
         league
             .work_asked()
             .check("league")
-            .map_err(|e| bad(&e.key, e.reason.to_string()))?;
+            .map_err(|e| at.bad(&e.key, e.reason.to_string()))?;
         Ok(league)
     }
 
@@ -619,6 +345,352 @@ impl League {
             .map(|m| m.steps() as u64 * self.contestants.len() as u64)
             .unwrap_or(0);
         tunes + self.cells().len() as u64 + margin
+    }
+}
+
+/// The suite file being loaded: its name, which its errors carry, and its
+/// folder, which the files it names are relative to.
+struct Loader<'a> {
+    file: String,
+    dir: &'a Path,
+}
+
+impl Loader<'_> {
+    /// The error at `key` of the suite file.
+    fn bad(&self, key: &str, reason: String) -> InputError {
+        InputError::key(&self.file, key, reason)
+    }
+
+    /// A scenario the suite names. One that fails to load is named by its
+    /// file, or by its `set` when an override is what fails.
+    fn load(&self, key: &str, p: &Path, set: &[String]) -> Result<Loop, InputError> {
+        crate::formats::load(&self.dir.join(p), set).map_err(|e| {
+            let msg = e.to_string();
+            let at = if msg.starts_with("--set") {
+                "set"
+            } else {
+                "file"
+            };
+            let key = match key.strip_suffix(".file") {
+                Some(k) => format!("{k}.{at}"),
+                None => key.to_string(),
+            };
+            self.bad(&key, msg)
+        })
+    }
+
+    /// A loaded scenario as a table, the base its runs are built on.
+    fn table_of(&self, key: &str, s: &Loop) -> Result<toml::Table, InputError> {
+        s.table().map_err(|e| self.bad(key, e.to_string()))
+    }
+
+    /// The `[[scenario]]`s, each loaded, labelled and given its draws' seeds.
+    fn cases(&self, entries: &[ScenarioEntry]) -> Result<Vec<Case>, InputError> {
+        let mut cases = Vec::new();
+        for (i, e) in entries.iter().enumerate() {
+            let key = format!("scenario[{i}]");
+            if !(1..=MAX_DRAWS).contains(&e.draws) {
+                return Err(self.bad(
+                    &format!("{key}.draws"),
+                    format!("must be in 1..={MAX_DRAWS} (got {})", e.draws),
+                ));
+            }
+            let scenario = self.load(&format!("{key}.file"), &e.file, &e.set)?;
+            let name = e.name.clone().unwrap_or_else(|| {
+                e.file
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| format!("scenario-{i}"))
+            });
+            check_label(&name).map_err(|r| self.bad(&format!("{key}.name"), r))?;
+            if cases.iter().any(|c: &Case| c.name == name) {
+                return Err(self.bad(
+                    &format!("{key}.name"),
+                    format!("`{name}` names two scenarios: give each a distinct `name`"),
+                ));
+            }
+            let seeds = self.seeds(&key, e)?;
+            let table = self.table_of(&key, &scenario)?;
+            cases.push(Case {
+                name,
+                scenario,
+                table,
+                seeds,
+            });
+        }
+        Ok(cases)
+    }
+
+    /// The seed of each draw of a `[[scenario]]` (None: the scenario's own).
+    fn seeds(&self, key: &str, e: &ScenarioEntry) -> Result<Vec<Option<u64>>, InputError> {
+        if e.draws == 1 && e.first_seed.is_none() {
+            return Ok(vec![None]);
+        }
+        let first = e.first_seed.unwrap_or(0);
+        // `uncertainty.seed` is a TOML integer: at most 2⁶³ − 1.
+        let last = first
+            .checked_add(e.draws - 1)
+            .filter(|&l| l <= i64::MAX as u64);
+        if last.is_none() {
+            return Err(self.bad(
+                &format!("{key}.first_seed"),
+                format!(
+                    "{first} + {} draws runs past the largest seed, 2^63 − 1 = {}: lower first_seed",
+                    e.draws,
+                    i64::MAX
+                ),
+            ));
+        }
+        Ok((0..e.draws).map(|d| Some(first + d)).collect())
+    }
+
+    /// The `[[controller]]`s, each checked, its table built on every
+    /// scenario and its tune made; `[tuning]` must tune at least one.
+    fn contestants(&self, sf: &SuiteFile, cases: &[Case]) -> Result<Vec<Contestant>, InputError> {
+        let mut contestants: Vec<Contestant> = Vec::new();
+        for (i, e) in sf.controller.iter().enumerate() {
+            let key = format!("controller[{i}]");
+            let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == e.kind) else {
+                return Err(self.bad(
+                    &format!("{key}.kind"),
+                    format!(
+                        "unknown controller kind `{}`: expected one of {}",
+                        e.kind,
+                        ControllerCfg::KINDS.join(", ")
+                    ),
+                ));
+            };
+            let name = e.name.clone().unwrap_or_else(|| kind.to_string());
+            check_label(&name).map_err(|r| self.bad(&format!("{key}.name"), r))?;
+            if contestants.iter().any(|c| c.name == name) {
+                return Err(self.bad(
+                    &format!("{key}.name"),
+                    format!("`{name}` names two controllers: give each a distinct `name`"),
+                ));
+            }
+            let table = self.controller_table(&key, e, kind, cases)?;
+            let source = if e.tune {
+                let Some(t) = &sf.tuning else {
+                    return Err(self.bad(
+                        "tuning",
+                        format!(
+                            "controller `{name}` is to be tuned (`tune` defaults to true) but the suite has no [tuning] section: add one, or set `tune = false`"
+                        ),
+                    ));
+                };
+                Source::Tuned(Box::new(tune_for(t, kind, &table, self.dir, &self.file)?))
+            } else {
+                Source::Given
+            };
+            contestants.push(Contestant {
+                name,
+                kind,
+                table,
+                source,
+            });
+        }
+        if sf.tuning.is_some()
+            && !contestants
+                .iter()
+                .any(|c| matches!(c.source, Source::Tuned(_)))
+        {
+            return Err(self.bad(
+                "tuning",
+                "no controller is tuned (every one has `tune = false`): drop [tuning]".into(),
+            ));
+        }
+        Ok(contestants)
+    }
+
+    /// A controller's full `[controller]` table: the kind's defaults and its
+    /// given `params`, which must build on every scenario of the suite.
+    fn controller_table(
+        &self,
+        key: &str,
+        e: &ControllerEntry,
+        kind: &'static str,
+        cases: &[Case],
+    ) -> Result<toml::Table, InputError> {
+        let mut table = ControllerCfg::default_of(kind)
+            .expect("a listed kind has defaults")
+            .to_table();
+        if e.tune && !e.params.is_empty() {
+            return Err(self.bad(
+                &format!("{key}.params"),
+                "given parameters with `tune = true`: set `tune = false` to run them as given, or drop `params` to tune".into(),
+            ));
+        }
+        if e.params.contains_key("kind") {
+            return Err(self.bad(
+                &format!("{key}.params.kind"),
+                "the kind is `kind`, not a parameter".into(),
+            ));
+        }
+        table.extend(e.params.clone());
+        for c in cases {
+            build_with(c, &table, None).map_err(|r| {
+                self.bad(
+                    &format!("{key}.params"),
+                    format!("on scenario `{}`: {r}", c.name),
+                )
+            })?;
+        }
+        Ok(table)
+    }
+
+    /// `[margin]`: its bracket checked, its scenario loaded, its error
+    /// limit in the scenario's unit, its keys numeric on every controller.
+    fn margin(&self, m: &MarginCfg, contestants: &[Contestant]) -> Result<Margin, InputError> {
+        self.check_bracket(m)?;
+        let scenario = self
+            .load("margin.file", &m.scenario, &m.set)
+            .map_err(|e| match e {
+                InputError::Key {
+                    file,
+                    line_col,
+                    key,
+                    reason,
+                } => InputError::Key {
+                    file,
+                    line_col,
+                    key: key.replace("margin.file", "margin.scenario"),
+                    reason,
+                },
+                other => other,
+            })?;
+        self.check_limit(m, &scenario)?;
+        let table = self.table_of("margin", &scenario)?;
+        let margin = Margin {
+            cfg: m.clone(),
+            scenario,
+            table,
+        };
+        // The keys must exist and take a number at both ends.
+        for k in &m.keys {
+            if let Some(v) = lookup(&margin.table, k) {
+                crate::tune::numeric(v).map_err(|what| {
+                    self.bad(
+                        "margin.keys",
+                        format!("`{k}` is {what}, not a real number: a margin varies numeric keys"),
+                    )
+                })?;
+            }
+        }
+        for x in [m.low, m.high] {
+            for c in contestants {
+                if let Err(e) = margin.build(&c.table, x) {
+                    let r = e.to_string();
+                    if r.contains("unknown") || crate::tune::not_a_result(&e.reason) {
+                        return Err(self.bad("margin.keys", r));
+                    }
+                }
+            }
+        }
+        Ok(margin)
+    }
+
+    /// The margin's keys, bracket, tolerance and scale, before its scenario
+    /// is loaded.
+    fn check_bracket(&self, m: &MarginCfg) -> Result<(), InputError> {
+        if m.keys.is_empty() {
+            return Err(self.bad("margin.keys", "is empty: name the keys to vary".into()));
+        }
+        if !(m.low.is_finite() && m.high.is_finite() && m.low < m.high) {
+            return Err(self.bad(
+                "margin.high",
+                format!("low = {} must be < high = {}, both finite", m.low, m.high),
+            ));
+        }
+        if !(m.high - m.low).is_finite() {
+            return Err(self.bad(
+                "margin.high",
+                format!(
+                    "high − low = {:e} − {:e} overflows: narrow the bracket",
+                    m.high, m.low
+                ),
+            ));
+        }
+        crate::bisection::check_tolerance(m.low, m.high, m.tolerance)
+            .map_err(|r| self.bad("margin.tolerance", r.to_string()))?;
+        if !(m.scale.is_finite() && m.scale != 0.0) {
+            return Err(self.bad(
+                "margin.scale",
+                format!("must be finite and nonzero (got {:?})", m.scale),
+            ));
+        }
+        if !((m.scale * m.low).is_finite() && (m.scale * m.high).is_finite()) {
+            return Err(self.bad(
+                "margin.scale",
+                format!(
+                    "scale·low and scale·high must be finite (got {:?}·[{:e}, {:e}])",
+                    m.scale, m.low, m.high
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The margin's error limit: its key says its unit, the one of the
+    /// scenario's axis, and it is finite and positive.
+    fn check_limit(&self, m: &MarginCfg, scenario: &Loop) -> Result<(), InputError> {
+        let (own, other) = match scenario.axis() {
+            crate::axis::Axis::Rotary => {
+                (("e_limit_deg", m.e_limit_deg), ("e_limit_mm", m.e_limit_mm))
+            }
+            crate::axis::Axis::Linear => {
+                (("e_limit_mm", m.e_limit_mm), ("e_limit_deg", m.e_limit_deg))
+            }
+        };
+        if other.1.is_some() {
+            return Err(self.bad(
+                &format!("margin.{}", other.0),
+                format!(
+                    "the margin's scenario is on a {} axis: give its error limit as `{}`",
+                    scenario.axis().name(),
+                    own.0
+                ),
+            ));
+        }
+        if let Some(l) = own.1 {
+            if !(l.is_finite() && l > 0.0) {
+                return Err(self.bad(
+                    &format!("margin.{}", own.0),
+                    format!("must be finite and > 0 (got {l:?})"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The league's axis. One league, one unit: every scenario (the
+    /// margin's too) on the first one's axis.
+    fn one_axis(
+        &self,
+        cases: &[Case],
+        margin: Option<&Margin>,
+    ) -> Result<crate::axis::Axis, InputError> {
+        let axis = cases[0].scenario.axis();
+        let mut axes: Vec<(String, &Loop)> = cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (format!("scenario[{i}].file"), &c.scenario))
+            .collect();
+        if let Some(m) = margin {
+            axes.push(("margin.scenario".into(), &m.scenario));
+        }
+        if let Some((key, s)) = axes.iter().find(|(_, s)| s.axis() != axis) {
+            return Err(self.bad(
+                key,
+                format!(
+                    "`{}` is on a {} axis, `{}` on a {} one: a league's errors share one unit",
+                    s.name(),
+                    s.axis().name(),
+                    cases[0].scenario.name(),
+                    axis.name()
+                ),
+            ));
+        }
+        Ok(axis)
     }
 }
 

@@ -4,7 +4,7 @@
 
 use crate::plot::{Dash, Figure, Mark, Panel, Series};
 use crate::run::RunResult;
-use crate::scenario::Loop;
+use crate::scenario::{Loop, Scenario};
 use crate::simulation::Sample;
 use ehservo_sim::axis::Axis;
 use ehservo_sim::plant::UncertaintySpec;
@@ -113,7 +113,7 @@ pub fn clip_diverged(p: &mut Panel, r: &RunResult) {
 pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
     let s = lp.scenario();
     let t: Vec<f64> = run.trace.iter().map(|x| x.t).collect();
-    let col = |f: &dyn Fn(&Sample) -> f64| run.trace.iter().map(f).collect::<Vec<f64>>();
+    let col = |f: &dyn Fn(&Sample) -> f64| column(run, f);
     let mut title = format!(
         "{} — {} on the {} plant, {} h = {} s",
         s.name,
@@ -152,6 +152,42 @@ pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
             Series::new(sym, t.clone(), col(&|x| ax.display(x.x[0])), 0),
         ],
     );
+    let mut panels = vec![
+        theta,
+        error_panel(s, run, &t),
+        panel("(c) control input u", "u (V)", u_series),
+    ];
+    panels.extend(seen_panel(s, run, &t));
+    panels.extend(law_panels(run, &t, ax));
+    // A diverged run: every time history is clipped to its bounded part,
+    // and the divergence marked (the last steps would flatten the rest).
+    if run.outcome.diverged.is_some() {
+        for p in panels.iter_mut() {
+            clip_diverged(p, run);
+        }
+    }
+    let rows = panels.len().div_ceil(2);
+    Figure {
+        title,
+        rows,
+        cols: 2,
+        size: (1400, 500 * rows as u32),
+        panels,
+        footer: variation_footer(lp),
+    }
+}
+
+/// One value of every kept sample of a run.
+fn column(run: &RunResult, f: &dyn Fn(&Sample) -> f64) -> Vec<f64> {
+    run.trace.iter().map(f).collect::<Vec<f64>>()
+}
+
+/// Panel (b), the tracking error. The error after the transient is the
+/// headline (e_max): the y axis is scaled to it and the transient clipped,
+/// with t_s marked.
+fn error_panel(s: &Scenario, run: &RunResult, t: &[f64]) -> Panel {
+    let ax = s.plant.axis();
+    let (sym, unit) = (ax.letter(), ax.unit());
     let mut e_panel = panel(
         &match run.metrics.e_max {
             Some(e) => format!(
@@ -162,10 +198,13 @@ pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
             None => format!("(b) tracking error e = {sym}d − {sym}"),
         },
         &format!("e ({unit})"),
-        vec![Series::new("", t.clone(), col(&|x| ax.display(x.e)), 0)],
+        vec![Series::new(
+            "",
+            t.to_vec(),
+            column(run, &|x| ax.display(x.e)),
+            0,
+        )],
     );
-    // The error after the transient is the headline (e_max): the y axis is
-    // scaled to it and the transient clipped, with t_s marked.
     let settle = s.simulation.settle;
     let after: Vec<f64> = run
         .trace
@@ -184,33 +223,48 @@ pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
             text: "transient ends".into(),
         });
     }
-    let mut panels = vec![
-        theta,
-        e_panel,
-        panel("(c) control input u", "u (V)", u_series),
-    ];
-    // What the controller was given against the truth, when the sensors
-    // or an estimator stand between: the acceleration, the hardest channel.
+    e_panel
+}
+
+/// What the controller was given against the truth, when the sensors or
+/// an estimator stand between: the acceleration, the hardest channel.
+fn seen_panel(s: &Scenario, run: &RunResult, t: &[f64]) -> Option<Panel> {
     let exact_sensor = s.sensor.is_exact();
-    if !exact_sensor || s.estimator.is_some() {
-        let source = match (&s.estimator, s.sensor.measured.has(2)) {
-            (Some(e), false) => format!("estimated ({})", e.kind()),
-            _ => "measured".to_string(),
-        };
-        panels.push(panel(
-            &format!("{sym}̈: true and {source}, as the controller saw it"),
-            &format!("{sym}̈ ({unit}/s²)"),
-            vec![
-                Series::new("seen", t.clone(), col(&|x| ax.display(x.x_ctrl[2])), 1)
-                    .dash(Dash::Dashed),
-                Series::new("true", t.clone(), col(&|x| ax.display(x.x[2])), 0),
-            ],
-        ));
+    if exact_sensor && s.estimator.is_none() {
+        return None;
     }
+    let ax = s.plant.axis();
+    let (sym, unit) = (ax.letter(), ax.unit());
+    let source = match (&s.estimator, s.sensor.measured.has(2)) {
+        (Some(e), false) => format!("estimated ({})", e.kind()),
+        _ => "measured".to_string(),
+    };
+    Some(panel(
+        &format!("{sym}̈: true and {source}, as the controller saw it"),
+        &format!("{sym}̈ ({unit}/s²)"),
+        vec![
+            Series::new(
+                "seen",
+                t.to_vec(),
+                column(run, &|x| ax.display(x.x_ctrl[2])),
+                1,
+            )
+            .dash(Dash::Dashed),
+            Series::new("true", t.to_vec(), column(run, &|x| ax.display(x.x[2])), 0),
+        ],
+    ))
+}
+
+/// The law's panels: for the sliding-mode laws the paper's Fig. 2 panels
+/// (σ, the lumped uncertainty and its estimate, ‖W‖); for any other law
+/// its parts in volts.
+fn law_panels(run: &RunResult, t: &[f64], ax: Axis) -> Vec<Panel> {
+    let col = |f: &dyn Fn(&Sample) -> f64| column(run, f);
+    let t = t.to_vec();
     let signals = run.trace.first().map(|x| x.signals).unwrap_or(&[]);
     let has = |key: &str| signals.iter().any(|g| g.key == key);
+    let mut panels = Vec::new();
     if has("sigma") && has("uncertainty") {
-        // The paper's Fig. 2 panels for the sliding-mode laws.
         let mut d_series = vec![Series::new(
             "Σ Δaᵢxᵢ − Δb·u(eq) + d − ξ",
             t.clone(),
@@ -239,7 +293,6 @@ pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
             ));
         }
     } else {
-        // Any other law: the law's parts in volts.
         let parts: Vec<Series> = signals
             .iter()
             .enumerate()
@@ -249,22 +302,7 @@ pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
             .collect();
         panels.push(panel("(d) the parts of the law", "(V)", parts));
     }
-    // A diverged run: every time history is clipped to its bounded part,
-    // and the divergence marked (the last steps would flatten the rest).
-    if run.outcome.diverged.is_some() {
-        for p in panels.iter_mut() {
-            clip_diverged(p, run);
-        }
-    }
-    let rows = panels.len().div_ceil(2);
-    Figure {
-        title,
-        rows,
-        cols: 2,
-        size: (1400, 500 * rows as u32),
-        panels,
-        footer: variation_footer(lp),
-    }
+    panels
 }
 
 /// A figure's footer: the true variation as the scenario sets it.

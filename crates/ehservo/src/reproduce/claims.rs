@@ -120,156 +120,181 @@ pub fn evaluate(claim: &Claim, results: &BTreeMap<String, Estimate>) -> Verdict 
         return undetermined(format!("case `{}` was not run", claim.case));
     };
     let oe = claim.other.as_ref().and_then(|o| results.get(o));
-    let metric = claim.metric.as_deref().unwrap_or("");
-    let fm = |v: f64| format_metric(metric, v);
-    let fmd = |x: Value| {
-        if x.d > 0.0 {
-            format!("{} ± {}", fm(x.v), fm(x.d).trim_start_matches('+'))
-        } else {
-            fm(x.v)
-        }
-    };
     if let Some(v) = unconverged(claim, results) {
         return v;
     }
-    let m = me.best();
-    let get = |e: &Estimate, who: &str| -> Result<Value, Verdict> {
-        let c = e.best();
-        match (c.get(metric), e.margin(metric)) {
-            (Some(v), Some(d)) => Ok(Value { v, d }),
-            _ => Err(undetermined(if c.base.diverged {
-                format!("`{who}` {}: {metric} undefined", divergence(c))
-            } else {
-                format!("{metric} undefined for `{who}` (or under the perturbation)")
-            })),
-        }
-    };
     match claim.kind {
-        ClaimKind::Bounded | ClaimKind::Unbounded => {
-            let want_bounded = claim.kind == ClaimKind::Bounded;
-            let status = if !me.status_stable() {
-                Status::Undecided
-            } else if m.base.diverged != want_bounded {
-                Status::Agree
-            } else {
-                Status::Differ
-            };
-            Verdict {
-                status,
-                measured: divergence(m),
-                detail: format!(
-                    "expects {}{}",
-                    if want_bounded { "bounded" } else { "unbounded" },
-                    if me.status_stable() {
-                        ""
-                    } else {
-                        "; the status changes with the level or the perturbation"
-                    }
-                ),
-            }
-        }
-        ClaimKind::Approx | ClaimKind::AtLeast | ClaimKind::AtMost => {
-            let x = match get(me, &claim.case) {
-                Ok(x) => x,
-                Err(u) => return u,
-            };
-            let target = claim.value.unwrap_or(f64::NAN);
-            let (status, detail) = match claim.kind {
-                ClaimKind::Approx => {
-                    let tol = claim.tol.unwrap_or(0.0) * target.abs();
-                    (
-                        band_status(x.v, x.d, target - tol, target + tol),
-                        format!(
-                            "paper {} ± {:.0} %: measured/paper = {:.2}",
-                            fm(target),
-                            100.0 * claim.tol.unwrap_or(0.0),
-                            x.v / target
-                        ),
-                    )
-                }
-                ClaimKind::AtLeast => (
-                    interval_status(x.v - x.d, x.v + x.d, &|v| v >= target),
-                    format!("expects ≥ {}", fm(target)),
-                ),
-                _ => (
-                    interval_status(x.v - x.d, x.v + x.d, &|v| v <= target),
-                    format!("expects ≤ {}", fm(target)),
-                ),
-            };
-            Verdict {
-                status,
-                measured: fmd(x),
-                detail,
-            }
-        }
+        ClaimKind::Bounded | ClaimKind::Unbounded => bounded_verdict(claim, me),
+        ClaimKind::Approx | ClaimKind::AtLeast | ClaimKind::AtMost => value_verdict(claim, me),
         ClaimKind::Less | ClaimKind::Greater | ClaimKind::Ratio | ClaimKind::Similar => {
             let Some(o) = oe else {
                 return undetermined("the other case was not run".into());
             };
-            let oname = claim.other.as_deref().unwrap_or("");
-            let x = match get(me, &claim.case) {
-                Ok(x) => x,
-                Err(u) => return u,
-            };
-            let y = match get(o, oname) {
-                Ok(y) => y,
-                Err(u) => return u,
-            };
-            let measured = format!("{} vs {}", fmd(x), fmd(y));
-            // The difference x − y with margin δx + δy; the ratio x/y with
-            // the first-order relative margin δx/|x| + δy/|y| (undecided
-            // when either margin reaches its value).
-            let diff = Value {
-                v: x.v - y.v,
-                d: x.d + y.d,
-            };
-            let ratio = || -> Option<Value> {
-                let rel = x.d / x.v.abs() + y.d / y.v.abs();
-                let r = x.v / y.v;
-                (rel < 1.0 && r.is_finite()).then(|| Value {
-                    v: r,
-                    d: r.abs() * rel,
-                })
-            };
-            let (status, detail) = match claim.kind {
-                ClaimKind::Less => (
-                    interval_status(diff.v - diff.d, diff.v + diff.d, &|v| v < 0.0),
-                    format!("expects {} < {}", claim.case, oname),
+            pair_verdict(claim, me, o)
+        }
+    }
+}
+
+/// The claim's metric at a case's converged level with its margin, or the
+/// undetermined verdict saying why there is none.
+fn value_of(e: &Estimate, who: &str, metric: &str) -> Result<Value, Verdict> {
+    let c = e.best();
+    match (c.get(metric), e.margin(metric)) {
+        (Some(v), Some(d)) => Ok(Value { v, d }),
+        _ => Err(undetermined(if c.base.diverged {
+            format!("`{who}` {}: {metric} undefined", divergence(c))
+        } else {
+            format!("{metric} undefined for `{who}` (or under the perturbation)")
+        })),
+    }
+}
+
+/// A value of `metric` as measured: `v ± d`, or `v` without a margin.
+fn format_measured(metric: &str, x: Value) -> String {
+    let fm = |v: f64| format_metric(metric, v);
+    if x.d > 0.0 {
+        format!("{} ± {}", fm(x.v), fm(x.d).trim_start_matches('+'))
+    } else {
+        fm(x.v)
+    }
+}
+
+/// A bounded or unbounded claim: the case's divergence status, undecided
+/// when it changes with the level or the perturbation.
+fn bounded_verdict(claim: &Claim, me: &Estimate) -> Verdict {
+    let m = me.best();
+    let want_bounded = claim.kind == ClaimKind::Bounded;
+    let status = if !me.status_stable() {
+        Status::Undecided
+    } else if m.base.diverged != want_bounded {
+        Status::Agree
+    } else {
+        Status::Differ
+    };
+    Verdict {
+        status,
+        measured: divergence(m),
+        detail: format!(
+            "expects {}{}",
+            if want_bounded { "bounded" } else { "unbounded" },
+            if me.status_stable() {
+                ""
+            } else {
+                "; the status changes with the level or the perturbation"
+            }
+        ),
+    }
+}
+
+/// A claim on one case's value: about the paper's (within its tolerance),
+/// at least or at most it.
+fn value_verdict(claim: &Claim, me: &Estimate) -> Verdict {
+    let metric = claim.metric.as_deref().unwrap_or("");
+    let fm = |v: f64| format_metric(metric, v);
+    let x = match value_of(me, &claim.case, metric) {
+        Ok(x) => x,
+        Err(u) => return u,
+    };
+    let target = claim.value.unwrap_or(f64::NAN);
+    let (status, detail) = match claim.kind {
+        ClaimKind::Approx => {
+            let tol = claim.tol.unwrap_or(0.0) * target.abs();
+            (
+                band_status(x.v, x.d, target - tol, target + tol),
+                format!(
+                    "paper {} ± {:.0} %: measured/paper = {:.2}",
+                    fm(target),
+                    100.0 * claim.tol.unwrap_or(0.0),
+                    x.v / target
                 ),
-                ClaimKind::Greater => (
-                    interval_status(diff.v - diff.d, diff.v + diff.d, &|v| v > 0.0),
-                    format!("expects {} > {}", claim.case, oname),
-                ),
-                kind => {
-                    let (target, what) = if kind == ClaimKind::Ratio {
-                        (claim.value.unwrap_or(f64::NAN), "paper")
-                    } else {
-                        (1.0, "similar:")
-                    };
-                    let tol = claim.tol.unwrap_or(0.0);
-                    match ratio() {
-                        Some(r) => (
-                            band_status(r.v, r.d, target * (1.0 - tol), target * (1.0 + tol)),
-                            format!(
-                                "ratio {:.2} ± {:.2}, {what} {target} ± {:.0} %",
-                                r.v,
-                                r.d,
-                                100.0 * tol
-                            ),
-                        ),
-                        None => (
-                            Status::Undecided,
-                            "the margins reach the values: the ratio is not determined".into(),
-                        ),
-                    }
-                }
+            )
+        }
+        ClaimKind::AtLeast => (
+            interval_status(x.v - x.d, x.v + x.d, &|v| v >= target),
+            format!("expects ≥ {}", fm(target)),
+        ),
+        _ => (
+            interval_status(x.v - x.d, x.v + x.d, &|v| v <= target),
+            format!("expects ≤ {}", fm(target)),
+        ),
+    };
+    Verdict {
+        status,
+        measured: format_measured(metric, x),
+        detail,
+    }
+}
+
+/// A claim comparing the case with the other: less, greater, a ratio
+/// about the paper's, or similar (a ratio about 1).
+fn pair_verdict(claim: &Claim, me: &Estimate, o: &Estimate) -> Verdict {
+    let metric = claim.metric.as_deref().unwrap_or("");
+    let oname = claim.other.as_deref().unwrap_or("");
+    let x = match value_of(me, &claim.case, metric) {
+        Ok(x) => x,
+        Err(u) => return u,
+    };
+    let y = match value_of(o, oname, metric) {
+        Ok(y) => y,
+        Err(u) => return u,
+    };
+    let measured = format!(
+        "{} vs {}",
+        format_measured(metric, x),
+        format_measured(metric, y)
+    );
+    // The difference x − y with margin δx + δy; the ratio x/y with
+    // the first-order relative margin δx/|x| + δy/|y| (undecided
+    // when either margin reaches its value).
+    let diff = Value {
+        v: x.v - y.v,
+        d: x.d + y.d,
+    };
+    let ratio = || -> Option<Value> {
+        let rel = x.d / x.v.abs() + y.d / y.v.abs();
+        let r = x.v / y.v;
+        (rel < 1.0 && r.is_finite()).then(|| Value {
+            v: r,
+            d: r.abs() * rel,
+        })
+    };
+    let (status, detail) = match claim.kind {
+        ClaimKind::Less => (
+            interval_status(diff.v - diff.d, diff.v + diff.d, &|v| v < 0.0),
+            format!("expects {} < {}", claim.case, oname),
+        ),
+        ClaimKind::Greater => (
+            interval_status(diff.v - diff.d, diff.v + diff.d, &|v| v > 0.0),
+            format!("expects {} > {}", claim.case, oname),
+        ),
+        kind => {
+            let (target, what) = if kind == ClaimKind::Ratio {
+                (claim.value.unwrap_or(f64::NAN), "paper")
+            } else {
+                (1.0, "similar:")
             };
-            Verdict {
-                status,
-                measured,
-                detail,
+            let tol = claim.tol.unwrap_or(0.0);
+            match ratio() {
+                Some(r) => (
+                    band_status(r.v, r.d, target * (1.0 - tol), target * (1.0 + tol)),
+                    format!(
+                        "ratio {:.2} ± {:.2}, {what} {target} ± {:.0} %",
+                        r.v,
+                        r.d,
+                        100.0 * tol
+                    ),
+                ),
+                None => (
+                    Status::Undecided,
+                    "the margins reach the values: the ratio is not determined".into(),
+                ),
             }
         }
+    };
+    Verdict {
+        status,
+        measured,
+        detail,
     }
 }
 

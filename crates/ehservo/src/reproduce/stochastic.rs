@@ -190,12 +190,51 @@ pub fn judge(
     m: &dyn Fn(&str, usize) -> Option<CaseMetrics>,
 ) -> ClaimDistribution {
     let metric = claim.metric.as_deref().unwrap_or("");
+    let other = claim.other.as_deref().unwrap_or("");
+    let get = |case: &str, k: usize| m(case, k).and_then(|c| c.get(metric));
+    let (quantity, band, paper) = quantity_and_band(claim);
+    let per_seed: Vec<Option<f64>> = (0..n)
+        .map(|k| match claim.kind {
+            ClaimKind::Approx | ClaimKind::AtLeast | ClaimKind::AtMost => get(&claim.case, k),
+            ClaimKind::Ratio | ClaimKind::Similar => match (get(&claim.case, k), get(other, k)) {
+                (Some(a), Some(b)) if b != 0.0 => Some(a / b),
+                _ => None,
+            },
+            ClaimKind::Less | ClaimKind::Greater => Some(get(&claim.case, k)? - get(other, k)?),
+            ClaimKind::Bounded | ClaimKind::Unbounded => {
+                m(&claim.case, k).map(|c| if c.base.diverged { 0.0 } else { 1.0 })
+            }
+        })
+        .collect();
+    let diverged = (0..n)
+        .filter(|&k| {
+            [Some(claim.case.as_str()), claim.other.as_deref()]
+                .into_iter()
+                .flatten()
+                .any(|c| m(c, k).is_some_and(|c| c.base.diverged))
+        })
+        .count();
+    let dist = distribution(&per_seed, band, diverged);
+    ClaimDistribution {
+        claim: claim.id.clone(),
+        quantity,
+        band,
+        paper,
+        agree: dist.median.is_some_and(|q| band.contains(q)),
+        dist,
+        per_seed,
+    }
+}
+
+/// What `claim` judges per seed (its name), the band it must lie in and
+/// the paper's value, where the claim has one.
+fn quantity_and_band(claim: &Claim) -> (String, Band, Option<f64>) {
+    let metric = claim.metric.as_deref().unwrap_or("");
     let value = claim.value.unwrap_or(f64::NAN);
     let tol = claim.tol.unwrap_or(0.0);
     let other = claim.other.as_deref().unwrap_or("");
-    let get = |case: &str, k: usize| m(case, k).and_then(|c| c.get(metric));
     let inf = f64::INFINITY;
-    let (quantity, band, paper): (String, Band, Option<f64>) = match claim.kind {
+    match claim.kind {
         ClaimKind::Approx => (
             metric.into(),
             Band {
@@ -275,37 +314,6 @@ pub fn judge(
                 None,
             )
         }
-    };
-    let per_seed: Vec<Option<f64>> = (0..n)
-        .map(|k| match claim.kind {
-            ClaimKind::Approx | ClaimKind::AtLeast | ClaimKind::AtMost => get(&claim.case, k),
-            ClaimKind::Ratio | ClaimKind::Similar => match (get(&claim.case, k), get(other, k)) {
-                (Some(a), Some(b)) if b != 0.0 => Some(a / b),
-                _ => None,
-            },
-            ClaimKind::Less | ClaimKind::Greater => Some(get(&claim.case, k)? - get(other, k)?),
-            ClaimKind::Bounded | ClaimKind::Unbounded => {
-                m(&claim.case, k).map(|c| if c.base.diverged { 0.0 } else { 1.0 })
-            }
-        })
-        .collect();
-    let diverged = (0..n)
-        .filter(|&k| {
-            [Some(claim.case.as_str()), claim.other.as_deref()]
-                .into_iter()
-                .flatten()
-                .any(|c| m(c, k).is_some_and(|c| c.base.diverged))
-        })
-        .count();
-    let dist = distribution(&per_seed, band, diverged);
-    ClaimDistribution {
-        claim: claim.id.clone(),
-        quantity,
-        band,
-        paper,
-        agree: dist.median.is_some_and(|q| band.contains(q)),
-        dist,
-        per_seed,
     }
 }
 

@@ -373,98 +373,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     if dirs.is_empty() {
         crate::bad_input!("nothing to merge");
     }
-    // The same directory given twice, by whatever spelling.
-    let mut seen: Vec<(PathBuf, &PathBuf)> = Vec::new();
-    for d in dirs {
-        if let Ok(c) = d.canonicalize() {
-            if let Some((_, first)) = seen.iter().find(|(s, _)| *s == c) {
-                crate::bad_input!(
-                    "{} is given twice (also as {}): refusing to merge a shard with itself",
-                    d.display(),
-                    first.display()
-                );
-            }
-            seen.push((c, d));
-        }
-    }
-    if let Ok(o) = out.canonicalize() {
-        if let Some((_, d)) = seen.iter().find(|(c, _)| *c == o) {
-            crate::bad_input!(
-                "--out {}: is the shard {} being merged: refusing to overwrite it",
-                out.display(),
-                d.display()
-            );
-        }
-    }
-
-    let mut records: Vec<(PathBuf, StudyRecord)> = Vec::new();
-    for d in dirs {
-        records.push((d.clone(), read_record(d)?));
-    }
-    let (first_dir, first) = records[0].clone();
-    for (d, r) in &records[1..] {
-        if r.study != first.study || r.base != first.base || r.runs != first.runs {
-            crate::bad_input!(
-                "{} and {} are outputs of different studies: refusing to merge",
-                first_dir.display(),
-                d.display()
-            );
-        }
-        if r.version != first.version {
-            crate::bad_input!(
-                "{} was written by {} {} and {} by {}: refusing to merge",
-                first_dir.display(),
-                first.software,
-                first.version,
-                d.display(),
-                r.version
-            );
-        }
-    }
+    check_distinct(dirs, out)?;
+    let mut records = read_records(dirs)?;
+    let first = records[0].1.clone();
     records.sort_by_key(|(_, r)| r.range);
-    let split = common_split(records.iter().map(|(_, r)| r));
-    let mut next = 0u64;
-    let mut prev: Option<&Path> = None;
-    for (d, r) in &records {
-        let [lo, hi] = r.range;
-        if lo > next {
-            crate::bad_input!(
-                "{}",
-                missing_message(
-                    first.runs,
-                    split,
-                    next,
-                    lo,
-                    &format!("before {}", d.display())
-                )
-            );
-        }
-        if lo < next {
-            crate::bad_input!(
-                "runs {lo}..{} are in both {} and {}: shards overlap or one is given twice",
-                next.min(hi),
-                prev.map_or_else(|| "?".into(), |p| p.display().to_string()),
-                d.display()
-            );
-        }
-        next = hi;
-        prev = Some(d);
-    }
-    if next != first.runs {
-        crate::bad_input!(
-            "{}",
-            missing_message(
-                first.runs,
-                split,
-                next,
-                first.runs,
-                &format!(
-                    "after {}",
-                    prev.map_or_else(|| "?".into(), |p| p.display().to_string())
-                )
-            )
-        );
-    }
+    check_coverage(&records, first.runs)?;
 
     // The rows, each checked, rewritten through one writer (the bytes a
     // whole run writes).
@@ -496,6 +409,107 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<u64> {
     )?;
     stage.commit()?;
     Ok(written)
+}
+
+/// No directory given twice (by whatever spelling), and `out` none of
+/// them.
+fn check_distinct(dirs: &[PathBuf], out: &Path) -> Result<()> {
+    let mut seen: Vec<(PathBuf, &PathBuf)> = Vec::new();
+    for d in dirs {
+        if let Ok(c) = d.canonicalize() {
+            if let Some((_, first)) = seen.iter().find(|(s, _)| *s == c) {
+                crate::bad_input!(
+                    "{} is given twice (also as {}): refusing to merge a shard with itself",
+                    d.display(),
+                    first.display()
+                );
+            }
+            seen.push((c, d));
+        }
+    }
+    if let Ok(o) = out.canonicalize() {
+        if let Some((_, d)) = seen.iter().find(|(c, _)| *c == o) {
+            crate::bad_input!(
+                "--out {}: is the shard {} being merged: refusing to overwrite it",
+                out.display(),
+                d.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Each directory's study.json, in the order given; all of one study,
+/// written by one version.
+fn read_records(dirs: &[PathBuf]) -> Result<Vec<(PathBuf, StudyRecord)>> {
+    let mut records: Vec<(PathBuf, StudyRecord)> = Vec::new();
+    for d in dirs {
+        records.push((d.clone(), read_record(d)?));
+    }
+    let (first_dir, first) = &records[0];
+    for (d, r) in &records[1..] {
+        if r.study != first.study || r.base != first.base || r.runs != first.runs {
+            crate::bad_input!(
+                "{} and {} are outputs of different studies: refusing to merge",
+                first_dir.display(),
+                d.display()
+            );
+        }
+        if r.version != first.version {
+            crate::bad_input!(
+                "{} was written by {} {} and {} by {}: refusing to merge",
+                first_dir.display(),
+                first.software,
+                first.version,
+                d.display(),
+                r.version
+            );
+        }
+    }
+    Ok(records)
+}
+
+/// The records' ranges, in order, cover runs 0..`runs` once: no gap (named
+/// as the missing shard when the split is known) and no overlap.
+fn check_coverage(records: &[(PathBuf, StudyRecord)], runs: u64) -> Result<()> {
+    let split = common_split(records.iter().map(|(_, r)| r));
+    let mut next = 0u64;
+    let mut prev: Option<&Path> = None;
+    for (d, r) in records {
+        let [lo, hi] = r.range;
+        if lo > next {
+            crate::bad_input!(
+                "{}",
+                missing_message(runs, split, next, lo, &format!("before {}", d.display()))
+            );
+        }
+        if lo < next {
+            crate::bad_input!(
+                "runs {lo}..{} are in both {} and {}: shards overlap or one is given twice",
+                next.min(hi),
+                prev.map_or_else(|| "?".into(), |p| p.display().to_string()),
+                d.display()
+            );
+        }
+        next = hi;
+        prev = Some(d);
+    }
+    if next != runs {
+        crate::bad_input!(
+            "{}",
+            missing_message(
+                runs,
+                split,
+                next,
+                runs,
+                &format!(
+                    "after {}",
+                    prev.map_or_else(|| "?".into(), |p| p.display().to_string())
+                )
+            )
+        );
+    }
+    Ok(())
 }
 
 #[cfg(test)]

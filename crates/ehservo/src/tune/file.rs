@@ -130,7 +130,7 @@ pub const MAX_BUDGET: u64 = 1_000_000;
 pub struct Tune {
     /// The file as written (defaults filled).
     pub file: TuneFile,
-    /// The scenarios, built.
+    /// The scenarios.
     pub scenarios: Vec<Loop>,
     pub(super) tables: Vec<toml::Table>,
     /// The kind tuned.
@@ -198,18 +198,15 @@ impl Tune {
         file: &str,
         section: &str,
     ) -> Result<Tune, InputError> {
-        let dot = if section.is_empty() { "" } else { "." };
-        let bad = |key: &str, reason: String| {
-            InputError::key(file, format!("{section}{dot}{key}"), reason)
-        };
+        let at = Keys { file, section };
         if scenarios.is_empty() {
-            return Err(bad(
+            return Err(at.bad(
                 "scenarios",
                 "is empty: list at least one scenario file".into(),
             ));
         }
         let axis = common_axis(&scenarios).map_err(|i| {
-            bad(
+            at.bad(
                 &format!("scenarios[{i}]"),
                 format!(
                     "`{}` is on a {} axis, `{}` on a {} one: the scores of one tune share one unit",
@@ -220,167 +217,10 @@ impl Tune {
                 ),
             )
         })?;
-        if !(1..=MAX_BUDGET).contains(&tf.budget) {
-            return Err(bad(
-                "budget",
-                format!("must be in 1..={MAX_BUDGET} (got {})", tf.budget),
-            ));
-        }
-        if !(2..=10_000).contains(&tf.particles) {
-            return Err(bad(
-                "particles",
-                format!("must be in 2..=10000 (got {})", tf.particles),
-            ));
-        }
-        if tf.budget < 2 * tf.particles {
-            return Err(bad(
-                "budget",
-                format!(
-                    "{} evaluations are fewer than two generations of {} particles",
-                    tf.budget, tf.particles
-                ),
-            ));
-        }
-        if !(1..=10_000).contains(&tf.draws) {
-            return Err(bad(
-                "draws",
-                format!("must be in 1..=10000 (got {})", tf.draws),
-            ));
-        }
-        let p = &tf.penalty;
-        if !(p.chattering.is_finite() && p.chattering >= 0.0) {
-            return Err(bad(
-                "penalty.chattering",
-                format!("must be finite and >= 0 (got {:?})", p.chattering),
-            ));
-        }
-        if !(p.u_excess.is_finite() && p.u_excess >= 0.0) {
-            return Err(bad(
-                "penalty.u_excess",
-                format!("must be finite and >= 0 (got {:?})", p.u_excess),
-            ));
-        }
-        if let Some(l) = p.u_limit {
-            if !(l.is_finite() && l > 0.0) {
-                return Err(bad(
-                    "penalty.u_limit",
-                    format!("must be finite and > 0 (got {l:?})"),
-                ));
-            }
-        }
-        let kind_name = tf
-            .controller
-            .clone()
-            .unwrap_or_else(|| scenarios[0].controller().kind().to_string());
-        let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == kind_name) else {
-            return Err(bad(
-                "controller",
-                format!(
-                    "unknown controller kind `{kind_name}`: expected one of {}",
-                    ControllerCfg::KINDS.join(", ")
-                ),
-            ));
-        };
-        let declared = ControllerCfg::default_of(kind)
-            .map(|c| c.visit(Tunables))
-            .unwrap_or(&[]);
-        let params: Vec<ParamRange> = if tf.param.is_empty() {
-            declared
-                .iter()
-                .map(|t| ParamRange {
-                    key: t.key.to_string(),
-                    low: t.low,
-                    high: t.high,
-                    scale: if t.log { Scale::Log } else { Scale::Linear },
-                })
-                .collect()
-        } else {
-            tf.param.clone()
-        };
-        if params.is_empty() {
-            return Err(bad(
-                "param",
-                format!("controller kind `{kind}` declares no tunable parameters: list them as [[param]]"),
-            ));
-        }
-        let defaults = ControllerCfg::default_of(kind)
-            .map(|c| c.to_table())
-            .unwrap_or_default();
-        for (i, r) in params.iter().enumerate() {
-            let key = format!("param[{i}]");
-            if params[..i].iter().any(|q| q.key == r.key) {
-                return Err(bad(&key, format!("`{}` is listed twice", r.key)));
-            }
-            if let Some(v) = defaults.get(&r.key) {
-                numeric(v).map_err(|what| {
-                    bad(
-                        &key,
-                        format!(
-                            "`{}` of `{kind}` is {what}, not a real number: only numeric parameters can be tuned",
-                            r.key
-                        ),
-                    )
-                })?;
-            }
-            if !(r.low.is_finite() && r.high.is_finite()) {
-                return Err(bad(
-                    &key,
-                    format!("`{}`: low and high must be finite", r.key),
-                ));
-            }
-            if r.low >= r.high {
-                return Err(bad(
-                    &key,
-                    format!("`{}`: low = {} must be < high = {}", r.key, r.low, r.high),
-                ));
-            }
-            if r.scale == Scale::Log && r.low <= 0.0 {
-                return Err(bad(
-                    &key,
-                    format!(
-                        "`{}`: a log range must lie above 0 (low = {})",
-                        r.key, r.low
-                    ),
-                ));
-            }
-            // The swarm draws velocities up to ±(high − low) and moves a
-            // particle by at most (c1 + c2)/(1 − w) ≈ 8.6 times that
-            // (argmin's SPSO 2011 weights): with a margin, all it computes
-            // must stay finite.
-            let (lo, hi) = r.bounds();
-            let reach = lo.abs().max(hi.abs()) + SWARM_REACH * (hi - lo);
-            if !reach.is_finite() {
-                return Err(bad(
-                    &key,
-                    format!(
-                        "`{}`: the swarm computes up to {SWARM_REACH}·(high − low) beyond the range, which overflows for [{:e}, {:e}]: narrow it (or use scale = \"log\")",
-                        r.key, r.low, r.high
-                    ),
-                ));
-            }
-        }
-        // The work asked for, bounded before any of it: every evaluation of
-        // the objective runs every scenario × draw (and the defaults once).
-        let mut work = crate::limits::Batch::default();
-        let per: f64 = scenarios
-            .iter()
-            .map(|s| crate::limits::run_evaluations(s.scenario()) + crate::limits::RUN_OVERHEAD)
-            .sum::<f64>()
-            * tf.draws as f64;
-        let runs = (scenarios.len() as u64 * tf.draws) as f64;
-        work.add(
-            "budget",
-            (tf.budget + 1) as f64,
-            per - crate::limits::RUN_OVERHEAD,
-            format!(
-                "{} evaluations of the objective × {runs} runs each ({} scenario(s) × {} draw(s))",
-                tf.budget,
-                scenarios.len(),
-                tf.draws
-            ),
-        );
-        work.check("tune")
-            .map_err(|e| bad(&e.key, e.reason.to_string()))?;
+        at.check_search(&tf)?;
+        let kind = at.kind(&tf, &scenarios)?;
+        let params = at.params(&tf, kind)?;
+        at.check_work(&tf, &scenarios)?;
         let tables = scenarios
             .iter()
             .map(|s| s.table().map_err(|e| InputError::file(file, e.to_string())))
@@ -402,12 +242,209 @@ impl Tune {
                     // A refused parameter value inside its range is a
                     // result (+∞), an unknown key is not.
                     if not_a_result(&e.reason) {
-                        return Err(bad(&e.key, e.reason.to_string()));
+                        return Err(at.bad(&e.key, e.reason.to_string()));
                     }
                 }
             }
         }
         Ok(t)
+    }
+}
+
+/// Where a tune file's keys are written: the file, and the section they
+/// sit under (empty in a tune file of its own).
+struct Keys<'a> {
+    file: &'a str,
+    section: &'a str,
+}
+
+impl Keys<'_> {
+    /// The error at `key`, named as it is written in the file.
+    fn bad(&self, key: &str, reason: String) -> InputError {
+        let (file, section) = (self.file, self.section);
+        let dot = if section.is_empty() { "" } else { "." };
+        InputError::key(file, format!("{section}{dot}{key}"), reason)
+    }
+
+    /// The search's settings: budget, particles, draws and penalties.
+    fn check_search(&self, tf: &TuneFile) -> Result<(), InputError> {
+        if !(1..=MAX_BUDGET).contains(&tf.budget) {
+            return Err(self.bad(
+                "budget",
+                format!("must be in 1..={MAX_BUDGET} (got {})", tf.budget),
+            ));
+        }
+        if !(2..=10_000).contains(&tf.particles) {
+            return Err(self.bad(
+                "particles",
+                format!("must be in 2..=10000 (got {})", tf.particles),
+            ));
+        }
+        if tf.budget < 2 * tf.particles {
+            return Err(self.bad(
+                "budget",
+                format!(
+                    "{} evaluations are fewer than two generations of {} particles",
+                    tf.budget, tf.particles
+                ),
+            ));
+        }
+        if !(1..=10_000).contains(&tf.draws) {
+            return Err(self.bad("draws", format!("must be in 1..=10000 (got {})", tf.draws)));
+        }
+        let p = &tf.penalty;
+        if !(p.chattering.is_finite() && p.chattering >= 0.0) {
+            return Err(self.bad(
+                "penalty.chattering",
+                format!("must be finite and >= 0 (got {:?})", p.chattering),
+            ));
+        }
+        if !(p.u_excess.is_finite() && p.u_excess >= 0.0) {
+            return Err(self.bad(
+                "penalty.u_excess",
+                format!("must be finite and >= 0 (got {:?})", p.u_excess),
+            ));
+        }
+        if let Some(l) = p.u_limit {
+            if !(l.is_finite() && l > 0.0) {
+                return Err(self.bad(
+                    "penalty.u_limit",
+                    format!("must be finite and > 0 (got {l:?})"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The controller kind tuned: `controller`, or the first scenario's.
+    fn kind(&self, tf: &TuneFile, scenarios: &[Loop]) -> Result<&'static str, InputError> {
+        let kind_name = tf
+            .controller
+            .clone()
+            .unwrap_or_else(|| scenarios[0].controller().kind().to_string());
+        let Some(&kind) = ControllerCfg::KINDS.iter().find(|k| **k == kind_name) else {
+            return Err(self.bad(
+                "controller",
+                format!(
+                    "unknown controller kind `{kind_name}`: expected one of {}",
+                    ControllerCfg::KINDS.join(", ")
+                ),
+            ));
+        };
+        Ok(kind)
+    }
+
+    /// The parameters tuned: the `[[param]]` ranges, or the kind's declared
+    /// tunables; each checked.
+    fn params(&self, tf: &TuneFile, kind: &'static str) -> Result<Vec<ParamRange>, InputError> {
+        let declared = ControllerCfg::default_of(kind)
+            .map(|c| c.visit(Tunables))
+            .unwrap_or(&[]);
+        let params: Vec<ParamRange> = if tf.param.is_empty() {
+            declared
+                .iter()
+                .map(|t| ParamRange {
+                    key: t.key.to_string(),
+                    low: t.low,
+                    high: t.high,
+                    scale: if t.log { Scale::Log } else { Scale::Linear },
+                })
+                .collect()
+        } else {
+            tf.param.clone()
+        };
+        if params.is_empty() {
+            return Err(self.bad(
+                "param",
+                format!("controller kind `{kind}` declares no tunable parameters: list them as [[param]]"),
+            ));
+        }
+        let defaults = ControllerCfg::default_of(kind)
+            .map(|c| c.to_table())
+            .unwrap_or_default();
+        for (i, r) in params.iter().enumerate() {
+            let key = format!("param[{i}]");
+            if params[..i].iter().any(|q| q.key == r.key) {
+                return Err(self.bad(&key, format!("`{}` is listed twice", r.key)));
+            }
+            if let Some(v) = defaults.get(&r.key) {
+                numeric(v).map_err(|what| {
+                    self.bad(
+                        &key,
+                        format!(
+                            "`{}` of `{kind}` is {what}, not a real number: only numeric parameters can be tuned",
+                            r.key
+                        ),
+                    )
+                })?;
+            }
+            self.check_range(&key, r)?;
+        }
+        Ok(params)
+    }
+
+    /// A parameter's range: finite, low below high, above 0 on a log
+    /// scale, and within what the swarm can compute beyond it.
+    fn check_range(&self, key: &str, r: &ParamRange) -> Result<(), InputError> {
+        if !(r.low.is_finite() && r.high.is_finite()) {
+            return Err(self.bad(key, format!("`{}`: low and high must be finite", r.key)));
+        }
+        if r.low >= r.high {
+            return Err(self.bad(
+                key,
+                format!("`{}`: low = {} must be < high = {}", r.key, r.low, r.high),
+            ));
+        }
+        if r.scale == Scale::Log && r.low <= 0.0 {
+            return Err(self.bad(
+                key,
+                format!(
+                    "`{}`: a log range must lie above 0 (low = {})",
+                    r.key, r.low
+                ),
+            ));
+        }
+        // The swarm draws velocities up to ±(high − low) and moves a
+        // particle by at most (c1 + c2)/(1 − w) ≈ 8.6 times that
+        // (argmin's SPSO 2011 weights): with a margin, all it computes
+        // must stay finite.
+        let (lo, hi) = r.bounds();
+        let reach = lo.abs().max(hi.abs()) + SWARM_REACH * (hi - lo);
+        if !reach.is_finite() {
+            return Err(self.bad(
+                key,
+                format!(
+                    "`{}`: the swarm computes up to {SWARM_REACH}·(high − low) beyond the range, which overflows for [{:e}, {:e}]: narrow it (or use scale = \"log\")",
+                    r.key, r.low, r.high
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The work asked for, bounded before any of it: every evaluation of
+    /// the objective runs every scenario × draw (and the defaults once).
+    fn check_work(&self, tf: &TuneFile, scenarios: &[Loop]) -> Result<(), InputError> {
+        let mut work = crate::limits::Batch::default();
+        let per: f64 = scenarios
+            .iter()
+            .map(|s| crate::limits::run_evaluations(s.scenario()) + crate::limits::RUN_OVERHEAD)
+            .sum::<f64>()
+            * tf.draws as f64;
+        let runs = (scenarios.len() as u64 * tf.draws) as f64;
+        work.add(
+            "budget",
+            (tf.budget + 1) as f64,
+            per - crate::limits::RUN_OVERHEAD,
+            format!(
+                "{} evaluations of the objective × {runs} runs each ({} scenario(s) × {} draw(s))",
+                tf.budget,
+                scenarios.len(),
+                tf.draws
+            ),
+        );
+        work.check("tune")
+            .map_err(|e| self.bad(&e.key, e.reason.to_string()))
     }
 }
 
@@ -435,7 +472,7 @@ pub(crate) fn numeric(v: &toml::Value) -> Result<(), &'static str> {
 pub(crate) fn not_a_result(reason: &Reason) -> bool {
     match reason {
         Reason::Serde(r) => r.contains("unknown field") || r.contains("invalid type"),
-        r => r.to_string().contains("not used by"),
+        r => r.contains("not used by"),
     }
 }
 

@@ -12,7 +12,7 @@ use crate::freq::response::{LoopModel, Responses, CURVES};
 use crate::freq::ss::C64;
 use crate::freq::{linearisation_json, Linearised};
 use crate::output::Staging;
-use crate::scenario::Loop;
+use crate::scenario::{Loop, Scenario};
 use anyhow::{Context, Result};
 use serde_json::json;
 use std::f64::consts::PI;
@@ -38,9 +38,11 @@ pub(super) fn write(
     stage: Staging,
 ) -> Result<FreqSummary> {
     let s = setup.scenario();
-    let dirp = stage.path().to_path_buf();
-    let mut files = Vec::new();
-    let mut text = String::new();
+    let mut out = Out {
+        dir: stage.path().to_path_buf(),
+        files: Vec::new(),
+        text: String::new(),
+    };
     let h = setup.sim().step;
     let freqs: Vec<f64> = (0..o.points)
         .map(|i| o.f_min * (f_max / o.f_min).powf(i as f64 / (o.points - 1) as f64))
@@ -59,172 +61,17 @@ pub(super) fn write(
     let mut lp_opt = None;
     match computed {
         Ok(l) => {
-            let lp = &l.lp;
-            lp_opt = Some(lp);
-            let lj = linearisation_json(l);
-            let path = dirp.join("linearization.json");
-            std::fs::write(&path, serde_json::to_string_pretty(&lj)? + "\n")
-                .with_context(|| format!("writing {}", path.display()))?;
-            files.push(PathBuf::from("linearization.json"));
-            responses = freqs.iter().map(|&f| lp.at(2.0 * PI * f)).collect();
-            let hi = if lp.sampled() {
-                lp.nyquist() * (1.0 - 1e-9)
-            } else {
-                2.0 * PI * f_max
-            };
-            let lo = lp.lowest();
-            let c = |sel: fn(&Responses) -> Option<C64>| move |w: f64| sel(&lp.at(w));
-            let m: Option<Margins> = lp
-                .loop_l
-                .as_ref()
-                .map(|_| margins::margins(&c(|r| r.l), lo, hi, lp.sampled().then_some(h)));
-            let peak = |sel: fn(&Responses) -> Option<C64>| {
-                margins::peak(&c(sel), lo, hi).map(
-                    |(w, v)| json!({"value": v, "dB": 20.0 * v.log10(), "f_Hz": w / (2.0 * PI)}),
-                )
-            };
-            let bw = |sel: fn(&Responses) -> Option<C64>| {
-                let dc = sel(&lp.at(lo)).map(|z| z.norm())?;
-                margins::bandwidth(&c(sel), dc, lo, hi).map(|w| w / (2.0 * PI))
-            };
-            let computed_json = json!({
-                "operating_point": l.point,
-                "one_sided": l.side.map(|s| s.as_str()),
-                "kinks": lp.kinks.iter().map(|k| k.what.clone()).collect::<Vec<_>>(),
-                "notes": lp.notes,
-                "discretisation": lp.discretisation.as_str(),
-                "linear_controller": lp.controller.is_some(),
-                "closed_loop_stable": lp.closed_loop_stable(),
-                "margins": m,
-                "Ms": lp.loop_l.as_ref().and_then(|_| peak(|r| r.s)),
-                "Mt": lp.loop_l.as_ref().and_then(|_| peak(|r| r.t)),
-                "tracking_peak": lp.loop_l.as_ref().and_then(|_| peak(|r| r.track)),
-                "bandwidth_Hz": {
-                    "T": lp.loop_l.as_ref().and_then(|_| bw(|r| r.t)),
-                    "tracking": lp.loop_l.as_ref().and_then(|_| bw(|r| r.track)),
-                    "G": bw(|r| r.g),
-                },
-                "dc_gain": {
-                    "G_rad_V": lp.g.dc_gain(),
-                    "C_V_rad": lp.feedback.as_ref().and_then(|f| f.dc_gain()),
-                },
-            });
-            let _ = writeln!(
-                text,
-                "computed about the {} point θ = {:.4}°{}:",
-                l.point.kind,
-                l.point.theta_deg,
-                l.point
-                    .t_s
-                    .map(|t| format!(" (t = {t} s)"))
-                    .unwrap_or_default()
-            );
-            if let Some(m) = &m {
-                let _ = writeln!(
-                    text,
-                    "  L: gain margin {}, phase margin {}, delay margin {}; closed loop {}",
-                    m.gain_margin
-                        .map(|g| format!("{:.3} dB at {:.3} Hz", g.gain_margin_db, g.f_hz))
-                        .unwrap_or("none (no phase crossover)".into()),
-                    m.phase_margin
-                        .map(|g| format!("{:.3}° at {:.3} Hz", g.phase_margin_deg, g.f_hz))
-                        .unwrap_or("none (no gain crossover)".into()),
-                    m.delay_margin
-                        .and_then(|g| g.delay_margin_s)
-                        .map(|d| format!("{:.3} ms", d * 1e3))
-                        .unwrap_or("none".into()),
-                    match lp.closed_loop_stable() {
-                        Some(true) => "stable",
-                        Some(false) => "UNSTABLE",
-                        None => "?",
-                    }
-                );
-                let bt = computed_json["bandwidth_Hz"]["tracking"].as_f64();
-                let _ = writeln!(
-                    text,
-                    "  Ms {:.3}, Mt {:.3}; −3 dB bandwidth of T {}, of θ/θd {}",
-                    computed_json["Ms"]["value"].as_f64().unwrap_or(f64::NAN),
-                    computed_json["Mt"]["value"].as_f64().unwrap_or(f64::NAN),
-                    computed_json["bandwidth_Hz"]["T"]
-                        .as_f64()
-                        .map(|b| format!("{b:.3} Hz"))
-                        .unwrap_or("beyond the band".into()),
-                    bt.map(|b| format!("{b:.3} Hz"))
-                        .unwrap_or("beyond the band".into()),
-                );
-            } else {
-                let _ = writeln!(
-                    text,
-                    "  `{}` is not a linear law: the computed curves are the plant's alone",
-                    s.controller.kind()
-                );
-            }
+            lp_opt = Some(&l.lp);
+            let (computed_json, rs) = out.computed(s, l, &freqs, f_max, h)?;
+            responses = rs;
             summary["computed"] = computed_json;
-            write_response_csv(&dirp.join("response.csv"), &responses, &freqs)?;
-            files.push(PathBuf::from("response.csv"));
         }
         Err(why) => {
             summary["computed"] = json!({"not_computed": why});
-            let _ = writeln!(text, "computed curves: not available ({why})");
+            let _ = writeln!(out.text, "computed curves: not available ({why})");
         }
     }
-    let mut measured_json = serde_json::Map::new();
-    for set in sets {
-        let name = format!("measured_{}.csv", set.method.as_str());
-        write_measured_csv(&dirp.join(&name), set, lp_opt)?;
-        files.push(PathBuf::from(&name));
-        let loop_pts: Vec<(f64, Option<C64>, f64)> = set
-            .disturbance
-            .iter()
-            .map(|m| {
-                let l = m.s_c().filter(|s| s.norm() > 0.0).map(|s| 1.0 / s - 1.0);
-                (m.f_hz, l, m.quality.min(m.quality_s.unwrap_or(1.0)))
-            })
-            .collect();
-        let diverged = set
-            .tracking
-            .iter()
-            .chain(&set.disturbance)
-            .filter(|m| m.diverged_at_s.is_some())
-            .count();
-        let q_min = |v: &[Measured]| v.iter().map(|m| m.quality).fold(f64::INFINITY, f64::min);
-        let bw = measured_bandwidth(&set.tracking);
-        let mm = measured_margins(&loop_pts);
-        let _ = writeln!(
-            text,
-            "measured ({}, {} frequencies): tracking −3 dB bandwidth {}; loop at the plant's input: phase margin {}, delay margin {}{}",
-            set.method.as_str(),
-            set.tracking.len(),
-            bw["bandwidth_Hz"]
-                .as_f64()
-                .map(|b| format!("{b:.3} Hz"))
-                .unwrap_or_else(|| format!("not found ({})", bw["why"].as_str().unwrap_or(""))),
-            mm["phase_margin"]["phase_margin_deg"]
-                .as_f64()
-                .map(|p| format!("{p:.2}°"))
-                .unwrap_or("none".into()),
-            mm["delay_margin"]["delay_margin_s"]
-                .as_f64()
-                .map(|d| format!("{:.2} ms", d * 1e3))
-                .unwrap_or("none".into()),
-            if diverged > 0 {
-                format!("; {diverged} runs unbounded")
-            } else {
-                String::new()
-            }
-        );
-        measured_json.insert(
-            set.method.as_str().into(),
-            json!({
-                "file": name,
-                "tracking_bandwidth": bw,
-                "loop_margins": mm,
-                "unbounded_runs": diverged,
-                "least_quality": {"tracking": q_min(&set.tracking), "disturbance": q_min(&set.disturbance)},
-                "plan": set.plan,
-            }),
-        );
-    }
+    let measured_json = out.measured(sets, lp_opt)?;
     summary["measured"] = json!({
         "settings": {
             "theta0_deg": settings.theta0 / ehservo_core::math::DR,
@@ -241,32 +88,254 @@ pub(super) fn write(
         "quality": "sinestream: the fundamental fraction, the share of the output's variance at the excited frequency; Welch: the coherence γ²",
     });
     if o.plots {
+        out.plots(&s.name, sets, lp_opt, &responses, &freqs, &summary)?;
+    }
+    let path = out.dir.join("freq.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+        .with_context(|| format!("writing {}", path.display()))?;
+    out.files.insert(0, PathBuf::from("freq.json"));
+    stage.commit()?;
+    Ok(FreqSummary {
+        files: out.files,
+        text: out.text,
+    })
+}
+
+/// The output folder being written: its (staging) path, the files written
+/// in it so far, and the lines for the terminal.
+struct Out {
+    dir: PathBuf,
+    files: Vec<PathBuf>,
+    text: String,
+}
+
+impl Out {
+    /// The computed curves: linearization.json and response.csv written,
+    /// the margins, peaks and bandwidths of the loop, its terminal lines.
+    /// The summary's `computed` and the responses on the grid `freqs`.
+    fn computed(
+        &mut self,
+        s: &Scenario,
+        l: &Linearised,
+        freqs: &[f64],
+        f_max: f64,
+        h: f64,
+    ) -> Result<(serde_json::Value, Vec<Responses>)> {
+        let lp = &l.lp;
+        let lj = linearisation_json(l);
+        let path = self.dir.join("linearization.json");
+        std::fs::write(&path, serde_json::to_string_pretty(&lj)? + "\n")
+            .with_context(|| format!("writing {}", path.display()))?;
+        self.files.push(PathBuf::from("linearization.json"));
+        let responses: Vec<Responses> = freqs.iter().map(|&f| lp.at(2.0 * PI * f)).collect();
+        let hi = if lp.sampled() {
+            lp.nyquist() * (1.0 - 1e-9)
+        } else {
+            2.0 * PI * f_max
+        };
+        let lo = lp.lowest();
+        let c = |sel: fn(&Responses) -> Option<C64>| move |w: f64| sel(&lp.at(w));
+        let m: Option<Margins> = lp
+            .loop_l
+            .as_ref()
+            .map(|_| margins::margins(&c(|r| r.l), lo, hi, lp.sampled().then_some(h)));
+        let peak = |sel: fn(&Responses) -> Option<C64>| {
+            margins::peak(&c(sel), lo, hi)
+                .map(|(w, v)| json!({"value": v, "dB": 20.0 * v.log10(), "f_Hz": w / (2.0 * PI)}))
+        };
+        let bw = |sel: fn(&Responses) -> Option<C64>| {
+            let dc = sel(&lp.at(lo)).map(|z| z.norm())?;
+            margins::bandwidth(&c(sel), dc, lo, hi).map(|w| w / (2.0 * PI))
+        };
+        let computed_json = json!({
+            "operating_point": l.point,
+            "one_sided": l.side.map(|s| s.as_str()),
+            "kinks": lp.kinks.iter().map(|k| k.what.clone()).collect::<Vec<_>>(),
+            "notes": lp.notes,
+            "discretisation": lp.discretisation.as_str(),
+            "linear_controller": lp.controller.is_some(),
+            "closed_loop_stable": lp.closed_loop_stable(),
+            "margins": m,
+            "Ms": lp.loop_l.as_ref().and_then(|_| peak(|r| r.s)),
+            "Mt": lp.loop_l.as_ref().and_then(|_| peak(|r| r.t)),
+            "tracking_peak": lp.loop_l.as_ref().and_then(|_| peak(|r| r.track)),
+            "bandwidth_Hz": {
+                "T": lp.loop_l.as_ref().and_then(|_| bw(|r| r.t)),
+                "tracking": lp.loop_l.as_ref().and_then(|_| bw(|r| r.track)),
+                "G": bw(|r| r.g),
+            },
+            "dc_gain": {
+                "G_rad_V": lp.g.dc_gain(),
+                "C_V_rad": lp.feedback.as_ref().and_then(|f| f.dc_gain()),
+            },
+        });
+        computed_text(&mut self.text, s, l, m.as_ref(), &computed_json);
+        write_response_csv(&self.dir.join("response.csv"), &responses, freqs)?;
+        self.files.push(PathBuf::from("response.csv"));
+        Ok((computed_json, responses))
+    }
+
+    /// Each measured set: its CSV table written, its tracking bandwidth and
+    /// loop margins, its terminal line. The summary's `methods`.
+    fn measured(
+        &mut self,
+        sets: &[MeasuredSet],
+        lp_opt: Option<&LoopModel>,
+    ) -> Result<serde_json::Map<String, serde_json::Value>> {
+        let mut measured_json = serde_json::Map::new();
+        for set in sets {
+            let name = format!("measured_{}.csv", set.method.as_str());
+            write_measured_csv(&self.dir.join(&name), set, lp_opt)?;
+            self.files.push(PathBuf::from(&name));
+            let loop_pts: Vec<(f64, Option<C64>, f64)> = set
+                .disturbance
+                .iter()
+                .map(|m| {
+                    let l = m.s_c().filter(|s| s.norm() > 0.0).map(|s| 1.0 / s - 1.0);
+                    (m.f_hz, l, m.quality.min(m.quality_s.unwrap_or(1.0)))
+                })
+                .collect();
+            let diverged = set
+                .tracking
+                .iter()
+                .chain(&set.disturbance)
+                .filter(|m| m.diverged_at_s.is_some())
+                .count();
+            let q_min = |v: &[Measured]| v.iter().map(|m| m.quality).fold(f64::INFINITY, f64::min);
+            let bw = measured_bandwidth(&set.tracking);
+            let mm = measured_margins(&loop_pts);
+            let _ = writeln!(
+                self.text,
+                "measured ({}, {} frequencies): tracking −3 dB bandwidth {}; loop at the plant's input: phase margin {}, delay margin {}{}",
+                set.method.as_str(),
+                set.tracking.len(),
+                bw["bandwidth_Hz"]
+                    .as_f64()
+                    .map(|b| format!("{b:.3} Hz"))
+                    .unwrap_or_else(|| format!("not found ({})", bw["why"].as_str().unwrap_or(""))),
+                mm["phase_margin"]["phase_margin_deg"]
+                    .as_f64()
+                    .map(|p| format!("{p:.2}°"))
+                    .unwrap_or("none".into()),
+                mm["delay_margin"]["delay_margin_s"]
+                    .as_f64()
+                    .map(|d| format!("{:.2} ms", d * 1e3))
+                    .unwrap_or("none".into()),
+                if diverged > 0 {
+                    format!("; {diverged} runs unbounded")
+                } else {
+                    String::new()
+                }
+            );
+            measured_json.insert(
+                set.method.as_str().into(),
+                json!({
+                    "file": name,
+                    "tracking_bandwidth": bw,
+                    "loop_margins": mm,
+                    "unbounded_runs": diverged,
+                    "least_quality": {"tracking": q_min(&set.tracking), "disturbance": q_min(&set.disturbance)},
+                    "plan": set.plan,
+                }),
+            );
+        }
+        Ok(measured_json)
+    }
+
+    /// The figures, PNG and SVG: the Bode and (with a loop) Nyquist plots
+    /// of the computed curves, and the measured points.
+    fn plots(
+        &mut self,
+        name: &str,
+        sets: &[MeasuredSet],
+        lp_opt: Option<&LoopModel>,
+        responses: &[Responses],
+        freqs: &[f64],
+        summary: &serde_json::Value,
+    ) -> Result<()> {
         if let Some(lp) = lp_opt {
             for ext in ["png", "svg"] {
-                let p = dirp.join(format!("bode.{ext}"));
-                bode(&p, lp, &responses, &freqs, &summary)?;
-                files.push(PathBuf::from(format!("bode.{ext}")));
+                let p = self.dir.join(format!("bode.{ext}"));
+                bode(&p, lp, responses, freqs, summary)?;
+                self.files.push(PathBuf::from(format!("bode.{ext}")));
                 if lp.loop_l.is_some() {
-                    let p = dirp.join(format!("nyquist.{ext}"));
-                    nyquist(&p, &responses, &summary)?;
-                    files.push(PathBuf::from(format!("nyquist.{ext}")));
+                    let p = self.dir.join(format!("nyquist.{ext}"));
+                    nyquist(&p, responses, summary)?;
+                    self.files.push(PathBuf::from(format!("nyquist.{ext}")));
                 }
             }
         }
         if !sets.is_empty() {
             for ext in ["png", "svg"] {
-                let p = dirp.join(format!("measured.{ext}"));
-                measured_plot(&p, sets, lp_opt, &s.name)?;
-                files.push(PathBuf::from(format!("measured.{ext}")));
+                let p = self.dir.join(format!("measured.{ext}"));
+                measured_plot(&p, sets, lp_opt, name)?;
+                self.files.push(PathBuf::from(format!("measured.{ext}")));
             }
         }
+        Ok(())
     }
-    let path = dirp.join("freq.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
-        .with_context(|| format!("writing {}", path.display()))?;
-    files.insert(0, PathBuf::from("freq.json"));
-    stage.commit()?;
-    Ok(FreqSummary { files, text })
+}
+
+/// The terminal lines of the computed curves: the operating point, and the
+/// loop's margins, Ms, Mt and bandwidths (or why there is no loop).
+fn computed_text(
+    text: &mut String,
+    s: &Scenario,
+    l: &Linearised,
+    m: Option<&Margins>,
+    computed_json: &serde_json::Value,
+) {
+    let lp = &l.lp;
+    let _ = writeln!(
+        text,
+        "computed about the {} point θ = {:.4}°{}:",
+        l.point.kind,
+        l.point.theta_deg,
+        l.point
+            .t_s
+            .map(|t| format!(" (t = {t} s)"))
+            .unwrap_or_default()
+    );
+    let Some(m) = m else {
+        let _ = writeln!(
+            text,
+            "  `{}` is not a linear law: the computed curves are the plant's alone",
+            s.controller.kind()
+        );
+        return;
+    };
+    let _ = writeln!(
+        text,
+        "  L: gain margin {}, phase margin {}, delay margin {}; closed loop {}",
+        m.gain_margin
+            .map(|g| format!("{:.3} dB at {:.3} Hz", g.gain_margin_db, g.f_hz))
+            .unwrap_or("none (no phase crossover)".into()),
+        m.phase_margin
+            .map(|g| format!("{:.3}° at {:.3} Hz", g.phase_margin_deg, g.f_hz))
+            .unwrap_or("none (no gain crossover)".into()),
+        m.delay_margin
+            .and_then(|g| g.delay_margin_s)
+            .map(|d| format!("{:.3} ms", d * 1e3))
+            .unwrap_or("none".into()),
+        match lp.closed_loop_stable() {
+            Some(true) => "stable",
+            Some(false) => "UNSTABLE",
+            None => "?",
+        }
+    );
+    let bt = computed_json["bandwidth_Hz"]["tracking"].as_f64();
+    let _ = writeln!(
+        text,
+        "  Ms {:.3}, Mt {:.3}; −3 dB bandwidth of T {}, of θ/θd {}",
+        computed_json["Ms"]["value"].as_f64().unwrap_or(f64::NAN),
+        computed_json["Mt"]["value"].as_f64().unwrap_or(f64::NAN),
+        computed_json["bandwidth_Hz"]["T"]
+            .as_f64()
+            .map(|b| format!("{b:.3} Hz"))
+            .unwrap_or("beyond the band".into()),
+        bt.map(|b| format!("{b:.3} Hz"))
+            .unwrap_or("beyond the band".into()),
+    );
 }
 
 fn write_response_csv(path: &Path, rs: &[Responses], freqs: &[f64]) -> Result<()> {
