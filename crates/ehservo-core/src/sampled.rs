@@ -362,6 +362,13 @@ impl<T: Real, C: Controller<T>> SampledController<C, T> {
         out
     }
 
+    /// The law's state set to its start at the plant state `x`
+    /// ([`Controller::initial_state_at`]); for a loop that does not start
+    /// at rest at the origin.
+    pub fn start_at(&mut self, x: &[T; 3]) {
+        self.states[self.cur] = self.ctrl.initial_state_at(x);
+    }
+
     /// Back to the initial state (∫e = 0, W = 0), last command 0, counters 0.
     pub fn reset(&mut self) {
         self.states[self.cur] = self.ctrl.initial_state();

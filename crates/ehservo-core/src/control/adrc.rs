@@ -38,13 +38,32 @@
 //! so `β1 = 4ω_o − ā3`, `β2 = 6ω_o² − ā2 − ā3β1`,
 //! `β3 = 4ω_o³ − ā1 − ā2β1 − ā3β2`, `β4 = ω_o⁴`.
 //!
-//! **Default bandwidths (the stated rule).** ω_o = min(2·ā3, 1/dt) and
-//! ω_c = ω_o/4 (Gao's ω_o = 3–5·ω_c, the middle). 2·ā3 is twice the sum of
-//! the plant's own poles (ā3 = 170 s⁻¹ for the paper's servo): the plain
-//! observer must be faster than the dynamics it lumps into f. 1/dt is the
-//! deadbeat limit of the sampled observer (below). Given only one of ω_c,
-//! ω_o, the other follows by the factor 4. For the paper's servo at
-//! dt = 0.01 s: ω_o = 100, ω_c = 25; at dt = 0.001 s: ω_o = 340, ω_c = 85.
+//! **Default bandwidths (the stated rule).** ω_o = min(2·max(ā3, ω_h),
+//! 1/dt) with ω_h = √ā2, and ω_c = ω_o/4 (Gao's ω_o = 3–5·ω_c, the
+//! middle). The plain observer must be faster than the plant dynamics it
+//! lumps into f, whose scale is the larger of ā3 (the sum of the plant's
+//! own poles: 170 s⁻¹ for the paper's well damped servo) and the hydraulic
+//! frequency ω_h (the resonance of a lightly damped axis, whose ā3 is
+//! small: a cylinder moving a mass, ζ_h = ā3/(2ω_h) ≈ 0.01, would get an
+//! observer a hundred times too slow from ā3 alone). 1/dt is the deadbeat
+//! limit of the sampled observer (below). Given only one of ω_c, ω_o, the
+//! other follows by the factor 4. For the paper's servo (ā3 = 170 >
+//! ω_h = 114) at dt = 0.01 s: ω_o = 100, ω_c = 25; at dt = 0.001 s:
+//! ω_o = 340, ω_c = 85. For `scenarios/cylinders/slide.toml` (ā3 = 1.67,
+//! ω_h = 108) at 1 ms: ω_o = 216, ω_c = 54.
+//!
+//! **A lightly damped axis.** Gao's plain ADRC lumps the whole plant,
+//! resonance included, into f: on a cylinder moving a mass (ζ_h of
+//! 0.01–0.1) f oscillates at ω_h with little damping, and an observer
+//! capped by the sample rate does not outrun it. On
+//! `scenarios/cylinders/slide.toml` (ω_h = 108 rad/s, ζ_h = 0.0077,
+//! h = 1 ms) plain ADRC ends in a sustained oscillation at the resonance
+//! for every ω_o tried (216, 500 rad/s) and diverges at ω_o = 1/h, while
+//! `model_assisted = true` (the nominal resonance in the observer and the
+//! law) settles the step to 1 µm. So, with both bandwidths left to the
+//! default, plain ADRC is refused when ζ_h < [`LIGHT_DAMPING`] (0.2), with
+//! the reason and `model_assisted = true` as the fix; giving `omega_o` or
+//! `omega_c` is taken as the user's own design and not refused.
 //!
 //! **Which u the observer sees.** A law here is memoryless: it cannot read
 //! the u of its previous evaluation. The LESO's input is the law's own u
@@ -87,7 +106,7 @@ use crate::math::Real;
 /// #     dt: 0.01,
 /// # };
 /// let adrc = AdrcConfig::default().build(&design)?;
-/// // The rule at dt = 0.01 s: ω_o = min(2·ā3, 1/dt) = min(340, 100) = 100,
+/// // The rule at dt = 0.01 s: ω_o = min(2·max(ā3, ω_h), 1/dt) = min(340, 100) = 100,
 /// // ω_c = ω_o/4 = 25; (s + 25)³ gives k = (25³, 3·25², 3·25).
 /// assert_eq!(adrc.bandwidths(), (25.0, 100.0));
 /// assert_eq!(adrc.feedback_gains(), [15625.0, 1875.0, 75.0]);
@@ -114,7 +133,7 @@ pub struct AdrcConfig {
     /// ω_c, the controller bandwidth (rad/s); default ω_o/4.
     #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
     pub omega_c: Option<f64>,
-    /// ω_o, the observer bandwidth (rad/s); default min(2ā3, 1/dt), or
+    /// ω_o, the observer bandwidth (rad/s); default min(2·max(ā3, √ā2), 1/dt), or
     /// 4·ω_c when ω_c is given.
     #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
     pub omega_o: Option<f64>,
@@ -266,6 +285,11 @@ impl<T: Real> Adrc<T> {
     }
 }
 
+/// ζ_h below which the default design refuses plain ADRC (module doc):
+/// the usual bound of a "lightly damped" hydraulic resonance (Jelali &
+/// Kroll 2003 give ζ_h of valve-controlled cylinders as 0.05–0.2).
+pub const LIGHT_DAMPING: f64 = 0.2;
+
 impl Config for AdrcConfig {
     const KIND: &'static str = "adrc";
     const USES_SURFACE: bool = false;
@@ -306,7 +330,20 @@ impl Config for AdrcConfig {
             (Some(c), None) => (c, 4.0 * c),
             (None, Some(o)) => (o / 4.0, o),
             (None, None) => {
-                let o = (2.0 * a[2]).min(1.0 / d.dt);
+                // The scale of the lumped dynamics (module doc).
+                let wh = if a[1] > 0.0 {
+                    crate::math::sqrt(a[1])
+                } else {
+                    0.0
+                };
+                if !self.model_assisted && wh > 0.0 && a[2] / (2.0 * wh) < LIGHT_DAMPING {
+                    return Err(ParamError::new(
+                        "model_assisted",
+                        "plain ADRC lumps this lightly damped resonance (ζ_h < 0.2) into its disturbance, which no observer within the sample rate outruns: set model_assisted = true (the nominal resonance in the observer), or give omega_o and omega_c",
+                        f64::NAN,
+                    ));
+                }
+                let o = (2.0 * a[2].max(wh)).min(1.0 / d.dt);
                 (o / 4.0, o)
             }
         };
@@ -344,6 +381,13 @@ impl<T: Real> Controller<T> for Adrc<T> {
 
     fn initial_state(&self) -> [T; 4] {
         [T::ZERO; 4]
+    }
+
+    /// The ESO starts at the plant's state (z1, z2, z3) = x and f = 0: a
+    /// zero start would read a loop started at θ(0) ≠ 0 as an observer
+    /// error of the whole θ(0) and kick the command to its limit.
+    fn initial_state_at(&self, x: &[T; 3]) -> [T; 4] {
+        [x[0], x[1], x[2], T::ZERO]
     }
 
     #[inline]
@@ -481,13 +525,42 @@ mod tests {
         close(ds[0], 1.0, 1e-12);
     }
 
-    /// The default rule: ω_o = min(2ā3, 1/dt), ω_c = ω_o/4; 2ā3 = 339.96.
+    /// The default rule: ω_o = min(2·max(ā3, ω_h), 1/dt), ω_c = ω_o/4;
+    /// for the paper's servo ā3 = 169.98 > ω_h = 114.02, 2ā3 = 339.96; a
+    /// model with ā2 = 10⁴ (ω_h = 100) and small ā3 gets 2ω_h = 200, and
+    /// below ζ_h = 0.2 only model-assisted.
     #[test]
     fn default_bandwidths_follow_the_rule() {
         let c = AdrcConfig::default().build(&design(0.01)).unwrap();
         assert_eq!(c.bandwidths(), (25.0, 100.0));
         let c = AdrcConfig::default().build(&design(0.001)).unwrap();
         close(c.bandwidths().1, 339.96086, 1e-4);
+        // ā2 = 10⁴: ω_h = 100. At ā3 = 41, ζ_h = 0.205: 2ω_h = 200 rules.
+        let mut light = design(0.001);
+        light.model.coeffs.a2 = 1e4;
+        light.model.coeffs.a3 = 41.0;
+        let c = AdrcConfig::default().build(&light).unwrap();
+        assert_eq!(c.bandwidths(), (50.0, 200.0));
+        // At ā3 = 2, ζ_h = 0.01: plain ADRC refused, model-assisted built
+        // on the same rule.
+        light.model.coeffs.a3 = 2.0;
+        let e = AdrcConfig::default().build(&light).unwrap_err();
+        assert_eq!(e.name, "model_assisted");
+        let c = AdrcConfig {
+            model_assisted: true,
+            ..AdrcConfig::default()
+        }
+        .build(&light)
+        .unwrap();
+        assert_eq!(c.bandwidths(), (50.0, 200.0));
+        // The user's own bandwidths are not refused.
+        let c = AdrcConfig {
+            omega_o: Some(400.0),
+            ..AdrcConfig::default()
+        }
+        .build(&light)
+        .unwrap();
+        assert_eq!(c.bandwidths(), (100.0, 400.0));
         close(c.b0(), 17911.75, 0.01);
         let c = AdrcConfig {
             omega_c: Some(10.0),

@@ -82,6 +82,7 @@ pub mod open_loop;
 pub mod pid;
 pub mod sliding;
 pub mod sta;
+pub mod state_feedback;
 pub mod vsc;
 
 use crate::error::ParamError;
@@ -363,6 +364,16 @@ pub trait Controller<T: Real = f64> {
     /// ξ(0).
     fn initial_state(&self) -> Self::State;
 
+    /// ξ(0) for a loop that starts at the state `x` = (θ, θ̇, θ̈) (the
+    /// scenario's `x0`): a law with an observer of the output (the ADRC's
+    /// ESO) starts it there, not at zero, so that a cylinder started
+    /// mid-stroke is not kicked by an observer error of its whole position.
+    /// By default [`initial_state`](Controller::initial_state).
+    fn initial_state_at(&self, x: &[T; 3]) -> Self::State {
+        let _ = x;
+        self.initial_state()
+    }
+
     /// Evaluates the law at measurement `m` and state `s`; writes ξ̇ into
     /// `ds`. Infallible and allocation-free.
     fn law(
@@ -607,6 +618,7 @@ macro_rules! controller_kinds {
             Sta "sta" => $crate::control::sta::StaConfig,
             Arc "arc" => $crate::control::arc::ArcConfig,
             Backstepping "backstepping" => $crate::control::backstepping::BacksteppingConfig,
+            StateFeedback "state-feedback" => $crate::control::state_feedback::StateFeedbackConfig,
             OpenLoop "open-loop" => $crate::control::open_loop::OpenLoopConfig,
         }
     };

@@ -160,7 +160,7 @@ pub fn design_gains(
     if a[2] <= 2.0 * lambda {
         return Err(ParamError::new(
             "design_pole",
-            "must be < ā3/2: the closed-loop poles' sum is fixed at −ā3",
+            "must be < ā3/2: the closed-loop poles' sum is fixed at −ā3 (a lightly damped axis, small ā3, leaves no room: use kind = \"state-feedback\", or give kp, ki, kd)",
             lambda,
         ));
     }
@@ -171,7 +171,7 @@ pub fn design_gains(
     if kd < 0.0 {
         return Err(ParamError::new(
             "design_pole",
-            "gives kd < 0 for this plant: choose another pole or give kp, ki, kd",
+            "gives kd < 0 for this plant (the pair's ω² is below ā2): give kp, ki, kd, or use kind = \"state-feedback\" on a lightly damped axis",
             lambda,
         ));
     }

@@ -427,8 +427,9 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             cfg,
             sampling,
         } = settings;
-        let xi = ctrl.initial_state();
-        let ctrl = SampledController::sampled(ctrl, sampling);
+        let xi = ctrl.initial_state_at(&cfg.x0);
+        let mut ctrl = SampledController::sampled(ctrl, sampling);
+        ctrl.start_at(&cfg.x0);
         let mut unc = Varying::new(&plant, stages.uncertainty);
         let per_hold = unc.signal().steps_per_hold(Self::hs(&cfg));
         let var0 = unc.at_step(&plant, 0, Self::hs(&cfg), per_hold);

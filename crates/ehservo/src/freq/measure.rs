@@ -149,6 +149,9 @@ impl<C: Controller> Controller for Disturbed<C> {
     fn initial_state(&self) -> C::State {
         self.inner.initial_state()
     }
+    fn initial_state_at(&self, x: &[f64; 3]) -> C::State {
+        self.inner.initial_state_at(x)
+    }
     #[inline]
     fn law(&self, m: &Measurement, s: &C::State, ds: &mut C::State) -> Output<C::Parts> {
         let mut o = self.inner.law(m, s, ds);

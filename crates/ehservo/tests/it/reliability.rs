@@ -75,7 +75,14 @@ fn small_league(dir: &Path) -> PathBuf {
 fn bases() -> Vec<String> {
     let mut b = vec![String::new()];
     for k in ehservo::scenario::ControllerCfg::KINDS {
-        b.push(format!("[controller]\nkind = {k:?}\n"));
+        // State feedback refuses the paper's servo at its 0.01 s step
+        // (ω_h·h = 1.14 > 1): its base is the same servo at 1 ms.
+        let step = if *k == "state-feedback" {
+            "[simulation]\nstep = 0.001\n"
+        } else {
+            ""
+        };
+        b.push(format!("{step}[controller]\nkind = {k:?}\n"));
     }
     b.extend(
         [
