@@ -70,7 +70,7 @@ pub(super) fn build(s: &Scenario) -> Result<Parts, KeyError> {
     let controller = s
         .controller
         .build(&design)
-        .map_err(|e| KeyError::param("controller", e))?;
+        .map_err(|e| design_refusal(e, &model, plant.axis().si_unit()))?;
     Ok(Parts {
         axis: plant.axis(),
         plant,
@@ -83,6 +83,50 @@ pub(super) fn build(s: &Scenario) -> Result<Parts, KeyError> {
         horizon: s.simulation.horizon,
         period: s.reference.period(s.simulation.horizon),
     })
+}
+
+/// A controller's refusal under `controller.<name>`. A refusal that
+/// depends on the plant (a pole the model cannot take, a gain of the wrong
+/// sign) also names the nominal model's numbers it was judged on, so the
+/// user can see why and what to set instead; a plain out-of-range value
+/// (not finite, not > 0) is the value's own fault and says only that.
+fn design_refusal(e: ParamError, model: &NominalModel, unit: &str) -> KeyError {
+    let own = matches!(
+        e.reason,
+        "must be finite and > 0" | "must be finite and >= 0" | "must be finite"
+    );
+    if own {
+        return KeyError::param("controller", e);
+    }
+    KeyError::new(
+        format!("controller.{}", e.name),
+        format!("{}; {}", Reason::Param(e), model_numbers(model, unit)),
+    )
+}
+
+/// The nominal third-order model's numbers in one phrase: ā1, ā2, ā3, b̄0,
+/// and the hydraulic resonance `s² + ā3·s + ā2` as ω_h = √ā2 and
+/// ζ_h = ā3/(2ω_h) when ā2 > 0. `unit` is the axis's SI unit (m or rad).
+pub(crate) fn model_numbers(model: &NominalModel, unit: &str) -> String {
+    let a = model.coeffs.as_array();
+    let mut s = format!(
+        "nominal model ā1 = {:.4e} 1/s³, ā2 = {:.4e} 1/s², ā3 = {:.4e} 1/s, b̄0 = {:.4e} {unit}/(s³·V)",
+        a[0],
+        a[1],
+        a[2],
+        model.b_at_rest()
+    );
+    if a[1] > 0.0 && a[1].is_finite() {
+        let wh = a[1].sqrt();
+        s.push_str(&format!(
+            ", ω_h = {wh:.1} rad/s ({:.2} Hz), ζ_h = {:.4}",
+            wh / std::f64::consts::TAU,
+            a[2] / (2.0 * wh)
+        ));
+    } else {
+        s.push_str(", no hydraulic resonance (ā2 <= 0)");
+    }
+    s
 }
 
 /// `[simulation]`: the step, the horizon (a whole number of steps, at most

@@ -199,6 +199,22 @@ impl Loop {
         &self.model
     }
 
+    /// The nominal model's numbers in one phrase, as a design's refusal
+    /// quotes them: ā1, ā2, ā3, b̄0 and, when ā2 > 0, the hydraulic
+    /// resonance `s² + ā3·s + ā2` as ω_h = √ā2 and ζ_h = ā3/(2ω_h).
+    ///
+    /// ```
+    /// # fn main() -> anyhow::Result<()> {
+    /// let lp = ehservo_scenario::Loop::parse("")?;
+    /// // The paper's servo: ā2 = 13000.27 1/s², so ω_h = 114.0 rad/s.
+    /// assert!(lp.model_summary().contains("ω_h = 114.0 rad/s"));
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn model_summary(&self) -> String {
+        super::build::model_numbers(&self.model, self.axis.si_unit())
+    }
+
     /// The paper's physical parameters of a third-order-family plant
     /// (`[plant.params]`); `None` for another plant.
     pub fn paper_params(&self) -> Option<ServoParams> {

@@ -333,7 +333,20 @@ pub(super) fn check(a: CheckArgs, w: &mut impl Write) -> Result<()> {
     let lp = load(&scenario, &set)?;
     put!(w, "{}", lp.scenario().to_toml());
     note!("{}: ok ({} steps)", scenario.display(), lp.sim().steps);
+    note!("{}", axis_line(&lp));
     Ok(())
+}
+
+/// The nominal third-order model the designs start from, in one line
+/// ([`Loop::model_summary`]), with ω_h·h: the sample period against the
+/// resonance (above 1 no sampled law can act on it).
+pub(crate) fn axis_line(lp: &Loop) -> String {
+    let a2 = lp.model().coeffs.as_array()[1];
+    let mut s = lp.model_summary();
+    if a2 > 0.0 && a2.is_finite() {
+        s.push_str(&format!(", ω_h·h = {:.3}", a2.sqrt() * lp.design().dt));
+    }
+    s
 }
 
 /// `--float`'s value (checked by clap).
