@@ -181,7 +181,9 @@ pub struct ReferenceCfg {
     /// The multisine's components.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub components: Option<Vec<ComponentCfg>>,
-    /// The CSV file (relative to the scenario file's directory).
+    /// The CSV file (relative to the scenario file's directory): the
+    /// header line `t,theta_deg` on a rotary axis or `t,y_mm` on a linear
+    /// one, then at least two rows, times (s) strictly increasing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
 }
