@@ -575,6 +575,13 @@ impl Plant for CylinderPlant {
         self.c.deriv(t, s, u, &v.f, ds);
     }
 
+    /// The relief valve's opening back inside [0, x_max]
+    /// ([`Supply::limit_opening`]).
+    #[inline]
+    fn limit_state(&self, s: &mut [f64; 6]) {
+        s[5] = self.c.supply.limit_opening(s[5]);
+    }
+
     #[inline]
     fn stiffness(&self, _t: f64, s: &[f64; 6], u: f64, v: &CylinderVariation) -> f64 {
         self.c.stiffness(s, u, &v.f)

@@ -172,6 +172,15 @@ pub trait Plant {
     /// The state derivative under input `u` (the valve command, V) and
     /// variation `v`.
     fn deriv(&self, t: f64, s: &Self::State, u: f64, v: &Self::Variation, ds: &mut Self::State);
+    /// Puts a state with hard limits back inside them after an RK4 step:
+    /// a limited integrator (the relief valve's opening, held in
+    /// [0, x_max] as Hopsan's filter holds its output) has its derivative
+    /// zeroed at a limit it pushes against, but a step that crosses the
+    /// limit ends beyond it; the simulator calls this after every RK4
+    /// (sub)step, so the stored state is the limited one and nothing winds
+    /// up. Nothing (the default) for a plant without such a state.
+    #[inline(always)]
+    fn limit_state(&self, _s: &mut Self::State) {}
     /// The nominal third-order model (what a controller is told).
     fn nominal(&self) -> &NominalModel;
     /// The variation of `spec` for one hold interval's draw `r` (all zero:

@@ -5,11 +5,28 @@
 //! fixed:  Ps = const
 //! pump:   (V_s/βe)·Ṗs = Q_pump − Q_P − Q_relief
 //!         Q_pump   = D·n/(2π) − C_lp·(Ps − Pt)
-//!         ẋr       = (clamp(x_s(Ps), 0, x_max) − xr)/τ
+//!         ẋr       = (x_s(Ps) − xr)/τ,  0 ≤ xr ≤ x_max  (ẋr = 0 at a limit it pushes against)
 //!         x_s(p)   = (p − p_max)/(C_s + C_f·(p − Pt)),  C_s = √p_nom/k_cs,  C_f = 1/(k_cf·√p_nom)
 //!         Q_relief = xr·√(Ps − Pt)  (Ps > Pt; a relief valve does not pass flow back)
 //!         x_max    = q_nom/√p_nom,  p_nom = 7 MPa
 //! ```
+//!
+//! The opening is a *limited* first-order lag: the limits act on its
+//! output, not on its input. Hopsan's relief valve feeds the unlimited
+//! static opening `xsh` to its filter (`HydraulicPressureReliefValve.hpp`
+//! line 196, `mFilterLP.update(xsh)`), which was initialised with the
+//! limits `[0, x0max]` (line 114); the filter clamps its output and stores
+//! the clamped value as its state (`HopsanCore/src/ComponentUtilities/
+//! FirstOrderTransferFunction.cpp` lines 169–185), so the opening reaches
+//! 0 in finite time when the pressure falls below the setting and stays
+//! there, with no wind-up. In the ODE that is ẋr = 0 at a limit it pushes
+//! against, and the state put back inside the limits after each RK4 step
+//! ([`Supply::limit_opening`], called through
+//! [`crate::plant::Plant::limit_state`]), as the independent ODE of
+//! `tests/data/hopsan/position_servo_ode.py` does (`deriv` and
+//! `clamp_state`). Clamping the lag's *input* instead (its target
+//! `clamp(x_s, 0, x_max)`) makes the opening decay as e^(−t/τ) and never
+//! close.
 //!
 //! Q_P is what the 4/3 valve draws ([`crate::valve::Flows::p`]). The pump
 //! and relief valve are Hopsan's `HydraulicFixedDisplacementPump` (its flow
@@ -280,7 +297,8 @@ impl Supply {
     }
 
     /// The derivatives of the supply's own two states, the line pressure
-    /// Ps (Pa/s) and the relief valve's opening xr (1/s), when the valve
+    /// Ps (Pa/s) and the relief valve's opening xr (1/s; 0 at a limit of
+    /// [0, x_max] that the lag pushes against), when the valve
     /// draws `q_p` (m³/s) from the line at the pressure `ps` (Pa, from
     /// [`Supply::pressure`]), over the tank at `pt`: the module's
     /// equations, with the relief setting scaled by `pressure_factor` and
@@ -302,13 +320,26 @@ impl Supply {
             Supply::Pump(p) => {
                 let p_max = p.p_max * pressure_factor;
                 let relief = Pump { p_max, ..*p };
-                let xs = relief.steady_opening(ps, pt);
+                let xs = relief.static_opening(ps, pt);
                 let qr = relief.q_relief(xr, ps, pt);
+                let dxr = (xs - xr) * p.rate;
+                let held = (xr <= 0.0 && dxr < 0.0) || (xr >= p.x_max && dxr > 0.0);
                 [
                     p.stiffness * bulk_factor * (p.q_pump(ps, pt) - qr - q_p),
-                    (xs - xr) * p.rate,
+                    if held { 0.0 } else { dxr },
                 ]
             }
+        }
+    }
+
+    /// The relief's opening `xr` put back inside [0, x_max] (the state
+    /// after an RK4 step that crossed a limit); unchanged for a fixed
+    /// supply.
+    #[inline]
+    pub fn limit_opening(&self, xr: f64) -> f64 {
+        match self {
+            Supply::Fixed { .. } => xr,
+            Supply::Pump(p) => xr.clamp(0.0, p.x_max),
         }
     }
 }
@@ -320,22 +351,32 @@ impl Pump {
         self.q_ideal - self.leakage * (ps - pt)
     }
 
-    /// The relief's steady opening at Ps, limited to [0, x_max].
+    /// The relief's static opening x_s at Ps, not limited: the input of
+    /// its first-order lag (Hopsan's `xs`, HydraulicPressureReliefValve.hpp
+    /// lines 140–144 and 185 without the TLM terms), negative below the
+    /// setting.
     #[inline]
-    pub fn steady_opening(&self, ps: f64, pt: f64) -> f64 {
+    pub fn static_opening(&self, ps: f64, pt: f64) -> f64 {
         let dp = ps - pt;
         let b1 = if dp * self.cf < 0.0 {
             self.cs
         } else {
             self.cs + dp * self.cf
         };
-        ((ps - self.p_max) / b1).clamp(0.0, self.x_max)
+        (ps - self.p_max) / b1
     }
 
-    /// The relief's flow at Ps with the opening `x`.
+    /// The opening the relief settles to at a constant Ps: the static
+    /// opening limited to [0, x_max].
+    #[inline]
+    pub fn steady_opening(&self, ps: f64, pt: f64) -> f64 {
+        self.static_opening(ps, pt).clamp(0.0, self.x_max)
+    }
+
+    /// The relief's flow at Ps with the opening `x` (limited to [0, x_max]).
     #[inline]
     pub fn q_relief(&self, x: f64, ps: f64, pt: f64) -> f64 {
-        x.max(0.0) * (ps - pt).max(0.0).sqrt()
+        x.clamp(0.0, self.x_max) * (ps - pt).max(0.0).sqrt()
     }
 }
 
@@ -414,6 +455,69 @@ mod tests {
         let x = ((ps - 2e7) / b1).min(0.01 / sq);
         let qr = x * (ps - pt).sqrt();
         assert!((q - qr).abs() <= 1e-9 * q, "{q} vs {qr}");
+    }
+
+    /// The relief's opening under a constant Ps, stepped as the simulator
+    /// steps it (RK4 on the supply's ẋr, then [`Supply::limit_opening`]):
+    /// the lag's closed form x_s + (x(0) − x_s)·e^(−t/τ) between the limits,
+    /// and a limit reached in finite time, at t* = τ·ln((x(0) − x_s)/(L −
+    /// x_s)) for the limit L, where it then stays exactly. The old rule
+    /// (the limits on the lag's input) instead decayed towards 0 as
+    /// e^(−t/τ) and never reached it.
+    #[test]
+    #[allow(clippy::float_cmp)] // the limits are held exactly
+    fn the_relief_opening_is_a_limited_lag() {
+        let (s, pt) = hopsan_pump();
+        let Supply::Pump(p) = s else { unreachable!() };
+        let tau = 1e-3;
+        let h = 1e-5;
+        // (Ps, x(0), the limit it runs into): below the 20 MPa setting the
+        // static opening is negative and the valve closes from half open;
+        // far above it the static opening is beyond x_max and it opens
+        // fully from closed.
+        for (ps, x_start, limit) in [(1.9e7, 0.5 * p.x_max, 0.0), (3e7, 0.0, p.x_max)] {
+            let xs = p.static_opening(ps, pt);
+            assert!(xs < 0.0 || xs > p.x_max, "{xs}");
+            let t_star = tau * ((x_start - xs) / (limit - xs)).ln();
+            assert!(t_star > 10.0 * h, "{t_star}");
+            let exact = |t: f64| xs + (x_start - xs) * (-t / tau).exp();
+            let mut x = [x_start];
+            let mut held = 0;
+            for k in 1..=((5.0 * t_star / h) as usize) {
+                ehservo_core::rk4::rk4_step(
+                    |_, y: &[f64; 1], dy: &mut [f64; 1]| {
+                        dy[0] = s.deriv(ps, y[0], pt, 0.0, 1.0, 1.0)[1];
+                    },
+                    (k - 1) as f64 * h,
+                    &mut x,
+                    h,
+                );
+                x[0] = s.limit_opening(x[0]);
+                let t = k as f64 * h;
+                if t <= t_star - h {
+                    let want = exact(t);
+                    assert!(
+                        (x[0] - want).abs() <= 1e-9 * p.x_max,
+                        "t = {t}: {} vs {want}",
+                        x[0]
+                    );
+                } else if t >= t_star + h {
+                    assert_eq!(x[0], limit, "t = {t} (t* = {t_star})");
+                    held += 1;
+                }
+            }
+            assert!(held > 0);
+        }
+        // At a limit with the lag pushing against it the derivative is 0;
+        // pulling away from it, the lag's.
+        assert_eq!(s.deriv(1.9e7, 0.0, pt, 0.0, 1.0, 1.0)[1], 0.0);
+        assert_eq!(s.deriv(3e7, p.x_max, pt, 0.0, 1.0, 1.0)[1], 0.0);
+        let xs = p.static_opening(2.05e7, pt);
+        assert_eq!(s.deriv(2.05e7, 0.0, pt, 0.0, 1.0, 1.0)[1], xs * p.rate);
+        // The relief's flow sees the limited opening.
+        let sq = (2.05e7 - pt).sqrt();
+        assert_eq!(p.q_relief(-1e-6, 2.05e7, pt), 0.0);
+        assert_eq!(p.q_relief(2.0 * p.x_max, 2.05e7, pt), p.x_max * sq);
     }
 
     #[test]

@@ -9,8 +9,19 @@ use crate::scenario::{Loop, Reason, ScenarioError};
 use std::path::Path;
 
 /// [`Loop::load`], with the hint of [`other_format`] when the file is
-/// another of the lab's files.
+/// another of the lab's files. What the `--set`s did that the user should
+/// know of (the keys a `--set controller.kind=K` dropped) is printed on
+/// stderr, one line each, `note: FILE: …`.
 pub fn load(path: &Path, set: &[String]) -> Result<Loop, ScenarioError> {
+    let lp = load_quiet(path, set)?;
+    for n in &lp.scenario().notes {
+        eprintln!("note: {}: {n}", path.display());
+    }
+    Ok(lp)
+}
+
+/// [`load`] without printing its notes.
+fn load_quiet(path: &Path, set: &[String]) -> Result<Loop, ScenarioError> {
     Loop::load(path, set).map_err(|e| {
         let file = path.display().to_string();
         match crate::input::read_text(path)

@@ -77,6 +77,25 @@ impl JsonSchema for ControllerCfg {
     }
 }
 
+impl ControllerCfg {
+    /// The keys a kind's `[controller]` table takes (`kind` among them),
+    /// from its JSON Schema; `None` for an unregistered kind.
+    pub fn keys_of(kind: &str) -> Option<Vec<String>> {
+        let mut g = SchemaGenerator::default();
+        let (_, s) = Self::kind_schemas(&mut g)
+            .into_iter()
+            .find(|(name, _)| *name == kind)?;
+        let v = resolve(g.definitions(), s.as_value());
+        let mut keys: Vec<String> = v
+            .get("properties")
+            .and_then(Value::as_object)
+            .map(|p| p.keys().cloned().collect())
+            .unwrap_or_default();
+        keys.push("kind".into());
+        Some(keys)
+    }
+}
+
 impl JsonSchema for PlantCfg {
     fn schema_name() -> Cow<'static, str> {
         "PlantCfg".into()

@@ -131,6 +131,11 @@ pub struct Scenario {
     /// relative `reference.file` is read from it. Not a key.
     #[serde(skip)]
     pub base_dir: Option<std::path::PathBuf>,
+    /// What reading the file with its `--set`s did that the user should
+    /// know of, one line each (the keys a `--set controller.kind=K`
+    /// dropped): the command line prints them. Not a key.
+    #[serde(skip)]
+    pub notes: Vec<String>,
 }
 
 /// Largest number of steps a scenario may ask for: 2·10⁷ (200 s at 10 µs;
@@ -223,11 +228,14 @@ impl Scenario {
             line_col: None,
             reason: Reason::Syntax(first_line(e.message())),
         })?;
+        let note = switch_controller_kind(&mut table, overrides);
         for o in overrides {
             apply_override(&mut table, o).map_err(|e| ScenarioError::in_file("--set", e))?;
         }
         let after = format!("{file} (after --set)");
-        Self::from_table(table, &after)
+        let mut s = Self::from_table(table, &after)?;
+        s.notes.extend(note);
+        Ok(s)
     }
 
     /// The scenario of a TOML table (named `file` in errors).
@@ -364,6 +372,50 @@ impl Scenario {
     }
 }
 
+/// `--set controller.kind=K` (the last one, if several) to another
+/// registered kind than the file's: the keys of the file's `[controller]`
+/// that kind `K` does not take are dropped from `table` (kept: the keys
+/// both kinds take, such as the sliding-mode kinds' shared table), so that
+/// switching kinds from the command line does not fail on the old kind's
+/// keys. Returns the line that names what was dropped, if anything. Other
+/// `--set controller.*` values apply afterwards, and a key of the old kind
+/// set that way is still refused. An unknown `K` is left to the loader's
+/// error, which names the registered kinds.
+fn switch_controller_kind(table: &mut toml::Table, overrides: &[String]) -> Option<String> {
+    let new_kind = overrides.iter().rev().find_map(|o| {
+        let (path, raw) = o.split_once('=')?;
+        match (path.trim(), parse_value(raw)) {
+            ("controller.kind", toml::Value::String(k)) => Some(k),
+            _ => None,
+        }
+    })?;
+    let keys = ControllerCfg::keys_of(&new_kind)?;
+    let Some(toml::Value::Table(ctrl)) = table.get_mut("controller") else {
+        return None;
+    };
+    let old_kind = match ctrl.get("kind") {
+        None => DEFAULT_KIND.to_string(),
+        Some(toml::Value::String(k)) => k.clone(),
+        Some(_) => return None,
+    };
+    if old_kind == new_kind {
+        return None;
+    }
+    let dropped: Vec<String> = ctrl.keys().filter(|k| !keys.contains(k)).cloned().collect();
+    if dropped.is_empty() {
+        return None;
+    }
+    for k in &dropped {
+        ctrl.remove(k);
+    }
+    Some(format!(
+        "--set controller.kind={new_kind}: dropped the file's {old_kind} key{} {} (kind {new_kind} does not take {})",
+        if dropped.len() == 1 { "" } else { "s" },
+        dropped.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", "),
+        if dropped.len() == 1 { "it" } else { "them" },
+    ))
+}
+
 /// The key error `e` of a scenario read from `text` of `file` with
 /// `overrides`, placed: a key set by `--set` is blamed on the flag, not on
 /// the file's line; any other key, when flags were given, on the file as
@@ -411,6 +463,68 @@ fn array_lengths(raw: &toml::Table, typed: &toml::Table, prefix: &str) -> Option
 #[allow(clippy::float_cmp)] // exact values are the point of several checks
 mod tests {
     use super::*;
+
+    /// `--set controller.kind=K` from a file of another kind: the file's
+    /// keys that K does not take are dropped and named in one note, the
+    /// keys both take kept; a key of the old kind set along with the
+    /// switch is still refused, and an unknown K named as before.
+    #[test]
+    fn set_controller_kind_drops_the_old_kinds_keys() {
+        let set = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let pid =
+            "[controller]\nkind = \"pid\"\nkp = 26.0\nki = 0.6\nkd = 0.0\nfeedforward = false\n";
+        let s = Scenario::parse_in(pid, "f.toml", &set(&["controller.kind=arc"]), None).unwrap();
+        assert_eq!(s.controller.kind(), "arc");
+        let arc = ControllerCfg::keys_of("arc").unwrap();
+        let gone: Vec<&str> = ["kp", "ki", "kd", "feedforward"]
+            .into_iter()
+            .filter(|k| !arc.iter().any(|a| a == k))
+            .collect();
+        assert!(!gone.is_empty());
+        assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
+        let note = &s.notes[0];
+        assert!(
+            note.starts_with("--set controller.kind=arc: dropped the file's pid keys"),
+            "{note}"
+        );
+        for k in ["kp", "ki", "kd", "feedforward"] {
+            assert_eq!(
+                note.contains(&format!("`{k}`")),
+                gone.contains(&k),
+                "{k}: {note}"
+            );
+        }
+        // Without the switch nothing is dropped.
+        let s = Scenario::parse_in(pid, "f.toml", &set(&["controller.kp=1"]), None).unwrap();
+        assert!(s.notes.is_empty());
+        // An old kind's key set with the switch is the user's: refused.
+        let e = Scenario::parse_in(
+            pid,
+            "f.toml",
+            &set(&["controller.kind=arc", "controller.kp=1"]),
+            None,
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "controller.kp");
+        // The sliding-mode kinds share their table: a value carries over.
+        let nn = "[controller]\ngamma1 = 200.0\n";
+        let s = Scenario::parse_in(nn, "f.toml", &set(&["controller.kind=vsc"]), None).unwrap();
+        assert_eq!(s.controller.kind(), "vsc");
+        assert!(s.notes.is_empty());
+        assert_eq!(s.controller.to_table()["gamma1"].as_float(), Some(200.0));
+        // An unknown kind: the registry's error, naming the kinds.
+        let e =
+            Scenario::parse_in(pid, "f.toml", &set(&["controller.kind=lqr"]), None).unwrap_err();
+        assert_eq!(e.key, "controller.kind");
+        assert!(e.reason.to_string().contains("nnvsc"), "{e}");
+        // Every kind's keys include its defaults' (the schema is complete).
+        for &k in ControllerCfg::KINDS {
+            let keys = ControllerCfg::keys_of(k).unwrap();
+            for d in ControllerCfg::default_of(k).unwrap().to_table().keys() {
+                assert!(keys.contains(d), "{k}: {d}");
+            }
+        }
+    }
 
     #[test]
     fn empty_file_is_the_paper_fig2_case() {

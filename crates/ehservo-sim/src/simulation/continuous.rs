@@ -70,11 +70,14 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         if n > 1 {
             let hr = h / f64::from(n);
             rk4_step_with_k1(f, t, &mut self.y, &dy, hr);
+            plant.limit_state(&mut self.y.pa.x);
             for i in 1..n {
                 rk4_step(f, t + f64::from(i) * hr, &mut self.y, hr);
+                plant.limit_state(&mut self.y.pa.x);
             }
         } else {
             rk4_step_with_k1(f, t, &mut self.y, &dy, h);
+            plant.limit_state(&mut self.y.pa.x);
         }
         ControlFlow::Continue(())
     }

@@ -172,6 +172,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                         y,
                         hr,
                     );
+                    plant.limit_state(&mut y.x);
                 }
                 continue;
             }
@@ -207,6 +208,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                     hs,
                 ),
             }
+            plant.limit_state(&mut y.x);
         }
         ControlFlow::Continue(())
     }

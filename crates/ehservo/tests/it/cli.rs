@@ -337,3 +337,70 @@ fn version_names_the_commit() {
         }
     }
 }
+
+/// `--set controller.kind=K` on a file of another kind: the kind switches,
+/// the file's `[controller]` keys that K does not take (by K's schema) are
+/// dropped and named on one line of stderr, the others kept; a key of the
+/// old kind given with the switch is still bad input (exit 2, one line
+/// naming the file, the key and the reason).
+#[test]
+fn set_controller_kind_switches_and_names_the_dropped_keys() {
+    let file = repo().join("scenarios/hopsan/position-servo.toml");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let table: toml::Table = toml::from_str(&text).unwrap();
+    let given: Vec<String> = table["controller"]
+        .as_table()
+        .unwrap()
+        .keys()
+        .filter(|k| *k != "kind")
+        .cloned()
+        .collect();
+    let arc = ehservo::scenario::ControllerCfg::keys_of("arc").unwrap();
+    let dropped: Vec<&String> = given.iter().filter(|k| !arc.contains(k)).collect();
+    assert!(!dropped.is_empty(), "the file has keys arc does not take");
+    let o = ehservo()
+        .arg("check")
+        .arg(&file)
+        .args(["--set", "controller.kind=arc"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let out: toml::Table = toml::from_str(&String::from_utf8_lossy(&o.stdout)).unwrap();
+    assert_eq!(out["controller"]["kind"].as_str(), Some("arc"));
+    let notes: Vec<&str> = err.lines().filter(|l| l.starts_with("note:")).collect();
+    assert_eq!(notes.len(), 1, "{err}");
+    for k in &given {
+        assert_eq!(
+            notes[0].contains(&format!("`{k}`")),
+            dropped.contains(&k),
+            "{k}: {}",
+            notes[0]
+        );
+    }
+    assert!(notes[0].contains("position-servo.toml") && notes[0].contains("controller.kind=arc"));
+    // The old kind's key given with the switch: refused.
+    let k = dropped[0];
+    let o = ehservo()
+        .arg("check")
+        .arg(&file)
+        .args([
+            "--set",
+            "controller.kind=arc",
+            "--set",
+            &format!("controller.{k}=1"),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(
+        lines[0].starts_with("error: ")
+            && lines[0].contains("position-servo.toml")
+            && lines[0].contains(&format!("`controller.{k}`"))
+            && lines[0].contains("unknown field"),
+        "{err}"
+    );
+}

@@ -17,6 +17,7 @@ mod faults;
 mod freq;
 mod golden;
 mod guide;
+mod guide_keys;
 mod hopsan;
 mod house;
 mod identify;

@@ -140,10 +140,12 @@ pub struct ReferenceCfg {
     /// Default `"sine"`.
     #[serde(skip_serializing_if = "ReferenceKind::is_sine")]
     pub kind: ReferenceKind,
-    /// Amplitude (deg): sine, step, square, chirp (a rotary axis).
+    /// Amplitude (deg): sine, step, square, chirp, on a rotary axis
+    /// (default 5 there); refused on a linear axis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub amplitude_deg: Option<f64>,
-    /// Amplitude (mm): sine, step, square, chirp (a linear axis).
+    /// Amplitude (mm): sine, step, square, chirp, on a linear axis, where
+    /// it is required (no default); refused on a rotary axis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub amplitude_mm: Option<f64>,
     /// Offset added to every kind (deg; a rotary axis). Default 0.
@@ -179,7 +181,9 @@ pub struct ReferenceCfg {
     /// The multisine's components.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub components: Option<Vec<ComponentCfg>>,
-    /// The CSV file (relative to the scenario file's directory).
+    /// The CSV file (relative to the scenario file's directory): the
+    /// header line `t,theta_deg` on a rotary axis or `t,y_mm` on a linear
+    /// one, then at least two rows, times (s) strictly increasing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
 }
@@ -452,6 +456,20 @@ impl ReferenceCfg {
                 ),
             );
         }
+        // The paper's 5° fills a sine's amplitude when the file gives none
+        // (`ReferenceRaw`): a rotary default, never a linear axis's. There
+        // the amplitude in millimetres is required, and the error says so
+        // rather than blame a key in degrees the file does not have.
+        if axis == Axis::Linear
+            && kind == ReferenceKind::Sine
+            && self.amplitude_mm.is_none()
+            && self.amplitude_deg == Some(DEFAULT_AMPLITUDE_DEG)
+        {
+            return bad(
+                "amplitude_mm",
+                "is required by kind `sine` on a linear axis (the default of 5 is the paper's degrees)",
+            );
+        }
         if let Some(k) = self.foreign_key(axis) {
             let (this, other) = match axis {
                 Axis::Rotary => ("rotary (in degrees)", "_deg"),
@@ -634,5 +652,35 @@ mod tests {
             .build(10.0, 1.0, None)
             .unwrap_err();
         assert_eq!(e.key, "reference.components");
+    }
+
+    /// A linear axis has no default amplitude: the paper's 5° is not
+    /// applied there, and the key to give is named in millimetres; a key
+    /// in degrees that the file does give is refused with the _mm form.
+    #[test]
+    fn a_linear_axis_has_no_default_in_degrees() {
+        let inf = f64::INFINITY;
+        for text in ["", "kind = \"sine\"", "kind = \"sine\"\nfrequency_hz = 2"] {
+            let e = cfg(text)
+                .build_on(Axis::Linear, 10.0, inf, None)
+                .unwrap_err();
+            assert_eq!(e.key, "reference.amplitude_mm", "{text:?}");
+            assert!(e.reason.to_string().contains("required"), "{e}");
+        }
+        let e = cfg("kind = \"step\"")
+            .build_on(Axis::Linear, 10.0, inf, None)
+            .unwrap_err();
+        assert_eq!(e.key, "reference.amplitude_mm");
+        let e = cfg("amplitude_deg = 3")
+            .build_on(Axis::Linear, 10.0, inf, None)
+            .unwrap_err();
+        assert_eq!(e.key, "reference.amplitude_deg");
+        assert!(e.reason.to_string().contains("_mm"), "{e}");
+        let r = cfg("amplitude_mm = 10")
+            .build_on(Axis::Linear, 10.0, inf, None)
+            .unwrap();
+        assert!((r.z(0.25)[0] - 0.01).abs() < 1e-15);
+        // The rotary axis keeps the paper's default.
+        assert!(cfg("").build(10.0, 1.0, None).is_ok());
     }
 }
