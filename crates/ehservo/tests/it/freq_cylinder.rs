@@ -5,7 +5,6 @@
 //! measured on the simulator at low frequency.
 
 use crate::common;
-use std::path::Path;
 
 fn chrono() -> String {
     common::repo()

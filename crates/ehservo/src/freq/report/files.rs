@@ -39,13 +39,14 @@ pub(super) fn write(
     stage: Staging,
 ) -> Result<FreqSummary> {
     let s = setup.scenario();
+    let axis = setup.axis();
     let mut out = Out {
         dir: stage.path().to_path_buf(),
         files: Vec::new(),
         text: String::new(),
+        axis,
     };
     let h = setup.sim().step;
-    let axis = setup.axis();
     let freqs: Vec<f64> = (0..o.points)
         .map(|i| o.f_min * (f_max / o.f_min).powf(i as f64 / (o.points - 1) as f64))
         .collect();
@@ -118,7 +119,7 @@ pub(super) fn write(
         "quality": "sinestream: the fundamental fraction, the share of the output's variance at the excited frequency; Welch: the coherence γ²",
     });
     if o.plots {
-        out.plots(&s.name, sets, lp_opt, &responses, &freqs, &summary, axis)?;
+        out.plots(&s.name, sets, lp_opt, &responses, &freqs, &summary)?;
     }
     let path = out.dir.join("freq.json");
     std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
@@ -137,6 +138,8 @@ struct Out {
     dir: PathBuf,
     files: Vec<PathBuf>,
     text: String,
+    /// The axis the outputs speak (units and names).
+    axis: Axis,
 }
 
 impl Out {
@@ -284,8 +287,8 @@ impl Out {
         responses: &[Responses],
         freqs: &[f64],
         summary: &serde_json::Value,
-        axis: Axis,
     ) -> Result<()> {
+        let axis = self.axis;
         if let Some(lp) = lp_opt {
             for ext in ["png", "svg"] {
                 let p = self.dir.join(format!("bode.{ext}"));
