@@ -48,6 +48,16 @@ pub fn amplitude(
     amplitude_deg: Option<f64>,
     file: &str,
 ) -> Result<(f64, &'static str), crate::scenario::ScenarioError> {
+    let flag = if amplitude_deg.is_some() {
+        "--amplitude-deg"
+    } else {
+        "--amplitude"
+    };
+    if let Some(a) = amplitude_deg.or(amplitude) {
+        if !(a.is_finite() && a > 0.0) {
+            return Err(super::bad(file, flag, format!("{a}: must be > 0")));
+        }
+    }
     match (amplitude, amplitude_deg) {
         (_, Some(d)) if axis == Axis::Linear => Err(super::bad(
             file,

@@ -139,6 +139,26 @@ fn degree_flags_are_refused_on_a_linear_axis() {
         "{err}"
     );
     assert!(!out.exists());
+    // Bad operating points and amplitudes name their flag, in the axis's
+    // unit, and write nothing.
+    for (args, flag, expect) in [
+        (vec!["--trim", "500"], "--trim", "outside its stroke"),
+        (vec!["--velocity", "1000"], "--velocity", "no trim point"),
+        (
+            vec!["--side", "plus", "--amplitude=-1"],
+            "--amplitude",
+            "-1: must be > 0",
+        ),
+    ] {
+        let r = common::ehservo()
+            .args(["freq", &chrono(), "--out", out.to_str().unwrap()])
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = common::rejected_naming("chrono-single-rod.toml", &r, expect);
+        assert!(err.contains(flag), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?}");
+    }
     let fig2 = common::repo().join("scenarios/paper/fig2.toml");
     let r = common::ehservo()
         .args(["linearize", fig2.to_str().unwrap(), "--velocity", "1"])

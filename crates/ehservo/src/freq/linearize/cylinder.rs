@@ -353,11 +353,11 @@ impl CylinderLin {
     pub fn trim(&self, x0: f64, v0: f64, side: Side) -> Result<(Vec<f64>, f64, usize), KeyError> {
         let c = self.c();
         let (y0, yd0) = self.rod(x0, v0);
-        if !(y0.is_finite() && yd0.is_finite()) {
-            return Err(KeyError::new(
-                "--trim",
-                "the position and speed must be finite",
-            ));
+        if !y0.is_finite() {
+            return Err(KeyError::new("--trim", "the position must be finite"));
+        }
+        if !yd0.is_finite() {
+            return Err(KeyError::new("--velocity", "the speed must be finite"));
         }
         if !(0.0..=c.stroke).contains(&y0) {
             return Err(KeyError::new(
@@ -391,12 +391,19 @@ impl CylinderLin {
             side.sign()
         };
         let leaks = c.leakage * self.f.leakage > 0.0;
-        match self.trim_in(s, force, dir, side) {
+        let r = match self.trim_in(s, force, dir, side) {
             // At rest with leakage the valve's direction follows the load,
             // not the side: the other direction's start when the side's fails.
             Err(e) if yd0 == 0.0 && leaks => self.trim_in(s, force, -dir, side).map_err(|_| e),
             r => r,
-        }
+        };
+        // In motion the speed asked for is what cannot be held.
+        r.map_err(|mut e| {
+            if yd0 != 0.0 {
+                e.key = "--velocity".into();
+            }
+            e
+        })
     }
 
     /// [`CylinderLin::trim`] from the start `s` (y, ẏ and the supply set)
