@@ -689,8 +689,9 @@ impl RawController {
 }
 
 /// Linearises a scenario's loop as `ehservo linearize` does: its JSON text.
-/// `at`: a time along the run (s); `trim`: θ0 (deg) of a trim point; with
-/// neither, a trim at θd(0). `side` ("minus"/"plus"): the one-sided model
+/// `at`: a time along the run (s); `trim`: the position of a trim point in
+/// the axis's unit (θ0 in degrees on a rotary axis, mm on a linear one);
+/// with neither, a trim at θd(0). `side` ("minus"/"plus"): the one-sided model
 /// at a point that is not differentiable. `discretise`: "zoh" or "rk4".
 #[pyfunction]
 #[pyo3(signature = (path, text, overrides, at=None, trim=None, side=None, discretise="zoh"))]
@@ -723,7 +724,7 @@ fn linearize(
     let l = ehservo::freq::linearise(
         &s,
         &file,
-        cli::operating_point(at, trim.map(Some)),
+        cli::operating_point_on(s.axis(), at, trim.map(Some), None, None),
         cli::side(side.as_deref()),
         cli::discretisation(discretise),
     )

@@ -167,7 +167,7 @@ const CYLINDER_STATES: [Signal; 6] = [
 
 /// The volumes' floor as a share of the dead volume: a stop's
 /// penetration can otherwise shrink a chamber to nothing.
-const VOLUME_FLOOR: f64 = 0.01;
+pub const VOLUME_FLOOR: f64 = 0.01;
 
 impl Cylinder {
     /// The chamber volumes at y (floored at 1 % of the dead volume).

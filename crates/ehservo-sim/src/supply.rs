@@ -255,7 +255,22 @@ impl Supply {
     pub fn holding_pressure(&self, pt: f64) -> f64 {
         match self {
             Supply::Fixed { ps } => *ps,
+            Supply::Pump(_) => self.holding_pressure_at(pt, 1.0),
+        }
+    }
+
+    /// [`Supply::holding_pressure`] with the relief setting (or a fixed
+    /// supply's pressure) scaled by `pressure_factor`, as
+    /// [`Supply::deriv`] scales it: the supply's steady pressure when the
+    /// 4/3 valve draws nothing.
+    pub fn holding_pressure_at(&self, pt: f64, pressure_factor: f64) -> f64 {
+        match self {
+            Supply::Fixed { ps } => ps * pressure_factor,
             Supply::Pump(p) => {
+                let p = &Pump {
+                    p_max: p.p_max * pressure_factor,
+                    ..*p
+                };
                 // Q_pump(Ps) = Q_relief(Ps) at the steady opening, both
                 // monotone in Ps: bisection over [p_max, p_max + 1e9 Pa],
                 // 200 halvings at most (far below the ulp of the bracket).

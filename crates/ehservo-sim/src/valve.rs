@@ -380,6 +380,34 @@ impl SpoolValve {
         self.k_turb * self.cd * a * a.sqrt() * (0.5 * ad * ad + k2) / (d * d.sqrt().sqrt())
     }
 
+    /// ∂q/∂(Cd·A) of [`SpoolValve::orifice`] at discharge area `cda` and
+    /// the drop `dp` (m/s per m² of Cd·A): with D = (AΔp)² + k²,
+    /// `dq/dA = Cd·√(2/ρ)·Δp·A^{1/2}·D^{−5/4}·((AΔp)² + 3k²/2)`, divided by
+    /// Cd. Its turbulent limit (k → 0) is `√(2/ρ)·sgn(Δp)·√|Δp|`
+    /// ([`SpoolValve::turbulent_area_slope`]); at A = 0 it is 0 (the
+    /// laminar region: q ∝ A^{3/2} there), and 0 for a closed edge.
+    #[inline]
+    pub fn orifice_area_slope(&self, cda: f64, dp: f64) -> f64 {
+        if cda <= 0.0 {
+            return 0.0;
+        }
+        let a = cda / self.cd;
+        let ad = a * dp;
+        let k2 = self.k_lam * self.k_lam;
+        let d = ad * ad + k2;
+        self.k_turb * dp * a.sqrt() * (ad * ad + 1.5 * k2) / (d * d.sqrt().sqrt())
+    }
+
+    /// The turbulent orifice's ∂q/∂(Cd·A) at the drop `dp`,
+    /// `√(2/ρ)·sgn(Δp)·√|Δp|`: what [`SpoolValve::orifice_area_slope`]
+    /// tends to once the opening is past its laminar region (a few
+    /// nanometres of spool at working drops), the flow gain of an edge that
+    /// just opens (Merritt's K_q at null).
+    #[inline]
+    pub fn turbulent_area_slope(&self, dp: f64) -> f64 {
+        self.k_turb * sgn(dp) * dp.abs().sqrt()
+    }
+
     /// The valve's flows at spool position `xv` with supply `ps`, tank
     /// `pt` and chamber pressures `p1`, `p2` (Pa).
     #[inline]
@@ -483,6 +511,34 @@ mod tests {
         // what the chambers take.
         assert!((f.p - f.t - (f.a + f.b)).abs() <= 1e-15 * f.p);
         assert!(v.loss(3e-4, 2e7, 1e5, 1e7, 1e6) > 0.0);
+    }
+
+    /// ∂q/∂(Cd·A) against a central difference of the orifice law, in the
+    /// laminar, transitional and turbulent regions and for both signs of
+    /// Δp; far from the laminar region it is the turbulent √(2Δp/ρ).
+    #[test]
+    fn orifice_area_slope_is_the_laws_derivative() {
+        let v = hopsan_like();
+        for a in [1e-12, 1e-10, 1e-8, 1e-6] {
+            for dp in [-5e6, -1e3, -1.0, 1.0, 1e3, 5e6] {
+                let cda = 0.67 * a;
+                let h = 1e-6 * cda;
+                let fd = (v.orifice(cda + h, dp) - v.orifice(cda - h, dp)) / (2.0 * h);
+                let an = v.orifice_area_slope(cda, dp);
+                assert!(
+                    (an - fd).abs() <= 1e-6 * fd.abs() + 1e-300,
+                    "A = {a}, Δp = {dp}: {an} vs {fd}"
+                );
+            }
+        }
+        // Turbulent: A·Δp ≫ k, so the slope is √(2/ρ)·√Δp to O((k/AΔp)²).
+        let dp = 5e6;
+        let turb = (2.0 * dp / 890.0f64).sqrt();
+        assert_eq!(v.turbulent_area_slope(dp), turb);
+        assert_eq!(v.turbulent_area_slope(-dp), -turb);
+        let an = v.orifice_area_slope(0.67 * 1e-6, dp);
+        assert!((an - turb).abs() <= 1e-6 * turb, "{an} vs {turb}");
+        assert_eq!(v.orifice_area_slope(0.0, dp), 0.0);
     }
 
     #[test]

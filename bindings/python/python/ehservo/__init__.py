@@ -494,8 +494,9 @@ def linearize(
     """Linearises a scenario's loop as ``ehservo linearize`` does and returns
     its models as python-control ``ss`` objects (:class:`Linearization`).
 
-    ``at``: a time along the run (s); ``trim``: θ0 (deg) of a trim point for
-    a constant reference; neither: a trim at θd(0). ``side`` ("minus" or
+    ``at``: a time along the run (s); ``trim``: the position of a trim point
+    for a constant reference in the axis's unit (θ0 in degrees on a rotary
+    axis, mm on a linear one); neither: a trim at θd(0). ``side`` ("minus" or
     "plus"): the one-sided model at a point that is not differentiable
     (otherwise such a point raises ``ScenarioError`` naming it).
     ``discretise``: "zoh" (exact) or "rk4" (the simulator's map). Needs

@@ -15,9 +15,17 @@ pub(super) struct LinearizeArgs {
     /// At this time along the run (s).
     #[arg(long, conflicts_with = "trim")]
     at: Option<f64>,
-    /// At a trim point for the constant reference θ0 (deg; without a value θd(0), the default).
-    #[arg(long, value_name = "DEG", num_args = 0..=1)]
+    /// At a trim point for the constant reference at this position, in the axis's unit: degrees on a rotary axis, mm on a linear one (without a value θd(0), the default).
+    #[arg(long, value_name = "X", num_args = 0..=1, allow_negative_numbers = true)]
     trim: Option<Option<f64>>,
+    /// The trim in steady motion at this speed (the axis's unit per second: mm/s on a linear axis); the cylinder's only.
+    #[arg(
+        long,
+        value_name = "V",
+        conflicts_with = "at",
+        allow_negative_numbers = true
+    )]
+    velocity: Option<f64>,
     /// At a point that is not differentiable, the one-sided model from below or above.
     #[arg(long, value_parser = ["minus", "plus"])]
     side: Option<String>,
@@ -43,9 +51,17 @@ pub(super) struct FreqArgs {
     /// Linearise at this time along the run (s).
     #[arg(long, conflicts_with = "trim")]
     at: Option<f64>,
-    /// Linearise at a trim point for the constant reference θ0 (deg; without a value θd(0), the default); the measurements excite the loop about it.
-    #[arg(long, value_name = "DEG", num_args = 0..=1)]
+    /// Linearise at a trim point for the constant reference at this position, in the axis's unit: degrees on a rotary axis, mm on a linear one (without a value θd(0), the default); the measurements excite the loop about it.
+    #[arg(long, value_name = "X", num_args = 0..=1, allow_negative_numbers = true)]
     trim: Option<Option<f64>>,
+    /// The trim in steady motion at this speed (the axis's unit per second: mm/s on a linear axis); the cylinder's only, for the computed curves.
+    #[arg(
+        long,
+        value_name = "V",
+        conflicts_with = "at",
+        allow_negative_numbers = true
+    )]
+    velocity: Option<f64>,
     /// At a point that is not differentiable, the one-sided model from below or above.
     #[arg(long, value_parser = ["minus", "plus"])]
     side: Option<String>,
@@ -73,9 +89,12 @@ pub(super) struct FreqArgs {
     /// Measured frequencies (sinestream) or bins (Welch), log-spaced.
     #[arg(long, default_value_t = 40)]
     measure_points: usize,
-    /// Amplitude of the tracking excitation (deg).
-    #[arg(long, default_value_t = 0.5)]
-    amplitude_deg: f64,
+    /// Amplitude of the tracking excitation, in the axis's unit: degrees on a rotary axis, mm on a linear one (default 0.5).
+    #[arg(long, value_name = "A")]
+    amplitude: Option<f64>,
+    /// Amplitude of the tracking excitation (deg), on a rotary axis only (the older spelling of --amplitude there).
+    #[arg(long, value_name = "DEG", conflicts_with = "amplitude")]
+    amplitude_deg: Option<f64>,
     /// Amplitude of the disturbance on the command (V).
     #[arg(long, default_value_t = 0.05)]
     disturbance: f64,
@@ -108,6 +127,7 @@ pub(super) fn linearize(a: LinearizeArgs, w: &mut impl Write) -> Result<()> {
         scenario,
         at,
         trim,
+        velocity,
         side,
         discretise,
         out,
@@ -117,7 +137,7 @@ pub(super) fn linearize(a: LinearizeArgs, w: &mut impl Write) -> Result<()> {
     let text = cli::linearize_cmd(
         &scenario,
         &set,
-        cli::operating_point(at, trim),
+        cli::PointFlags { at, trim, velocity },
         cli::side(side.as_deref()),
         cli::discretisation(&discretise),
         out.as_deref(),
@@ -133,6 +153,7 @@ pub(super) fn freq(a: FreqArgs, w: &mut impl Write) -> Result<()> {
         out,
         at,
         trim,
+        velocity,
         side,
         discretise,
         f_min,
@@ -142,6 +163,7 @@ pub(super) fn freq(a: FreqArgs, w: &mut impl Write) -> Result<()> {
         measure_f_min,
         measure_f_max,
         measure_points,
+        amplitude,
         amplitude_deg,
         disturbance,
         settle,
@@ -161,14 +183,16 @@ pub(super) fn freq(a: FreqArgs, w: &mut impl Write) -> Result<()> {
         None => default_out(&format!("{}-freq", s.name))?,
     };
     let mut o = crate::freq::report::FreqOptions::defaults();
-    o.at = cli::operating_point(at, trim);
+    o.at = cli::PointFlags { at, trim, velocity }.resolve(&lp);
     o.side = cli::side(side.as_deref());
     o.discretisation = cli::discretisation(&discretise);
     (o.f_min, o.f_max, o.points) = (f_min, f_max, points);
     o.methods = cli::methods(&measure, &scenario.display().to_string())?;
     (o.measure_f_min, o.measure_f_max, o.measure_points) =
         (measure_f_min, measure_f_max, measure_points);
-    o.settings.amplitude = amplitude_deg * crate::core::math::DR;
+    let file = scenario.display().to_string();
+    (o.settings.amplitude, o.amplitude_flag) =
+        cli::amplitude(lp.axis(), amplitude, amplitude_deg, &file)?;
     o.settings.disturbance = disturbance;
     o.settings.settle_s = settle;
     o.settings.cycles = cycles;

@@ -16,17 +16,20 @@
 //! differentiable with a zero gain (saturated, inside the dead band, the
 //! valve root clamped), as notes.
 //!
-//! A new plant (the lead's cylinder) implements [`Linearize`] and
-//! [`PlantState`]; nothing else here knows a plant.
+//! A new plant implements [`Linearize`] and [`PlantState`] (the cylinder
+//! does, in `cylinder`); nothing else here knows a plant.
 //!
 //! Here: the trait, its points, kinks and sides, the delay, the chain of
-//! two stages and the finite-difference check; the plants in `plants`,
-//! the actuator stage in `actuator_stage`.
+//! two stages and the finite-difference check; the paper's plants in
+//! `plants`, the cylinder in `cylinder`, the actuator stage in
+//! `actuator_stage`.
 
 mod actuator_stage;
+mod cylinder;
 mod plants;
 
 pub use actuator_stage::ActuatorStage;
+pub use cylinder::CylinderLin;
 pub use plants::friction_curvature;
 
 use super::ss::{Quantity, StateSpace};

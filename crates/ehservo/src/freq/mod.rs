@@ -79,7 +79,10 @@ pub fn linearise(
     let act = ActuatorStage::new(&setup.stages().actuator);
     let at = at.unwrap_or_else(|| default_at(setup));
     let point = match at {
-        At::Trim(theta0) => oppoint::trim(setup, &plant, &act, theta0),
+        At::Trim(x0) => oppoint::trim(setup, &plant, &act, x0, 0.0, side.unwrap_or(Side::Plus)),
+        At::Moving(x0, v0) => {
+            oppoint::trim(setup, &plant, &act, x0, v0, side.unwrap_or(Side::Plus))
+        }
         At::Time(t) => oppoint::at_time(setup, &plant, &act, t),
     }
     .map_err(|e| bad(file, &e.key, e.reason.to_string()))?;
@@ -212,8 +215,17 @@ pub fn linearisation_json(l: &Linearised) -> Value {
             "closed_loop_stable": lp.closed_loop_stable(),
         })
     });
-    let theta = ss::Quantity::new("theta", "rad");
+    let axis = l.setup.axis();
+    let theta = response::quantity_for_axis(&ss::Quantity::new("theta", "rad"), axis);
     let u = ss::Quantity::new("u", "V");
+    let feedback = match axis {
+        crate::axis::Axis::Rotary => {
+            "C = −u/θm: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
+        }
+        crate::axis::Axis::Linear => {
+            "C = −u/ym: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
+        }
+    };
     json!({
         "scenario": s.name,
         "ehservo": env!("CARGO_PKG_VERSION"),
@@ -240,7 +252,7 @@ pub fn linearisation_json(l: &Linearised) -> Value {
         "loop": loop_json,
         "estimator": lp.observer.as_ref().map(model_json),
         "conventions": {
-            "feedback": "C = −u/θm: negative feedback, L = C·z^−ns·Gd·z^−nc",
+            "feedback": feedback,
             "phase_margin": "mod(∠L, 360°) − 180° (python-control's)",
             "discrete": "x⁺ = A·x + B·u at the period dt_s; responses at z = e^{jωh}",
         },

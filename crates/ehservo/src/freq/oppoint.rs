@@ -24,7 +24,8 @@
 //! variation the simulator draws for that period. Such a point is no
 //! equilibrium: its `drift` ẋ is reported.
 
-use super::linearize::{ActuatorStage, Linearize, PlantState, Point, Side};
+use super::linearize::{ActuatorStage, CylinderLin, Linearize, PlantState, Point, Side};
+use crate::axis::Axis;
 use crate::plant::{PhysicalPlant, Plant, ThirdOrderPlant, UncertaintySignal, Variation};
 use crate::scenario::{self, ControllerConfig, KeyError, Loop, LoopPlant, LoopVisit, Typed};
 use crate::simulation::{Mode, Simulation, Stop};
@@ -43,8 +44,12 @@ pub const TRIM_MAX_HALVINGS: usize = 40;
 /// Where to linearise.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum At {
-    /// A trim point for the constant reference θ0 (rad).
+    /// A trim point for the constant reference at this position (the
+    /// axis's SI unit: rad or m), at rest.
     Trim(f64),
+    /// A trim point in steady motion: the position and the speed (the
+    /// axis's SI units); the cylinder's only.
+    Moving(f64, f64),
     /// The run's state at time t (s).
     Time(f64),
 }
@@ -53,13 +58,15 @@ pub enum At {
 /// parameters at the operating point (a physical bias or draw folded in:
 /// the physical factors vary the parameters, the paper's Δa_i/δb stay in
 /// [`Point::v`]).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 #[allow(clippy::large_enum_variant)]
 pub enum LinPlant {
     /// `plant.model = "third-order"`.
     Third(ThirdOrderPlant),
     /// `plant.model = "physical"`.
     Physical(PhysicalPlant),
+    /// `plant.model = "cylinder"`.
+    Cylinder(Box<CylinderLin>),
 }
 
 impl LinPlant {
@@ -79,7 +86,16 @@ impl LinPlant {
         match &setup.plant() {
             scenario::AnyPlant::ThirdOrder(_) => Ok(LinPlant::Third(ThirdOrderPlant::new(p, l))),
             scenario::AnyPlant::Physical(_) => Ok(LinPlant::Physical(PhysicalPlant::new(p, l))),
-            // Any other registered plant (a new one need not be named here).
+            // The cylinder's factors vary it as the simulator does; its
+            // force signal at t = 0 (a trim's; `at_time` moves it).
+            scenario::AnyPlant::Cylinder(c) => Ok(LinPlant::Cylinder(Box::new(CylinderLin::new(
+                c.clone(),
+                *f,
+                0.0,
+            )))),
+            // Any plant registered later (a new one need not be named here
+            // to build: its computed responses are refused until it is).
+            #[allow(unreachable_patterns)]
             other => Err(KeyError::new(
                 "plant.model",
                 format!(
@@ -95,6 +111,7 @@ impl LinPlant {
         match self {
             LinPlant::Third(p) => p,
             LinPlant::Physical(p) => p,
+            LinPlant::Cylinder(p) => p.as_ref(),
         }
     }
 
@@ -103,6 +120,16 @@ impl LinPlant {
         match self {
             LinPlant::Third(p) => p.state_of(s),
             LinPlant::Physical(p) => p.state_of(s),
+            LinPlant::Cylinder(p) => p.state_of(s),
+        }
+    }
+
+    /// The same plant with its time-dependent parts (the cylinder's force
+    /// signal) taken at `t`.
+    fn at_time(self, t: f64) -> Self {
+        match self {
+            LinPlant::Cylinder(p) => LinPlant::Cylinder(Box::new(p.at_time(t))),
+            other => other,
         }
     }
 }
@@ -114,8 +141,27 @@ pub struct OperatingPoint {
     pub kind: &'static str,
     /// The time along the run (s), for `"time"`.
     pub t_s: Option<f64>,
-    /// θ there (deg).
-    pub theta_deg: f64,
+    /// θ there (deg), on a rotary axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub theta_deg: Option<f64>,
+    /// The position there (m), on a linear axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x_m: Option<f64>,
+    /// The same in mm.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x_mm: Option<f64>,
+    /// The trim's speed (m/s) on a linear axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v_m_s: Option<f64>,
+    /// The same in mm/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v_mm_s: Option<f64>,
+    /// The trim's speed (deg/s) on a rotary axis, when it moves.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub theta_dot_deg_s: Option<f64>,
+    /// The axis.
+    #[serde(skip)]
+    pub axis: Axis,
     /// The plant's state, in the order of its model's states.
     pub plant_state: Vec<f64>,
     /// The actuator's state (spool; its rate for a second-order spool).
@@ -141,6 +187,62 @@ pub struct OperatingPoint {
 }
 
 impl OperatingPoint {
+    /// The position and speed fields of an axis: θ in degrees on a rotary
+    /// axis (the bits the paper's outputs always had), x and v in m and mm
+    /// on a linear one.
+    #[allow(clippy::type_complexity)]
+    fn position_fields(
+        axis: Axis,
+        x: f64,
+        v: f64,
+    ) -> (
+        Option<f64>,
+        Option<f64>,
+        Option<f64>,
+        Option<f64>,
+        Option<f64>,
+        Option<f64>,
+    ) {
+        match axis {
+            Axis::Rotary => (
+                Some(x / DR),
+                None,
+                None,
+                None,
+                None,
+                (v != 0.0).then(|| v / DR),
+            ),
+            Axis::Linear => (
+                None,
+                Some(x),
+                Some(axis.display(x)),
+                Some(v),
+                Some(axis.display(v)),
+                None,
+            ),
+        }
+    }
+
+    /// The position there in the axis's SI unit (rad or m).
+    pub fn position(&self) -> f64 {
+        match (self.theta_deg, self.x_m) {
+            (Some(d), _) => d * DR,
+            (None, Some(x)) => x,
+            (None, None) => 0.0,
+        }
+    }
+
+    /// The position for people: `θ = 1.2345°` (from `theta_deg` itself, as
+    /// the paper's outputs always printed it) or `y = 142.0000 mm`.
+    pub fn describe(&self) -> String {
+        let a = self.axis;
+        let shown = match self.theta_deg {
+            Some(d) => d,
+            None => a.display(self.position()),
+        };
+        format!("{} = {shown:.4}{}", a.letter(), a.suffix())
+    }
+
     /// The variation there.
     pub fn variation(&self) -> Variation {
         Variation {
@@ -323,24 +425,50 @@ pub fn trim_plant(
     unreachable!("the loop returns")
 }
 
-/// The trim point of the scenario's loop at θ0 (rad).
+/// The trim point of the scenario's loop at the position `theta0` (the
+/// axis's SI unit) moving at `speed` (the cylinder's only; 0 otherwise);
+/// `side` picks the direction a cylinder at rest on a closed-centre valve
+/// last moved in.
 pub fn trim(
     setup: &Loop,
     plant: &LinPlant,
     actuator: &ActuatorStage,
     theta0: f64,
+    speed: f64,
+    side: Side,
 ) -> Result<OperatingPoint, KeyError> {
     let (v, factors) = bias(setup);
-    let (x, p, it) = trim_plant(plant.lin(), theta0, v, "--trim")?;
+    let (x, p, it) = match plant {
+        LinPlant::Cylinder(c) => c.trim(theta0, speed, side)?,
+        _ if speed != 0.0 => {
+            return Err(KeyError::new(
+                "--velocity",
+                format!(
+                    "a trim in steady motion is the cylinder's (plant.model = \"cylinder\"), not plant.model = \"{}\"'s",
+                    setup.plant().model()
+                ),
+            ))
+        }
+        _ => trim_plant(plant.lin(), theta0, v, "--trim")?,
+    };
     let (xa, u) = actuator
         .invert(p)
         .map_err(|e| KeyError::new("--trim", format!("{} ({})", e.reason, e.key)))?;
     let mut drift = vec![0.0; x.len()];
     plant.lin().eval(&Point { x: &x, u: p, v }, &mut drift);
+    let axis = setup.axis();
+    let (theta_deg, x_m, x_mm, v_m_s, v_mm_s, theta_dot_deg_s) =
+        OperatingPoint::position_fields(axis, theta0, speed);
     Ok(OperatingPoint {
         kind: "trim",
         t_s: None,
-        theta_deg: theta0 / DR,
+        theta_deg,
+        x_m,
+        x_mm,
+        v_m_s,
+        v_mm_s,
+        theta_dot_deg_s,
+        axis,
         plant_state: x,
         actuator_state: xa,
         u,
@@ -393,7 +521,7 @@ pub fn at_time(
     } else {
         bias(setup)
     };
-    let plant = LinPlant::with_factors(setup, &factors)?;
+    let plant = LinPlant::with_factors(setup, &factors)?.at_time(tk);
     let mut dx = vec![0.0; x.len()];
     plant.lin().eval(
         &Point {
@@ -403,10 +531,19 @@ pub fn at_time(
         },
         &mut dx,
     );
+    let axis = setup.axis();
+    let (theta_deg, x_m, x_mm, _, _, _) =
+        OperatingPoint::position_fields(axis, rec.sample.x[0], 0.0);
     Ok(OperatingPoint {
         kind: "time",
         t_s: Some(tk),
-        theta_deg: x[0] / DR,
+        theta_deg,
+        x_m,
+        x_mm,
+        v_m_s: None,
+        v_mm_s: None,
+        theta_dot_deg_s: None,
+        axis,
         plant_state: x,
         actuator_state: xa,
         u,

@@ -104,6 +104,8 @@ pub struct FreqOptions {
     pub periods: u64,
     /// Draw the figures.
     pub plots: bool,
+    /// The flag the tracking amplitude came from (for its error).
+    pub amplitude_flag: &'static str,
 }
 
 impl FreqOptions {
@@ -131,6 +133,7 @@ impl FreqOptions {
             },
             periods: 4,
             plots: true,
+            amplitude_flag: "--amplitude",
         }
     }
 }
@@ -226,9 +229,9 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
         }
     }
     let theta0 = match &computed {
-        Ok(l) => l.point.theta_deg * ehservo_core::math::DR,
+        Ok(l) => l.point.position(),
         Err(_) => match o.at {
-            Some(At::Trim(t)) => t,
+            Some(At::Trim(t)) | Some(At::Moving(t, _)) => t,
             _ => super::default_at(setup).theta0(),
         },
     };
@@ -331,7 +334,7 @@ fn check_measure_options(file: &str, o: &FreqOptions, mf_max: f64, h: f64) -> Re
     )?;
     let st = &o.settings;
     for (k, v) in [
-        ("--amplitude-deg", st.amplitude),
+        (o.amplitude_flag, st.amplitude),
         ("--disturbance", st.disturbance),
     ] {
         if !(v.is_finite() && v > 0.0) {
@@ -368,7 +371,7 @@ impl At {
     /// θ0 of a trim (rad); 0 for a time.
     pub fn theta0(&self) -> f64 {
         match self {
-            At::Trim(t) => *t,
+            At::Trim(t) | At::Moving(t, _) => *t,
             At::Time(_) => 0.0,
         }
     }

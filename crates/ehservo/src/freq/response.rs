@@ -30,6 +30,7 @@ use super::controllers::{controller_model, observer_model, ControllerModel};
 use super::linearize::{ActuatorStage, Chain, Delay, Kink, Linearize, Point, Side};
 use super::oppoint::{LinPlant, OperatingPoint};
 use super::ss::{Quantity, StateSpace, C64};
+use crate::axis::Axis;
 use crate::scenario::{KeyError, Loop};
 use crate::simulation::Mode;
 use ehservo_sim::estimator::AnyEstimator;
@@ -114,7 +115,7 @@ pub struct Responses {
 }
 
 /// The names of the curves, their units and what they are (for the CSV
-/// and the docs).
+/// and the docs), on a rotary axis.
 pub const CURVES: [(&str, &str, &str); 8] = [
     ("G", "rad/V", "plant with actuator, continuous"),
     (
@@ -133,6 +134,18 @@ pub const CURVES: [(&str, &str, &str); 8] = [
         "response θ/d to a disturbance d on the command",
     ),
 ];
+
+/// [`CURVES`] on `axis`: on a linear one the position is y in m (`m/V`,
+/// `V/m`, y/yd, y/d); a rotary axis's are [`CURVES`] as they are.
+pub fn curves(axis: Axis) -> Vec<(&'static str, String, String)> {
+    CURVES
+        .iter()
+        .map(|(n, u, d)| match axis {
+            Axis::Rotary => (*n, u.to_string(), d.to_string()),
+            Axis::Linear => (*n, axis.si_name(u), d.replace('θ', axis.letter())),
+        })
+        .collect()
+}
 
 impl Responses {
     /// The curves in the order of [`CURVES`].
@@ -330,7 +343,7 @@ impl LoopModel {
             Some(AnyEstimator::Linear(o)) if sampled => Some(observer_model(o, h)),
             _ => None,
         };
-        Ok(LoopModel {
+        let mut lm = LoopModel {
             mode: setup.sim().mode,
             h,
             discretisation,
@@ -347,7 +360,38 @@ impl LoopModel {
             observer,
             kinks,
             notes,
-        })
+        };
+        lm.name_for_axis(setup.axis());
+        Ok(lm)
+    }
+
+    /// On a linear axis every signal named for the angle is the rod's
+    /// position: `theta…` becomes `y…` and `rad` becomes `m` in names and
+    /// units (the laws are the same equations in m); nothing changes on a
+    /// rotary axis.
+    fn name_for_axis(&mut self, axis: Axis) {
+        if axis == Axis::Rotary {
+            return;
+        }
+        let models = [
+            Some(&mut self.plant),
+            Some(&mut self.actuator),
+            Some(&mut self.g),
+            self.g_d.as_mut(),
+            self.controller_loop.as_mut(),
+            self.feedback.as_mut(),
+            self.loop_l.as_mut(),
+            self.observer.as_mut(),
+        ];
+        for m in models.into_iter().flatten() {
+            rename_for_axis(m, axis);
+        }
+        if let Some(c) = self.controller.as_mut() {
+            rename_for_axis(&mut c.law, axis);
+            for (_, m) in c.parts.iter_mut() {
+                rename_for_axis(m, axis);
+            }
+        }
     }
 
     /// Whether the loop is discrete.
@@ -460,6 +504,33 @@ impl LoopModel {
     }
 }
 
+/// A quantity of the angle renamed for `axis` ([`LoopModel`]'s
+/// `name_for_axis`): `theta_m` in rad is `y_m` in m on a linear axis.
+pub fn quantity_for_axis(q: &Quantity, axis: Axis) -> Quantity {
+    if axis == Axis::Rotary {
+        return q.clone();
+    }
+    let name = match q.name.strip_prefix("theta") {
+        Some(rest) => format!("{}{rest}", axis.symbol()),
+        None => q.name.clone(),
+    };
+    Quantity {
+        name: axis.si_name(&name),
+        unit: axis.si_name(&q.unit),
+    }
+}
+
+fn rename_for_axis(m: &mut StateSpace, axis: Axis) {
+    for q in m
+        .states
+        .iter_mut()
+        .chain(m.inputs.iter_mut())
+        .chain(m.outputs.iter_mut())
+    {
+        *q = quantity_for_axis(q, axis);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -472,7 +543,7 @@ mod tests {
         let s = setup(toml);
         let plant = LinPlant::of(&s).unwrap();
         let act = ActuatorStage::new(&s.stages().actuator);
-        let op = oppoint::trim(&s, &plant, &act, 0.0).unwrap();
+        let op = oppoint::trim(&s, &plant, &act, 0.0, 0.0, Side::Plus).unwrap();
         LoopModel::new(&s, &plant, &act, &op, Side::Plus, d).unwrap()
     }
 

@@ -15,6 +15,7 @@ mod cluster;
 mod controllers;
 mod faults;
 mod freq;
+mod freq_cylinder;
 mod golden;
 mod guide;
 mod guide_keys;

@@ -3,6 +3,7 @@
 //! and the Nyquist curve of L, as PNG or SVG.
 
 use super::{db, unwrap, MeasuredSet};
+use crate::axis::Axis;
 use crate::freq::measure::Measured;
 use crate::freq::response::{LoopModel, Responses};
 use crate::freq::ss::C64;
@@ -177,6 +178,7 @@ pub(super) fn bode(
     rs: &[Responses],
     f: &[f64],
     summary: &Value,
+    axis: Axis,
 ) -> Result<()> {
     let pick = [(0usize, 0usize), (3, 1), (4, 2), (5, 3), (6, 4), (7, 5)];
     let curves: Vec<(usize, Vec<Option<C64>>)> = pick
@@ -184,19 +186,28 @@ pub(super) fn bode(
         .map(|&(i, c)| (c, rs.iter().map(|r| r.all()[i]).collect::<Vec<_>>()))
         .filter(|(_, v)| v.iter().any(|z| z.is_some()))
         .collect();
-    let labels = ["G (rad/V)", "L", "S", "T", "θ/θd", "θ/d (rad/V)"];
+    let a = axis.letter();
+    let si = axis.si_unit();
+    let labels = [
+        format!("G ({si}/V)"),
+        "L".to_string(),
+        "S".to_string(),
+        "T".to_string(),
+        format!("{a}/{a}d"),
+        format!("{a}/d ({si}/V)"),
+    ];
     let mut gains = Vec::new();
     let mut phases = Vec::new();
     for (c, v) in &curves {
         gains.push(Line {
-            label: labels[*c].into(),
+            label: labels[*c].clone(),
             x: f.to_vec(),
             y: v.iter().map(|z| z.map(db)).collect(),
             color: *c,
             points: false,
         });
         phases.push(Line {
-            label: labels[*c].into(),
+            label: labels[*c].clone(),
             x: f.to_vec(),
             y: unwrap(v),
             color: *c,
@@ -211,13 +222,19 @@ pub(super) fn bode(
         }
     }
     let fmt = |v: Option<f64>, u: &str| v.map(|x| format!("{x:.2}{u}")).unwrap_or("—".into());
+    let op = &summary["computed"]["operating_point"];
     let title = format!(
-        "{}: {} loop about θ = {:.3}° — GM {}, PM {}, DM {}",
+        "{}: {} loop about {} = {:.3}{} — GM {}, PM {}, DM {}",
         summary["scenario"].as_str().unwrap_or(""),
         summary["controller"].as_str().unwrap_or(""),
-        summary["computed"]["operating_point"]["theta_deg"]
-            .as_f64()
-            .unwrap_or(0.0),
+        a,
+        op[match axis {
+            Axis::Rotary => "theta_deg",
+            Axis::Linear => "x_mm",
+        }]
+        .as_f64()
+        .unwrap_or(0.0),
+        axis.suffix(),
         fmt(m["gain_margin"]["gain_margin_dB"].as_f64(), " dB"),
         fmt(m["phase_margin"]["phase_margin_deg"].as_f64(), "°"),
         fmt(
@@ -340,27 +357,20 @@ pub(super) fn measured_plot(
     sets: &[MeasuredSet],
     lp: Option<&LoopModel>,
     name: &str,
+    axis: Axis,
 ) -> Result<()> {
     let mut panels = Vec::new();
+    let a = axis.letter();
+    let track_title = format!("{a}/{a}d (tracking)");
+    let dist_title = format!("{a}/d (disturbance on the command)");
+    let dist_unit = format!("{}/V", axis.si_unit());
     type Sel = fn(&Measured) -> Option<C64>;
     let th: Sel = |m| m.theta_c();
     let sv: Sel = |m| m.s_c();
-    type Spec = (
-        &'static str,
-        &'static str,
-        bool,
-        Sel,
-        fn(&Responses) -> Option<C64>,
-    );
-    let specs: [Spec; 3] = [
-        ("θ/θd (tracking)", "", true, th, |r| r.track),
-        (
-            "θ/d (disturbance on the command)",
-            "rad/V",
-            false,
-            th,
-            |r| r.dist,
-        ),
+    type Spec<'a> = (&'a str, &'a str, bool, Sel, fn(&Responses) -> Option<C64>);
+    let specs: [Spec<'_>; 3] = [
+        (&track_title, "", true, th, |r| r.track),
+        (&dist_title, &dist_unit, false, th, |r| r.dist),
         ("S = u/d", "", false, sv, |r| r.s),
     ];
     for (title, unit, tracking, sel, csel) in specs {

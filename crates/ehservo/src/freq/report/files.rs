@@ -6,9 +6,10 @@
 use super::figures::{bode, measured_plot, nyquist};
 use super::measured::{measured_bandwidth, measured_margins};
 use super::{db, unwrap, FreqOptions, FreqSummary, MeasuredSet};
+use crate::axis::Axis;
 use crate::freq::margins::{self, Margins};
 use crate::freq::measure::{Measured, Settings};
-use crate::freq::response::{LoopModel, Responses, CURVES};
+use crate::freq::response::{curves, LoopModel, Responses};
 use crate::freq::ss::C64;
 use crate::freq::{linearisation_json, Linearised};
 use crate::output::Staging;
@@ -38,10 +39,12 @@ pub(super) fn write(
     stage: Staging,
 ) -> Result<FreqSummary> {
     let s = setup.scenario();
+    let axis = setup.axis();
     let mut out = Out {
         dir: stage.path().to_path_buf(),
         files: Vec::new(),
         text: String::new(),
+        axis,
     };
     let h = setup.sim().step;
     let freqs: Vec<f64> = (0..o.points)
@@ -55,14 +58,14 @@ pub(super) fn write(
         "dt_s": h,
         "nyquist_Hz": 0.5 / h,
         "grid": {"f_min_Hz": o.f_min, "f_max_Hz": f_max, "points": o.points},
-        "curves": CURVES.iter().map(|(n, u, d)| json!({"name": n, "unit": u, "what": d, "gain_dB": format!("20·log10 |{n}| re 1 {}", if u.is_empty() { "(dimensionless)" } else { u })})).collect::<Vec<_>>(),
+        "curves": curves(axis).iter().map(|(n, u, d)| json!({"name": n, "unit": u, "what": d, "gain_dB": format!("20·log10 |{n}| re 1 {}", if u.is_empty() { "(dimensionless)" } else { u })})).collect::<Vec<_>>(),
     });
     let mut responses: Vec<Responses> = Vec::new();
     let mut lp_opt = None;
     match computed {
         Ok(l) => {
             lp_opt = Some(&l.lp);
-            let (computed_json, rs) = out.computed(s, l, &freqs, f_max, h)?;
+            let (computed_json, rs) = out.computed(s, l, &freqs, f_max, h, axis)?;
             responses = rs;
             summary["computed"] = computed_json;
         }
@@ -71,11 +74,33 @@ pub(super) fn write(
             let _ = writeln!(out.text, "computed curves: not available ({why})");
         }
     }
-    let measured_json = out.measured(sets, lp_opt)?;
-    summary["measured"] = json!({
-        "settings": {
-            "theta0_deg": settings.theta0 / ehservo_core::math::DR,
-            "amplitude_deg": settings.amplitude / ehservo_core::math::DR,
+    let measured_json = out.measured(sets, lp_opt, axis)?;
+    let mut excitation = serde_json::Map::new();
+    match axis {
+        // The keys and bits the paper's outputs always had.
+        Axis::Rotary => {
+            excitation.insert(
+                "theta0_deg".into(),
+                json!(settings.theta0 / ehservo_core::math::DR),
+            );
+            excitation.insert(
+                "amplitude_deg".into(),
+                json!(settings.amplitude / ehservo_core::math::DR),
+            );
+        }
+        Axis::Linear => {
+            excitation.insert("x0_m".into(), json!(settings.theta0));
+            excitation.insert("x0_mm".into(), json!(axis.display(settings.theta0)));
+            excitation.insert("amplitude_m".into(), json!(settings.amplitude));
+            excitation.insert(
+                "amplitude_mm".into(),
+                json!(axis.display(settings.amplitude)),
+            );
+        }
+    }
+    let mut settings_json = serde_json::Value::Object(excitation);
+    settings_json.as_object_mut().expect("an object").extend(
+        json!({
             "disturbance_V": settings.disturbance,
             "settle_s": settings.settle_s,
             "settle_cycles": settings.settle_cycles,
@@ -83,7 +108,13 @@ pub(super) fn write(
             "welch_periods": o.periods,
             "f_min_Hz": o.measure_f_min,
             "points": o.measure_points,
-        },
+        })
+        .as_object()
+        .expect("an object")
+        .clone(),
+    );
+    summary["measured"] = json!({
+        "settings": settings_json,
         "methods": measured_json,
         "quality": "sinestream: the fundamental fraction, the share of the output's variance at the excited frequency; Welch: the coherence γ²",
     });
@@ -107,6 +138,8 @@ struct Out {
     dir: PathBuf,
     files: Vec<PathBuf>,
     text: String,
+    /// The axis the outputs speak (units and names).
+    axis: Axis,
 }
 
 impl Out {
@@ -120,6 +153,7 @@ impl Out {
         freqs: &[f64],
         f_max: f64,
         h: f64,
+        axis: Axis,
     ) -> Result<(serde_json::Value, Vec<Responses>)> {
         let lp = &l.lp;
         let lj = linearisation_json(l);
@@ -165,12 +199,12 @@ impl Out {
                 "G": bw(|r| r.g),
             },
             "dc_gain": {
-                "G_rad_V": lp.g.dc_gain(),
-                "C_V_rad": lp.feedback.as_ref().and_then(|f| f.dc_gain()),
+                axis.si_name("G_rad_V"): lp.g.dc_gain(),
+                axis.si_name("C_V_rad"): lp.feedback.as_ref().and_then(|f| f.dc_gain()),
             },
         });
         computed_text(&mut self.text, s, l, m.as_ref(), &computed_json);
-        write_response_csv(&self.dir.join("response.csv"), &responses, freqs)?;
+        write_response_csv(&self.dir.join("response.csv"), &responses, freqs, axis)?;
         self.files.push(PathBuf::from("response.csv"));
         Ok((computed_json, responses))
     }
@@ -181,11 +215,12 @@ impl Out {
         &mut self,
         sets: &[MeasuredSet],
         lp_opt: Option<&LoopModel>,
+        axis: Axis,
     ) -> Result<serde_json::Map<String, serde_json::Value>> {
         let mut measured_json = serde_json::Map::new();
         for set in sets {
             let name = format!("measured_{}.csv", set.method.as_str());
-            write_measured_csv(&self.dir.join(&name), set, lp_opt)?;
+            write_measured_csv(&self.dir.join(&name), set, lp_opt, axis)?;
             self.files.push(PathBuf::from(&name));
             let loop_pts: Vec<(f64, Option<C64>, f64)> = set
                 .disturbance
@@ -253,10 +288,11 @@ impl Out {
         freqs: &[f64],
         summary: &serde_json::Value,
     ) -> Result<()> {
+        let axis = self.axis;
         if let Some(lp) = lp_opt {
             for ext in ["png", "svg"] {
                 let p = self.dir.join(format!("bode.{ext}"));
-                bode(&p, lp, responses, freqs, summary)?;
+                bode(&p, lp, responses, freqs, summary, axis)?;
                 self.files.push(PathBuf::from(format!("bode.{ext}")));
                 if lp.loop_l.is_some() {
                     let p = self.dir.join(format!("nyquist.{ext}"));
@@ -268,7 +304,7 @@ impl Out {
         if !sets.is_empty() {
             for ext in ["png", "svg"] {
                 let p = self.dir.join(format!("measured.{ext}"));
-                measured_plot(&p, sets, lp_opt, name)?;
+                measured_plot(&p, sets, lp_opt, name, axis)?;
                 self.files.push(PathBuf::from(format!("measured.{ext}")));
             }
         }
@@ -288,9 +324,9 @@ fn computed_text(
     let lp = &l.lp;
     let _ = writeln!(
         text,
-        "computed about the {} point θ = {:.4}°{}:",
+        "computed about the {} point {}{}:",
         l.point.kind,
-        l.point.theta_deg,
+        l.point.describe(),
         l.point
             .t_s
             .map(|t| format!(" (t = {t} s)"))
@@ -326,21 +362,29 @@ fn computed_text(
     let bt = computed_json["bandwidth_Hz"]["tracking"].as_f64();
     let _ = writeln!(
         text,
-        "  Ms {:.3}, Mt {:.3}; −3 dB bandwidth of T {}, of θ/θd {}",
+        "  Ms {:.3}, Mt {:.3}; −3 dB bandwidth of T {}, of {} {}",
         computed_json["Ms"]["value"].as_f64().unwrap_or(f64::NAN),
         computed_json["Mt"]["value"].as_f64().unwrap_or(f64::NAN),
         computed_json["bandwidth_Hz"]["T"]
             .as_f64()
             .map(|b| format!("{b:.3} Hz"))
             .unwrap_or("beyond the band".into()),
+        tracking_name(l.setup.axis()),
         bt.map(|b| format!("{b:.3} Hz"))
             .unwrap_or("beyond the band".into()),
     );
 }
 
-fn write_response_csv(path: &Path, rs: &[Responses], freqs: &[f64]) -> Result<()> {
+/// The tracking response's name: θ/θd, or y/yd on a linear axis.
+pub(super) fn tracking_name(axis: Axis) -> String {
+    let a = axis.letter();
+    format!("{a}/{a}d")
+}
+
+fn write_response_csv(path: &Path, rs: &[Responses], freqs: &[f64], axis: Axis) -> Result<()> {
     let mut head = vec!["f_Hz".to_string(), "omega_rad_s".to_string()];
-    for (n, u, _) in CURVES {
+    let curves = curves(axis);
+    for (n, u, _) in &curves {
         let u = u.replace('/', "_");
         let suf = if u.is_empty() {
             String::new()
@@ -352,14 +396,14 @@ fn write_response_csv(path: &Path, rs: &[Responses], freqs: &[f64]) -> Result<()
         head.push(format!("{n}_re{suf}"));
         head.push(format!("{n}_im{suf}"));
     }
-    let cols: Vec<Vec<Option<C64>>> = (0..CURVES.len())
+    let cols: Vec<Vec<Option<C64>>> = (0..curves.len())
         .map(|i| rs.iter().map(|r| r.all()[i]).collect())
         .collect();
     let phases: Vec<Vec<Option<f64>>> = cols.iter().map(|c| unwrap(c)).collect();
     let mut out = head.join(",") + "\n";
     for (k, f) in freqs.iter().enumerate() {
         let mut row = vec![cell(Some(*f)), cell(Some(2.0 * PI * f))];
-        for i in 0..CURVES.len() {
+        for i in 0..curves.len() {
             let z = cols[i][k];
             row.push(cell(z.map(db)));
             row.push(cell(phases[i][k]));
@@ -371,7 +415,13 @@ fn write_response_csv(path: &Path, rs: &[Responses], freqs: &[f64]) -> Result<()
     std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))
 }
 
-fn write_measured_csv(path: &Path, set: &MeasuredSet, lp: Option<&LoopModel>) -> Result<()> {
+fn write_measured_csv(
+    path: &Path,
+    set: &MeasuredSet,
+    lp: Option<&LoopModel>,
+    axis: Axis,
+) -> Result<()> {
+    let (dist_re, dist_im) = (axis.si_name("dist_re_rad_V"), axis.si_name("dist_im_rad_V"));
     let head = [
         "f_Hz",
         "track_gain_dB",
@@ -381,8 +431,8 @@ fn write_measured_csv(path: &Path, set: &MeasuredSet, lp: Option<&LoopModel>) ->
         "track_quality",
         "dist_gain_dB",
         "dist_phase_deg",
-        "dist_re_rad_V",
-        "dist_im_rad_V",
+        dist_re.as_str(),
+        dist_im.as_str(),
         "S_gain_dB",
         "S_phase_deg",
         "S_re",
