@@ -301,7 +301,7 @@ pub fn detect_oscillation(
     tolerance: f64,
     reference_period: Option<f64>,
 ) -> Option<Oscillation> {
-    if e.len() < 8 || !e.iter().all(|v| v.is_finite()) || !(dt > 0.0) {
+    if e.len() < 8 || !e.iter().all(|v| v.is_finite()) || dt.is_nan() || dt <= 0.0 {
         return None;
     }
     let mean = e.iter().sum::<f64>() / e.len() as f64;
@@ -310,19 +310,20 @@ pub fn detect_oscillation(
     let mut crossings: Vec<(f64, usize)> = Vec::new();
     let mut armed = false;
     let mut candidate: Option<(f64, usize)> = None;
-    for i in 0..e.len() {
-        let d = e[i] - mean;
+    let mut prev: Option<f64> = None;
+    for (i, v) in e.iter().enumerate() {
+        let d = v - mean;
         if d < -band {
             armed = true;
             candidate = None;
         }
-        if i > 0 {
-            let p = e[i - 1] - mean;
+        if let Some(p) = prev {
             if armed && p < 0.0 && d >= 0.0 {
                 let t = (i - 1) as f64 * dt + dt * p / (p - d);
                 candidate = Some((t, i));
             }
         }
+        prev = Some(d);
         if d > band && armed {
             if let Some(c) = candidate.take() {
                 crossings.push(c);
