@@ -432,6 +432,7 @@ impl ErrorWindow {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)] // the kept samples are whole numbers, compared exactly
 mod tests {
     use super::*;
     use std::f64::consts::PI;

@@ -274,7 +274,10 @@ fn a_tune_with_stable_candidates_is_verified() {
         assert_eq!(r["end_stop_contacts"], 0);
         let e = r["e_max"].as_f64().unwrap();
         let steady = 1000.0 / kp;
-        assert!(e <= steady * (1.0 + 1e-6) && e > 0.99 * steady, "{e} vs {steady}");
+        assert!(
+            e <= steady * (1.0 + 1e-6) && e > 0.99 * steady,
+            "{e} vs {steady}"
+        );
     }
     assert!(out.join("tuned.toml").exists());
 }
