@@ -281,3 +281,78 @@ fn a_tune_with_stable_candidates_is_verified() {
     }
     assert!(out.join("tuned.toml").exists());
 }
+
+/// A sweep of the slide's valve null bias, 0 and 1 V: with no bias and
+/// no command nothing moves (bounded), with 1 V the slide drives into a
+/// stop. The summary line counts the end stop apart from the unbounded
+/// runs; results.csv carries each run's verdict and contacts; two shards
+/// merge into the whole sweep's results.csv, byte for byte.
+#[test]
+fn a_sweep_counts_end_stops_apart_from_unbounded_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("bias.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "name = \"bias\"\nbase = {:?}\nseed = 1\n[[axis]]\nkey = \"actuator.null_bias\"\nvalues = [0.0, 1.0]\n",
+            repo().join("scenarios/cylinders/slide-open-loop.toml")
+        ),
+    )
+    .unwrap();
+    let sweep = |extra: &[&str], out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_ehservo"))
+            .arg("sweep")
+            .arg(&study)
+            .arg("--out")
+            .arg(out)
+            .arg("--no-plot")
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let whole = tmp.path().join("whole");
+    let o = sweep(&[], &whole);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    let line = text(&o.stdout);
+    assert!(
+        line.contains("(0 unbounded, 1 hit an end stop, 0 oscillating, 0 saturated)"),
+        "{line}"
+    );
+    let csv = std::fs::read_to_string(whole.join("results.csv")).unwrap();
+    let mut rows = csv.lines();
+    let head: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let (verdict, contacts) = (col("verdict"), col("end_stop_contacts"));
+    assert!(verdict > col("samples") && col("error") == head.len() - 1);
+    let cells: Vec<(String, String)> = rows
+        .map(|r| {
+            let c: Vec<&str> = r.split(',').collect();
+            (c[verdict].to_string(), c[contacts].to_string())
+        })
+        .collect();
+    assert_eq!(
+        cells,
+        [
+            ("bounded".into(), "0".into()),
+            ("hit-end-stop".into(), "1".into())
+        ]
+    );
+    let shards: Vec<PathBuf> = (0..2).map(|k| tmp.path().join(format!("s{k}"))).collect();
+    for (k, d) in shards.iter().enumerate() {
+        let o = sweep(&["--shard", &format!("{k}/2"), "--quiet"], d);
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    }
+    let merged = tmp.path().join("merged");
+    let o = Command::new(env!("CARGO_BIN_EXE_ehservo"))
+        .arg("merge")
+        .args(&shards)
+        .arg("--out")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(merged.join("results.csv")).unwrap(),
+        csv
+    );
+}
