@@ -402,8 +402,9 @@ fn print_summary(
                 out!(w, "  hint: {warning}");
             }
         }
+        // A run with findings is not called bounded: they are its verdict.
         None if findings.is_empty() => out!(w, "  bounded over the horizon"),
-        None => out!(w, "  bounded over the horizon, but:"),
+        None => {}
     }
     for line in behaviour_lines(&m.behaviour, &findings, unit) {
         out!(w, "  {line}");
