@@ -453,6 +453,9 @@ fn sweep<'py>(
     // a linear one).
     let metric_names = Metrics::csv_names(plan.axis());
     names.extend(metric_names.iter().map(|s| s.to_string()));
+    // The behaviour's columns after them, as results.csv has them.
+    let behaviour_names = ehservo::behaviour::columns(plan.axis());
+    names.extend(behaviour_names.iter().map(|s| s.to_string()));
     names.push("error".into());
 
     let mut cols: Vec<Column> = vec![Column::Int(rows.iter().map(|r| r.index as i64).collect())];
@@ -487,6 +490,25 @@ fn sweep<'py>(
             _ => Column::Float(
                 rows.iter()
                     .map(|r| r.metrics.and_then(|m| m.get(name)).unwrap_or(f64::NAN))
+                    .collect(),
+            ),
+        });
+    }
+    // The behaviour's cells as results.csv writes them: the verdict as
+    // text, the numbers read back (shortest decimals: the same bits), NaN
+    // where a cell is empty.
+    let cells: Vec<Option<[String; 7]>> = rows
+        .iter()
+        .map(|r| r.metrics.map(|m| m.behaviour.cells(m.diverged)))
+        .collect();
+    for k in 0..behaviour_names.len() {
+        let cell = |c: &Option<[String; 7]>| c.as_ref().map(|c| c[k].clone());
+        cols.push(match k {
+            0 => Column::Text(cells.iter().map(cell).collect()),
+            _ => Column::Float(
+                cells
+                    .iter()
+                    .map(|c| cell(c).and_then(|v| v.parse().ok()).unwrap_or(f64::NAN))
                     .collect(),
             ),
         });

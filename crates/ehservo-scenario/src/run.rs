@@ -14,7 +14,8 @@
 //! assert!(r.metrics.e_max.is_some());
 //! ```
 
-use crate::metrics::{Metrics, MetricsAccumulator};
+use crate::metrics::{Checks, Metrics, MetricsAccumulator};
+use crate::plant::Plant;
 use crate::scenario::{ControllerConfig, Loop, LoopPlant, LoopVisit, Typed};
 use crate::simulation::{Outcome, Sample, Simulation};
 use ehservo_core::control::Controller;
@@ -167,25 +168,39 @@ impl<M: MapController> LoopVisit for Runner<'_, M> {
     fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
         let lp = t.lp;
         let ctrl = self.map.map(t.config, t.controller);
+        let acc = accumulator(lp, &t.plant, &ctrl);
         let sim =
             Simulation::from_settings(t.plant, ctrl, lp.reference().clone(), lp.settings().clone());
-        execute(sim, lp, self.observe, self.states)
+        execute(sim, acc, lp, self.observe, self.states)
     }
 }
 
-/// The metrics' accumulator of a loop whose controller is `ctrl`.
-pub fn accumulator<C: Controller>(lp: &Loop, ctrl: &C) -> MetricsAccumulator {
+/// The metrics' accumulator of a loop whose plant is `plant` and
+/// controller `ctrl`, with the checks of [`Metrics::behaviour`]: the
+/// plant's end stops, the actuator's limit, the reference's period.
+pub fn accumulator<P: Plant, C: Controller>(lp: &Loop, plant: &P, ctrl: &C) -> MetricsAccumulator {
     let network = !ctrl.weights(&<C::State as OdeState>::zero()).is_empty();
-    MetricsAccumulator::new(lp.horizon(), lp.settle(), lp.period(), network).on(lp.axis())
+    let limit = lp.stages().actuator.limit();
+    let checks = Checks {
+        end_stops: plant.end_stops(),
+        limit,
+        has_limit: limit.is_finite() || lp.stages().policy.limits.u.is_finite(),
+        reference_period: lp.reference_period(),
+        ..Checks::default()
+    };
+    let after = ((lp.horizon() - lp.settle()).max(0.0) / lp.sim().step) as u64 + 2;
+    MetricsAccumulator::new(lp.horizon(), lp.settle(), lp.period(), network)
+        .on(lp.axis())
+        .with_checks(checks, after)
 }
 
 fn execute<P: LoopPlant, C: Controller, R: Reference>(
     mut sim: Simulation<P, C, R>,
+    mut acc: MetricsAccumulator,
     lp: &Loop,
     observe: &mut dyn FnMut(&Sample),
     states: bool,
 ) -> (Outcome, Metrics) {
-    let mut acc = accumulator(lp, sim.controller());
     sim.log_states(states);
     // In chunks, so that a host's Ctrl-C can stop it (crate::cancel).
     let outcome = crate::cancel::run_chunked(&mut sim, lp, &mut |smp: &Sample| {

@@ -76,7 +76,7 @@ impl LoopVisit for BuildLoop {
     type Out = Box<dyn LoopStep>;
     fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
         let lp = t.lp;
-        let acc = crate::run::accumulator(lp, &t.controller);
+        let acc = crate::run::accumulator(lp, &t.plant, &t.controller);
         Box::new(Looped {
             sim: t.simulation(),
             acc,

@@ -541,6 +541,17 @@ impl Plant for CylinderPlant {
         }
     }
 
+    /// The rod at y < 0 or y > stroke ([`Cylinder::stop_force`] acts
+    /// there), as the axis's x₀: the rod's y, or (y − stroke/2)/r through
+    /// a pinion of radius r.
+    fn end_stops(&self) -> Option<[f64; 2]> {
+        let half = 0.5 * self.c.stroke;
+        Some(match self.c.radius {
+            None => [0.0, self.c.stroke],
+            Some(r) => [-half / r, half / r],
+        })
+    }
+
     fn states(&self, t: f64, s: &[f64; 6], _x: &[f64; 3], out: &mut [f64; MAX_STATES]) {
         let f = Factors::ONE;
         let (_, fl, fs) = self.c.forces(t, s, &f);

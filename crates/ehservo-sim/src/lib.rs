@@ -16,6 +16,7 @@
 //! | [`estimator`] | the channels the sensors do not measure, estimated at the controller's rate by one of the core's [`estimate`](ehservo_core::estimate) components (Levant's differentiator, a Luenberger or steady-state Kalman observer) |
 //! | [`simulation`] | the resumable loop, continuous and sampled, with its stop reasons |
 //! | [`metrics`] | SPEC §9 metrics, computed online |
+//! | [`behaviour`] | what a run did besides its errors: end-stop contacts, saturation share, sustained oscillation |
 //! | [`triple`] | serde for the scenarios' `[f64; 3]` keys, naming the length a key takes |
 //!
 //! Controllers come from [`ehservo_core`]: any [`Controller`](ehservo_core::control::Controller)
@@ -73,6 +74,7 @@
 
 pub mod actuator;
 pub mod axis;
+pub mod behaviour;
 pub mod cylinder;
 pub mod error;
 pub mod estimator;

@@ -24,9 +24,19 @@
 //!
 //! A value that is undefined (no sample after t_s, a run with u ≡ 0) is
 //! `None` (JSON `null`), never NaN.
+//!
+//! Beside them, [`Metrics::behaviour`] ([`crate::behaviour`]): end-stop
+//! contacts, the share of samples at the command's limit and the error's
+//! oscillation after t_s, which the verdicts name. They are not among the
+//! keys above (summary.json writes them as `behaviour`, results.csv as
+//! columns of their own), so the metrics of the paper's scenarios are
+//! the keys they always were.
 
 use crate::axis::Axis;
+use crate::behaviour::OSCILLATION_TOLERANCE;
+use crate::behaviour::{detect_oscillation, Behaviour, EndStops, ErrorWindow};
 use crate::simulation::{Divergence, Sample};
+use ehservo_core::control::flags;
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize};
 
@@ -61,6 +71,9 @@ pub struct Metrics {
     pub samples: u64,
     /// The axis the errors are measured on (their unit).
     pub axis: Axis,
+    /// What the run did besides its errors (end stops, saturation,
+    /// oscillation): not one of the keys of the table.
+    pub behaviour: Behaviour,
 }
 
 /// The metrics, one line each: the field, what it is (an error in the
@@ -251,6 +264,7 @@ impl<'de> Deserialize<'de> for Metrics {
             } else {
                 Axis::Rotary
             },
+            behaviour: Behaviour::default(),
         })
     }
 }
@@ -320,6 +334,48 @@ pub struct MetricsAccumulator {
     i_w_norm: Option<usize>,
     i_sigma_delta: Option<usize>,
     axis: Axis,
+    checks: Checks,
+    t_first: f64,
+    in_contact: bool,
+    contacts: u64,
+    first_contact: Option<f64>,
+    contact_samples: u64,
+    at_limit: u64,
+    window: ErrorWindow,
+}
+
+/// What the accumulator needs to know of the loop for
+/// [`Metrics::behaviour`]; by default none of it (no end stops, no limit,
+/// no periodic reference).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Checks {
+    /// The plant's end stops (`Plant::end_stops`).
+    pub end_stops: Option<[f64; 2]>,
+    /// The command's limit (V): the actuator's saturation; infinite for
+    /// none. A sample whose `saturated` flag is set counts as at the limit
+    /// whatever it is.
+    pub limit: f64,
+    /// The loop's command has a limit (the actuator's or `[fault]`'s
+    /// valve range): otherwise the saturation share is undefined unless
+    /// the law itself flagged a sample saturated (ADRC's `u_limit`).
+    pub has_limit: bool,
+    /// The period of a periodic reference (s), whose forced response is
+    /// not an oscillation.
+    pub reference_period: Option<f64>,
+    /// The amplitude of a sustained oscillation (the axis's display unit).
+    pub tolerance: f64,
+}
+
+impl Default for Checks {
+    fn default() -> Self {
+        Self {
+            end_stops: None,
+            limit: f64::INFINITY,
+            has_limit: false,
+            reference_period: None,
+            tolerance: OSCILLATION_TOLERANCE,
+        }
+    }
 }
 
 impl MetricsAccumulator {
@@ -354,7 +410,24 @@ impl MetricsAccumulator {
             i_w_norm: None,
             i_sigma_delta: None,
             axis: Axis::Rotary,
+            checks: Checks::default(),
+            t_first: 0.0,
+            in_contact: false,
+            contacts: 0,
+            first_contact: None,
+            contact_samples: 0,
+            at_limit: 0,
+            window: ErrorWindow::default(),
         }
+    }
+
+    /// The same accumulator with what it checks of the loop
+    /// ([`Metrics::behaviour`]), for about `expected_after` samples after
+    /// the transient (the error's window is allocated for them once).
+    pub fn with_checks(mut self, checks: Checks, expected_after: u64) -> Self {
+        self.checks = checks;
+        self.window = ErrorWindow::with_capacity(expected_after);
+        self
     }
 
     /// The same accumulator for errors measured on `axis` (rotary by
@@ -373,9 +446,29 @@ impl MetricsAccumulator {
         let e = self.axis.display(s.e.abs());
         let u = s.u;
         let w_norm = self.i_w_norm.map_or(0.0, |i| s.values[i]);
+        if self.n == 0 {
+            self.t_first = s.t;
+        }
         self.n += 1;
         self.t_last = s.t;
         keep_max(&mut self.u_max, u.abs());
+        if s.flags & flags::SATURATED != 0 || u.abs() >= self.checks.limit {
+            self.at_limit += 1;
+        }
+        if let Some([lo, hi]) = self.checks.end_stops {
+            let p = s.x[0];
+            let contact = p < lo || p > hi;
+            if contact {
+                if !self.in_contact {
+                    self.contacts += 1;
+                    if self.first_contact.is_none() {
+                        self.first_contact = Some(s.t);
+                    }
+                }
+                self.contact_samples += 1;
+            }
+            self.in_contact = contact;
+        }
         keep_max(&mut self.w_max, w_norm);
         self.w_last = w_norm;
         if s.t >= self.settle {
@@ -386,6 +479,8 @@ impl MetricsAccumulator {
                 self.t_first_after = Some(s.t);
             }
             self.n_after += 1;
+            // Signed, in the display unit, for the oscillation.
+            self.window.push(self.axis.display(s.e));
             keep_max(&mut self.e_max, e);
             self.e_sq += e * e;
             self.u_sq += u * u;
@@ -425,6 +520,44 @@ impl MetricsAccumulator {
             diverged_at_s: diverged.map(|d| d.t),
             samples: self.n,
             axis: self.axis,
+            behaviour: self.behaviour(diverged.is_some()),
+        }
+    }
+
+    /// The sample period, from the samples (they are evenly spaced); 0
+    /// with fewer than two.
+    fn sample_period(&self) -> f64 {
+        if self.n > 1 {
+            (self.t_last - self.t_first) / (self.n - 1) as f64
+        } else {
+            0.0
+        }
+    }
+
+    fn behaviour(&self, diverged: bool) -> Behaviour {
+        let h = self.sample_period();
+        let end_stops = self.checks.end_stops.map(|_| EndStops {
+            contacts: self.contacts,
+            first_s: self.first_contact,
+            time_s: self.contact_samples as f64 * h,
+        });
+        let saturation_share = ((self.checks.has_limit || self.at_limit > 0) && self.n > 0)
+            .then(|| self.at_limit as f64 / self.n as f64);
+        let (kept, stride) = self.window.kept();
+        let oscillation = if diverged || h <= 0.0 {
+            None
+        } else {
+            detect_oscillation(
+                kept,
+                h * stride as f64,
+                self.checks.tolerance,
+                self.checks.reference_period,
+            )
+        };
+        Behaviour {
+            end_stops,
+            saturation_share,
+            oscillation,
         }
     }
 }
@@ -546,7 +679,81 @@ mod tests {
             diverged_at_s: Some(0.5),
             samples: 42,
             axis,
+            behaviour: Behaviour::default(),
         }
+    }
+
+    /// End stops at x₀ ∈ [0, 1], h = 0.1 s: positions 0.5, 1.2, 1.3, 0.9,
+    /// −0.1, −0.2, 0.0, 0.5, 1.01: three entries (k = 1, 4, 8), the first
+    /// at 0.1 s, five samples in contact: 0.5 s. The commands 0, 2, −2, 1.9,
+    /// 2.5 and four zeros against a limit of 2: three at it (|u| ≥ 2), one
+    /// flagged by the law (k = 5): 4 of 9.
+    #[test]
+    fn end_stops_and_saturation_by_hand() {
+        let xs = [0.5, 1.2, 1.3, 0.9, -0.1, -0.2, 0.0, 0.5, 1.01];
+        let us = [0.0, 2.0, -2.0, 1.9, 2.5, 0.0, 0.0, 0.0, 0.0];
+        let checks = Checks {
+            end_stops: Some([0.0, 1.0]),
+            limit: 2.0,
+            has_limit: true,
+            ..Checks::default()
+        };
+        let mut m = MetricsAccumulator::new(0.8, 0.0, 0.8, false).with_checks(checks, 9);
+        for (k, (&x, &u)) in xs.iter().zip(&us).enumerate() {
+            m.push(&Sample {
+                k: k as u64,
+                t: k as f64 * 0.1,
+                x: [x, 0.0, 0.0],
+                u,
+                flags: if k == 5 { flags::SATURATED } else { 0 },
+                ..Sample::default()
+            });
+        }
+        let b = m.finish(None).behaviour;
+        let e = b.end_stops.unwrap();
+        assert_eq!(e.contacts, 3);
+        assert_eq!(e.first_s, Some(0.1));
+        assert!((e.time_s - 0.5).abs() < 1e-12, "{e:?}");
+        assert_eq!(b.saturation_share, Some(4.0 / 9.0));
+        assert!(b.hit_end_stop());
+        assert!(b.saturated_above(0.2) && !b.saturated_above(0.5));
+        // Without stops or a limit: both undefined, not zero.
+        let mut plain = MetricsAccumulator::new(0.8, 0.0, 0.8, false);
+        plain.push(&Sample::default());
+        let b = plain.finish(None).behaviour;
+        assert_eq!((b.end_stops, b.saturation_share), (None, None));
+    }
+
+    /// The error 2·sin(2π·5t) degrees after the transient is found as an
+    /// oscillation of 2° at 0.2 s; the same run diverged has none.
+    #[test]
+    fn the_error_window_finds_the_oscillation() {
+        let h = 1e-3;
+        let mut m =
+            MetricsAccumulator::new(3.0, 1.0, 3.0, false).with_checks(Checks::default(), 2001);
+        for k in 0..=3000u64 {
+            let t = k as f64 * h;
+            let e = if t < 1.0 {
+                50.0
+            } else {
+                2.0 * (2.0 * std::f64::consts::PI * 5.0 * t).sin()
+            };
+            m.push(&Sample {
+                k,
+                t,
+                e: e * DR,
+                ..Sample::default()
+            });
+        }
+        let o = m.finish(None).behaviour.oscillation.unwrap();
+        assert!(o.sustained, "{o:?}");
+        assert!((o.period_s.unwrap() - 0.2).abs() < 1e-6, "{o:?}");
+        assert!((o.amplitude - 2.0).abs() < 1e-3, "{o:?}");
+        let d = Divergence {
+            t: 3.0,
+            reason: crate::simulation::DivergenceReason::ThetaLimit,
+        };
+        assert_eq!(m.finish(Some(d)).behaviour.oscillation, None);
     }
 
     #[test]

@@ -150,6 +150,14 @@ pub trait Plant {
     fn axis(&self) -> Axis {
         Axis::Rotary
     }
+    /// The end stops of the axis, as the positions x₀ (SI, the axis's
+    /// own: rad or m) below the first and above the second of which the
+    /// plant is in contact with a stop; `None` (the default) for a plant
+    /// without stops. The metrics count contacts from it
+    /// ([`crate::metrics::Behaviour`]).
+    fn end_stops(&self) -> Option<[f64; 2]> {
+        None
+    }
     /// The values of [`Plant::STATES`] at time `t` and state `s`, whose
     /// output is `x`.
     fn states(&self, _t: f64, _s: &Self::State, _x: &[f64; 3], _out: &mut [f64; MAX_STATES]) {}

@@ -48,7 +48,8 @@ pub mod study;
 pub mod tune;
 
 pub use ehservo_sim::{
-    actuator, axis, metrics, physical, plant, sensor, simulation, third_order, uncertainty,
+    actuator, axis, behaviour, metrics, physical, plant, sensor, simulation, third_order,
+    uncertainty,
 };
 
 pub use ehservo_core as core;

@@ -215,6 +215,38 @@ impl Loop {
         super::build::model_numbers(&self.model, self.axis.si_unit())
     }
 
+    /// What a cylinder scenario is warned of, one line each (the CLI
+    /// prints them on stderr): no `[actuator]` stage (the spool follows
+    /// the command at once and without limit), and a sample step h with
+    /// ω_h·h > 1, ω_h = √ā2 the hydraulic natural frequency of the nominal
+    /// model (a sampled law then acts slower than the oil column rings).
+    /// Empty for the other plants: the paper's own servo is sampled at
+    /// ω_h·h ≈ 1.14 (ā2 = 13000 s⁻², h = 10 ms) by the paper's choice.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if self.scenario.plant.model() != "cylinder" {
+            return v;
+        }
+        if self.stages().actuator.is_identity() {
+            v.push(
+                "a cylinder without an [actuator] stage: the valve's spool follows the command at once and without limit (no saturation, no spool lag)"
+                    .to_string(),
+            );
+        }
+        let a2 = self.model.coeffs.a2;
+        let h = self.sim().step;
+        if a2 > 0.0 && a2.is_finite() {
+            let wh = a2.sqrt();
+            if wh * h > 1.0 {
+                v.push(format!(
+                    "the hydraulic natural frequency ω_h = √ā2 = {wh:.4} rad/s and the step h = {h} s give ω_h·h = {:.4} > 1: the sampled loop is slower than the oil column rings",
+                    wh * h
+                ));
+            }
+        }
+        v
+    }
+
     /// The paper's physical parameters of a third-order-family plant
     /// (`[plant.params]`); `None` for another plant.
     pub fn paper_params(&self) -> Option<ServoParams> {
@@ -278,6 +310,16 @@ impl Loop {
     /// The horizon (s).
     pub fn horizon(&self) -> f64 {
         self.horizon
+    }
+
+    /// The period of a periodic reference (a sine or a square wave), whose
+    /// forced response the oscillation check leaves alone; None for the
+    /// others.
+    pub fn reference_period(&self) -> Option<f64> {
+        match self.scenario.reference.kind {
+            super::ReferenceKind::Sine | super::ReferenceKind::Square => Some(self.period),
+            _ => None,
+        }
     }
 
     /// The period of the reference (s): the window of `e_final`.

@@ -121,6 +121,9 @@ pub(super) fn run(a: RunArgs, w: &mut impl Write) -> Result<()> {
         float,
     } = a;
     let lp = load(&scenario, &set)?;
+    if !quiet {
+        warn(&scenario, &lp);
+    }
     let s = lp.scenario();
     let dir = match out {
         Some(d) => d,
@@ -181,6 +184,9 @@ pub(super) fn pil(a: PilArgs, w: &mut impl Write) -> Result<()> {
     } = a;
     use crate::pil::{Options, Target};
     let lp = load(&scenario, &set)?;
+    if !quiet {
+        warn(&scenario, &lp);
+    }
     let s = lp.scenario();
     let dir = match out {
         Some(d) => d,
@@ -331,6 +337,7 @@ pub(super) fn analyze(a: AnalyzeArgs, w: &mut impl Write) -> Result<()> {
 pub(super) fn check(a: CheckArgs, w: &mut impl Write) -> Result<()> {
     let CheckArgs { scenario, set } = a;
     let lp = load(&scenario, &set)?;
+    warn(&scenario, &lp);
     put!(w, "{}", lp.scenario().to_toml());
     note!("{}: ok ({} steps)", scenario.display(), lp.sim().steps);
     note!("{}", axis_line(&lp));
@@ -347,6 +354,13 @@ pub(crate) fn axis_line(lp: &Loop) -> String {
         s.push_str(&format!(", ω_h·h = {:.3}", a2.sqrt() * lp.design().dt));
     }
     s
+}
+
+/// The scenario's warnings ([`Loop::warnings`]) on stderr, one line each.
+fn warn(file: &std::path::Path, lp: &Loop) {
+    for wn in lp.warnings() {
+        note!("warning: {}: {wn}", file.display());
+    }
 }
 
 /// `--float`'s value (checked by clap).
@@ -371,6 +385,8 @@ fn print_summary(
     let m = &r.metrics;
     let unit = m.axis.suffix();
     let sim = &s.simulation;
+    // What the run did besides diverging: the verdict names each.
+    let findings = m.behaviour.findings(false);
     out!(
         w,
         "{}: {} on the {} plant, {} (h = {} s{}), horizon {} s",
@@ -399,7 +415,12 @@ fn print_summary(
                 out!(w, "  hint: {warning}");
             }
         }
-        None => out!(w, "  bounded over the horizon"),
+        // A run with findings is not called bounded: they are its verdict.
+        None if findings.is_empty() => out!(w, "  bounded over the horizon"),
+        None => {}
+    }
+    for line in behaviour_lines(&m.behaviour, &findings, unit) {
+        out!(w, "  {line}");
     }
     out!(
         w,
@@ -440,4 +461,53 @@ fn print_summary(
         secs * 1e3
     );
     Ok(())
+}
+
+/// One line per finding of a run's verdict (after its first line), naming
+/// the numbers: the end stops' contacts, the oscillation's amplitude and
+/// period, the saturation share.
+pub(crate) fn behaviour_lines(
+    b: &crate::behaviour::Behaviour,
+    findings: &[crate::behaviour::Finding],
+    unit: &str,
+) -> Vec<String> {
+    use crate::behaviour::Finding;
+    let mut v = Vec::new();
+    for f in findings {
+        match f {
+            Finding::HitEndStop => {
+                if let Some(e) = b.end_stops {
+                    v.push(format!(
+                        "HIT AN END STOP: {} contact(s), the first at t = {} s, {:.4} s in contact",
+                        e.contacts,
+                        fmt_opt(e.first_s, 4, ""),
+                        e.time_s
+                    ));
+                }
+            }
+            Finding::Oscillating => {
+                if let Some(o) = b.oscillation {
+                    v.push(format!(
+                        "SUSTAINED OSCILLATION after the transient: amplitude {:.4}{unit}, period {} s ({} Hz), {} cycles, last/first amplitude {}",
+                        o.amplitude,
+                        fmt_opt(o.period_s, 4, ""),
+                        fmt_opt(o.period_s.map(|p| 1.0 / p), 2, ""),
+                        o.cycles,
+                        fmt_opt(o.decay, 3, "")
+                    ));
+                }
+            }
+            Finding::Saturated => {
+                if let Some(sh) = b.saturation_share {
+                    v.push(format!(
+                        "SATURATED: the command at its limit in {:.1} % of the samples (more than {:.0} %)",
+                        100.0 * sh,
+                        100.0 * crate::behaviour::SATURATION_SHARE_LIMIT
+                    ));
+                }
+            }
+            Finding::Unbounded => {}
+        }
+    }
+    v
 }

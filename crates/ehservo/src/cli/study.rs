@@ -169,14 +169,15 @@ pub(super) fn sweep(a: SweepArgs, w: &mut impl Write) -> Result<()> {
     let start = Instant::now();
     let rows = crate::study::sweep(&plan, &opts)?;
     if !quiet {
-        let unbounded = rows
+        let findings: Vec<Vec<crate::behaviour::Finding>> = rows
             .iter()
-            .filter(|r| r.metrics.is_some_and(|m| m.diverged))
-            .count();
+            .filter_map(|r| r.metrics.map(|m| m.behaviour.findings(m.diverged)))
+            .collect();
+        let tally = crate::behaviour::tally(findings.iter().map(Vec::as_slice));
         let invalid = rows.iter().filter(|r| r.error.is_some()).count();
         out!(
             w,
-            "{}: {} runs{} in {:.2} s ({} unbounded{}); wrote {}/results.csv",
+            "{}: {} runs{} in {:.2} s ({}{}); wrote {}/results.csv",
             plan.study.name,
             rows.len(),
             match shard {
@@ -184,7 +185,7 @@ pub(super) fn sweep(a: SweepArgs, w: &mut impl Write) -> Result<()> {
                 None => String::new(),
             },
             start.elapsed().as_secs_f64(),
-            unbounded,
+            crate::behaviour::tally_text(&tally),
             if invalid > 0 {
                 format!(", {invalid} invalid draws")
             } else {

@@ -62,6 +62,16 @@ pub(super) fn tune(a: TuneArgs, w: &mut impl Write) -> Result<()> {
     let start = Instant::now();
     let r = crate::tune::tune_to_dir(&tune, &out, threads, &pb, !no_plot)?;
     pb.finish_and_clear();
+    if let Some(why) = r.failure(&tune) {
+        // Not a silent "best": the outputs (tune.json, convergence.csv)
+        // say what was tried, and no tuned.toml is written.
+        anyhow::bail!(
+            "{}: {} not tuned: {why} (wrote {}/tune.json)",
+            tune.file.name,
+            tune.kind,
+            out.display()
+        );
+    }
     if !quiet {
         let params: Vec<String> = r
             .params
@@ -70,7 +80,7 @@ pub(super) fn tune(a: TuneArgs, w: &mut impl Write) -> Result<()> {
             .collect();
         out!(
             w,
-            "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}{}\n  {}\nwrote {}/tuned.toml",
+            "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}{}\n  {}\n  {}\nwrote {}/tuned.toml",
             tune.file.name,
             tune.kind,
             r.evaluations,
@@ -83,6 +93,10 @@ pub(super) fn tune(a: TuneArgs, w: &mut impl Write) -> Result<()> {
                 format!(" (defaults: {:.5}{})", r.defaults, tune.axis.suffix())
             },
             params.join(", "),
+            r.verification
+                .as_ref()
+                .map(|v| v.summary(tune.axis.suffix()))
+                .unwrap_or_default(),
             out.display()
         );
     }
@@ -106,17 +120,25 @@ pub(super) fn league(a: LeagueArgs, w: &mut impl Write) -> Result<()> {
     let r = crate::league::league_to_dir(&league, &out, threads, &pb, !no_plot)?;
     pb.finish_and_clear();
     if !quiet {
+        let findings: Vec<Vec<crate::behaviour::Finding>> = r
+            .cells
+            .iter()
+            .filter_map(|c| c.metrics.map(|m| m.behaviour.findings(m.diverged)))
+            .collect();
         let rows = crate::league::report::rows(&league, &r);
         let ranks = crate::league::report::ranks(&league, &rows);
         let mut best: Vec<usize> = (0..ranks.len()).collect();
         best.sort_by(|&a, &b| ranks[a].1.total_cmp(&ranks[b].1).then(a.cmp(&b)));
         out!(
             w,
-            "{}: {} controllers × {} scenarios ({} runs) in {:.1} s; mean rank: {}\nwrote {}/league.md, league.html, league.csv",
+            "{}: {} controllers × {} scenarios ({} runs: {}) in {:.1} s; mean rank: {}\nwrote {}/league.md, league.html, league.csv",
             league.file.name,
             league.contestants.len(),
             league.cases.len(),
             r.cells.len(),
+            crate::behaviour::tally_text(&crate::behaviour::tally(
+                findings.iter().map(Vec::as_slice)
+            )),
             start.elapsed().as_secs_f64(),
             best.iter()
                 .map(|&i| format!("{} {:.2}", r.standings[i].name, ranks[i].1))

@@ -131,7 +131,11 @@ pub fn play(
                             table.insert(k.clone(), toml::Value::Float(*v));
                         }
                     }
-                    let p = if r.kept_defaults {
+                    let p = if !r.objective.is_finite() {
+                        "tuned (no candidate passed: defaults kept)"
+                    } else if !r.accepted() {
+                        "tuned (failed its verification)"
+                    } else if r.kept_defaults {
                         "tuned (defaults kept)"
                     } else {
                         "tuned"

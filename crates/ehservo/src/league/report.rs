@@ -23,6 +23,13 @@ pub struct Row {
     pub unbounded: usize,
     /// Runs whose scenario refused the parameters.
     pub refused: usize,
+    /// Runs that hit an end stop (bounded or not).
+    pub hit_end_stop: usize,
+    /// Runs whose error oscillates after the transient without decaying.
+    pub oscillating: usize,
+    /// Runs whose command sat at its limit in more than
+    /// [`crate::behaviour::SATURATION_SHARE_LIMIT`] of the samples.
+    pub saturated: usize,
     /// Worst e_max (°), when every run is bounded.
     pub e_max_worst_deg: Option<f64>,
     /// Mean e_max over the bounded runs (°).
@@ -74,6 +81,12 @@ pub fn rows(l: &League, r: &LeagueResult) -> Vec<Row> {
             let e_max = metric(&|m| m.e_max);
             let refused = cells.iter().filter(|c| c.refused.is_some()).count();
             let unbounded = cells.len() - ok.len() - refused;
+            let findings: Vec<Vec<crate::behaviour::Finding>> = cells
+                .iter()
+                .filter_map(|c| c.metrics.map(|m| m.behaviour.findings(m.diverged)))
+                .collect();
+            let [_, hit_end_stop, oscillating, saturated] =
+                crate::behaviour::tally(findings.iter().map(Vec::as_slice));
             let low = l.margin.as_ref().map(|m| m.cfg.low).unwrap_or(0.0);
             out.push(Row {
                 controller: s.name.clone(),
@@ -83,6 +96,9 @@ pub fn rows(l: &League, r: &LeagueResult) -> Vec<Row> {
                 draws: cells.len(),
                 unbounded,
                 refused,
+                hit_end_stop,
+                oscillating,
+                saturated,
                 e_max_worst_deg: if ok.len() == cells.len() {
                     max(&e_max)
                 } else {
@@ -118,12 +134,12 @@ fn csv_text(s: &str) -> String {
 pub fn league_csv(l: &League, rows: &[Row]) -> String {
     let u = l.axis.unit();
     let mut s = format!(
-        "controller,kind,parameters,scenario,draws,unbounded,refused,e_max_worst_{u},e_max_mean_{u},e_rms_mean_{u},chattering_mean,energy_mean_V2s,u_max_worst_V,margin\n",
+        "controller,kind,parameters,scenario,draws,unbounded,refused,e_max_worst_{u},e_max_mean_{u},e_rms_mean_{u},chattering_mean,energy_mean_V2s,u_max_worst_V,margin,hit_end_stop,oscillating,saturated\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             csv_text(&r.controller),
             r.kind,
             csv_text(&r.parameters),
@@ -137,7 +153,10 @@ pub fn league_csv(l: &League, rows: &[Row]) -> String {
             cell(r.chattering_mean),
             cell(r.energy_mean_v2s),
             cell(r.u_max_worst_v),
-            csv_text(&r.margin)
+            csv_text(&r.margin),
+            r.hit_end_stop,
+            r.oscillating,
+            r.saturated
         );
     }
     s
@@ -148,6 +167,10 @@ pub fn league_csv(l: &League, rows: &[Row]) -> String {
 pub fn runs_csv(l: &League, r: &LeagueResult) -> String {
     let mut s = String::from("controller,scenario,draw,seed,file,refused,energy_V2s");
     for n in crate::metrics::Metrics::csv_names(l.axis) {
+        s.push(',');
+        s.push_str(n);
+    }
+    for n in crate::behaviour::columns(l.axis) {
         s.push(',');
         s.push_str(n);
     }
@@ -171,6 +194,13 @@ pub fn runs_csv(l: &League, r: &LeagueResult) -> String {
             s.push(',');
             if let Some(m) = &c.metrics {
                 s.push_str(&m.cell(n));
+            }
+        }
+        let cells = c.metrics.map(|m| m.behaviour.cells(m.diverged));
+        for k in 0..crate::behaviour::columns(l.axis).len() {
+            s.push(',');
+            if let Some(cs) = &cells {
+                s.push_str(&cs[k]);
             }
         }
         s.push('\n');
@@ -444,6 +474,7 @@ fn scenario_table(l: &League, r: &LeagueResult, rows: &[Row], si: usize) -> Tabl
             "energy (V²·s)",
             "u_max worst (V)",
             "unbounded",
+            "end stop / oscillating / saturated",
         ]
         .map(String::from)
         .to_vec(),
@@ -460,6 +491,10 @@ fn scenario_table(l: &League, r: &LeagueResult, rows: &[Row], si: usize) -> Tabl
                     num(row.energy_mean_v2s),
                     num(row.u_max_worst_v),
                     format!("{}/{}", row.unbounded + row.refused, row.draws),
+                    format!(
+                        "{} / {} / {}",
+                        row.hit_end_stop, row.oscillating, row.saturated
+                    ),
                 ]
                 .map(|c| (c, ""))
                 .to_vec()

@@ -5,7 +5,7 @@
 use super::{build_with, Margin};
 use crate::error::InputError;
 use crate::scenario::{ControllerCfg, Loop};
-use crate::tune::{Objective, Penalty, Tune, TuneFile};
+use crate::tune::{Objective, Penalty, Reject, Tune, TuneFile, Verify};
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -83,6 +83,12 @@ pub struct TuningCfg {
     /// Penalties.
     #[serde(default)]
     pub penalty: Penalty,
+    /// What makes a candidate unacceptable (+∞): as a tune file's.
+    #[serde(default)]
+    pub reject: Reject,
+    /// The verification of each tuned controller: as a tune file's.
+    #[serde(default)]
+    pub verify: Verify,
 }
 
 /// `[margin]`.
@@ -753,6 +759,8 @@ fn tune_for(
         objective: t.objective,
         draws: t.draws,
         penalty: t.penalty,
+        reject: t.reject,
+        verify: t.verify,
         param: Vec::new(),
     };
     // The tune's keys sit under `tuning` in a suite.

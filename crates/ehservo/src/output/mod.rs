@@ -269,6 +269,14 @@ pub struct Summary<'a> {
     pub divergence: Option<DivergenceInfo>,
     /// Numerical guards that fired.
     pub faults: Faults,
+    /// What the run did besides its errors ([`crate::behaviour`]):
+    /// end-stop contacts, the saturation share, the error's oscillation
+    /// after the transient.
+    pub behaviour: crate::behaviour::Behaviour,
+    /// The verdict: `["bounded"]`, or the findings in order (`unbounded`,
+    /// `hit-end-stop`, `oscillating`, `saturated`), as `ehservo run`
+    /// prints them.
+    pub verdict: Vec<&'static str>,
     /// Quantities derived from the scenario.
     pub derived: Derived,
     /// What the theory says about the scenario (`ehservo analyze`).
@@ -363,6 +371,8 @@ pub fn summary_with<'a>(
             saturated_samples: run.outcome.saturated,
             measurement_fault_samples: run.outcome.measurement_faults,
         },
+        behaviour: run.metrics.behaviour,
+        verdict: verdict(&run.metrics),
         derived: Derived {
             a_nominal: model.coeffs.as_array(),
             b_at_rest: model.b_at_rest(),
@@ -372,6 +382,17 @@ pub fn summary_with<'a>(
         analysis: crate::analysis::analyze(lp),
         diagnostics,
         offboard: None,
+    }
+}
+
+/// The verdict of a run's metrics: `["bounded"]` or the names of its
+/// findings ([`crate::behaviour::Behaviour::findings`]).
+pub fn verdict(m: &Metrics) -> Vec<&'static str> {
+    let f = m.behaviour.findings(m.diverged);
+    if f.is_empty() {
+        vec!["bounded"]
+    } else {
+        f.iter().map(|f| f.name()).collect()
     }
 }
 

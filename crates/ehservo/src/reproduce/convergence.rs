@@ -433,6 +433,7 @@ mod tests {
             diverged_at_s: diverged_at,
             samples: 0,
             axis: Default::default(),
+            behaviour: Default::default(),
         };
         CaseMetrics::from(base)
     }

@@ -99,7 +99,8 @@ fn check_row(
     {
         let ok = match name.as_str() {
             "diverged" => c == "true" || c == "false",
-            "samples" => c.parse::<u64>().is_ok(),
+            "samples" | "end_stop_contacts" => c.parse::<u64>().is_ok(),
+            "verdict" => crate::behaviour::is_verdict_cell(c),
             _ => finite(c),
         };
         if !ok {
@@ -107,7 +108,8 @@ fn check_row(
                 "{shown}: line {line}: `{name}` = {c:?} is not {}",
                 match name.as_str() {
                     "diverged" => "true or false",
-                    "samples" => "a whole number",
+                    "samples" | "end_stop_contacts" => "a whole number",
+                    "verdict" => "a verdict (bounded, or unbounded, hit-end-stop, oscillating, saturated joined by +)",
                     _ => "a finite number",
                 }
             );

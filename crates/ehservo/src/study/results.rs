@@ -47,6 +47,11 @@ pub(crate) fn header(columns: Vec<String>, axis: Axis) -> Vec<String> {
     head.extend(columns);
     head.push("seed".into());
     head.extend(Metrics::csv_names(axis).iter().map(|s| s.to_string()));
+    head.extend(
+        crate::behaviour::columns(axis)
+            .iter()
+            .map(|s| s.to_string()),
+    );
     head.push("error".into());
     head
 }
@@ -62,8 +67,14 @@ pub fn results_csv(plan: &Plan, rows: &[RunRow]) -> Result<Vec<u8>> {
         rec.extend(r.values.iter().map(cell));
         rec.push(r.seed.to_string());
         match &r.metrics {
-            Some(m) => rec.extend(names.iter().map(|k| metric_cell(m, k))),
-            None => rec.extend(std::iter::repeat_n(String::new(), names.len())),
+            Some(m) => {
+                rec.extend(names.iter().map(|k| metric_cell(m, k)));
+                rec.extend(m.behaviour.cells(m.diverged));
+            }
+            None => rec.extend(std::iter::repeat_n(
+                String::new(),
+                names.len() + crate::behaviour::columns(axis).len(),
+            )),
         }
         rec.push(r.error.clone().unwrap_or_default());
         w.write_record(&rec)?;

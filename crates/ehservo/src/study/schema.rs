@@ -538,6 +538,8 @@ fn check_columns(study: &Study, file: &str) -> Result<(), InputError> {
         .iter()
         .chain(super::METRIC_COLUMNS.iter())
         .chain(crate::metrics::Metrics::CSV_LINEAR.iter())
+        .chain(crate::behaviour::columns(crate::axis::Axis::Rotary).iter())
+        .chain(crate::behaviour::columns(crate::axis::Axis::Linear).iter())
         .map(|c| c.to_string())
         .collect();
     let reserved = columns.len();

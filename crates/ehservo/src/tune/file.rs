@@ -72,6 +72,51 @@ impl Default for Penalty {
     }
 }
 
+/// `[reject]`: a candidate whose run does any of these scores +∞ (on any
+/// scenario × draw), whatever its error.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Reject {
+    /// The largest share of samples at the command's limit a run may have
+    /// (0 to 1; default 0.2): a law that spends more of the run saturated
+    /// is a bang-bang law, whatever its error. A run also scores +∞ when it
+    /// hits an end stop or its error oscillates after the transient
+    /// without decaying (`ehservo run`'s verdict).
+    pub saturation_share: f64,
+}
+
+impl Default for Reject {
+    fn default() -> Self {
+        Self {
+            saturation_share: crate::behaviour::SATURATION_SHARE_LIMIT,
+        }
+    }
+}
+
+/// `[verify]`: the chosen parameters run again, longer and over more
+/// draws, before the tune reports them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Verify {
+    /// Each scenario's horizon is multiplied by this (1 to 100; default
+    /// 2): an oscillation that grows slowly, or a drift into an end stop,
+    /// shows after the tune's horizon.
+    pub horizon_factor: f64,
+    /// Uncertainty draws per scenario (`uncertainty.seed` = 0, 1, …; 1:
+    /// the scenario's own seed, as the tune's `draws`); default: the
+    /// tune's `draws`, at least 3.
+    pub draws: Option<u64>,
+}
+
+impl Default for Verify {
+    fn default() -> Self {
+        Self {
+            horizon_factor: 2.0,
+            draws: None,
+        }
+    }
+}
+
 /// A tune file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -103,6 +148,12 @@ pub struct TuneFile {
     /// Penalties.
     #[serde(default)]
     pub penalty: Penalty,
+    /// What makes a candidate unacceptable (+∞).
+    #[serde(default)]
+    pub reject: Reject,
+    /// The verification of the chosen parameters.
+    #[serde(default)]
+    pub verify: Verify,
     /// The parameters searched (default: the kind's declared tunables).
     #[serde(default)]
     pub param: Vec<ParamRange>,
@@ -291,6 +342,25 @@ impl Keys<'_> {
         }
         if !(1..=10_000).contains(&tf.draws) {
             return Err(self.bad("draws", format!("must be in 1..=10000 (got {})", tf.draws)));
+        }
+        let r = tf.reject.saturation_share;
+        if !(0.0..=1.0).contains(&r) {
+            return Err(self.bad(
+                "reject.saturation_share",
+                format!("must be a share from 0 to 1 (got {r:?})"),
+            ));
+        }
+        let f = tf.verify.horizon_factor;
+        if !(1.0..=100.0).contains(&f) {
+            return Err(self.bad(
+                "verify.horizon_factor",
+                format!("must be from 1 to 100 (got {f:?})"),
+            ));
+        }
+        if let Some(d) = tf.verify.draws {
+            if !(1..=10_000).contains(&d) {
+                return Err(self.bad("verify.draws", format!("must be in 1..=10000 (got {d})")));
+            }
         }
         let p = &tf.penalty;
         if !(p.chattering.is_finite() && p.chattering >= 0.0) {

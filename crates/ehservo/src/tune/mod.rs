@@ -14,6 +14,11 @@
 //! chattering = 0.0                      # + weight·chattering index
 //! u_limit = 10.0                        # V; + u_excess·max(0, u_max − u_limit)
 //! u_excess = 1.0
+//! [reject]
+//! saturation_share = 0.2                # a run at the command's limit longer than this share: +∞
+//! [verify]
+//! horizon_factor = 2.0                  # the choice re-run at 2× each scenario's horizon …
+//! draws = 3                             # … over these draws (default: `draws`, at least 3)
 //! [[param]]                             # default: the kind's declared tunables
 //! key = "kp"
 //! low = 1.0
@@ -23,8 +28,13 @@
 //!
 //! One evaluation runs every scenario (× draws) with the candidate
 //! parameters and scores it: e_max after the transient (°), plus the
-//! penalties; a run that diverges, or parameters the controller refuses,
-//! score +∞. The swarm (Zambrano-Bigiarini et al., SPSO 2011, as argmin
+//! penalties; a run that diverges, hits an end stop, ends in a sustained
+//! oscillation or saturates beyond `[reject] saturation_share`
+//! ([`crate::behaviour`]), or parameters the controller refuses, score +∞.
+//! The parameters chosen are then verified ([`Tune::verify`]): every
+//! scenario at `[verify]`'s longer horizon and over its draws, held to the
+//! same rules. No finite objective, or a failed verification, is a failed
+//! tune ([`TuneResult::failure`]): no tuned.toml, exit 1. The swarm (Zambrano-Bigiarini et al., SPSO 2011, as argmin
 //! implements it) searches a log-scaled parameter as its log10. Its random
 //! numbers come from a seeded generator, and the particles of an
 //! iteration are evaluated in parallel by rayon and collected in order,
@@ -33,8 +43,12 @@
 mod file;
 mod score;
 mod search;
+mod verify;
 
-pub use file::{common_axis, Objective, ParamRange, Penalty, Scale, Tune, TuneFile, MAX_BUDGET};
+pub use file::{
+    common_axis, Objective, ParamRange, Penalty, Reject, Scale, Tune, TuneFile, Verify, MAX_BUDGET,
+};
 pub(crate) use file::{default_budget, default_draws, default_particles, default_seed};
 pub(crate) use file::{not_a_result, numeric};
 pub use search::{search, tune_to_dir, TuneResult};
+pub use verify::{Verification, VerifiedRun};

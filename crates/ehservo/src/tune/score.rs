@@ -71,8 +71,17 @@ impl Tune {
             .collect()
     }
 
-    /// One run's score: e_max (in the axis's unit, ° or mm) plus the penalties; +∞ when unbounded,
-    /// refused or undefined.
+    /// A run's findings that reject a candidate ([`super::Reject`]):
+    /// unbounded, an end stop hit, a sustained oscillation, a saturation
+    /// share above `reject.saturation_share`. Empty: acceptable.
+    pub fn rejections(&self, m: &Metrics) -> Vec<crate::behaviour::Finding> {
+        m.behaviour
+            .findings_with(m.diverged, self.file.reject.saturation_share)
+    }
+
+    /// One run's score: e_max (in the axis's unit, ° or mm) plus the
+    /// penalties; +∞ when unbounded, refused, undefined, or rejected
+    /// ([`Tune::rejections`]).
     pub fn score(&self, m: Option<&Metrics>) -> f64 {
         let Some(m) = m else {
             return f64::INFINITY;
@@ -80,6 +89,9 @@ impl Tune {
         let (Some(e), false) = (m.e_max, m.diverged) else {
             return f64::INFINITY;
         };
+        if !self.rejections(m).is_empty() {
+            return f64::INFINITY;
+        }
         let p = &self.file.penalty;
         let mut s = e;
         if p.chattering > 0.0 {

@@ -68,6 +68,37 @@ pub struct TuneResult {
     /// Best objective after each iteration of the swarm (the first after
     /// its second generation: the initial swarm is one).
     pub history: Vec<f64>,
+    /// The chosen parameters run again, longer and over more draws
+    /// (None: no candidate passed, nothing was chosen).
+    pub verification: Option<super::Verification>,
+}
+
+impl TuneResult {
+    /// A candidate passed (a finite objective) and the choice passed its
+    /// verification.
+    pub fn accepted(&self) -> bool {
+        self.objective.is_finite() && self.verification.as_ref().is_some_and(|v| v.passed)
+    }
+
+    /// Why the result is not accepted, in one sentence naming the numbers;
+    /// None when it is.
+    pub fn failure(&self, t: &Tune) -> Option<String> {
+        if !self.objective.is_finite() {
+            return Some(format!(
+                "no candidate passed: every one of {} evaluations (and the kind's defaults) diverged, was refused, hit an end stop, oscillated after the transient or saturated in more than {} % of the samples on some scenario × draw",
+                self.evaluations,
+                100.0 * t.file.reject.saturation_share
+            ));
+        }
+        match &self.verification {
+            Some(v) if !v.passed => Some(format!(
+                "the chosen {} parameters failed: {}",
+                t.kind,
+                v.summary(t.axis.suffix())
+            )),
+            _ => None,
+        }
+    }
 }
 
 /// Runs the swarm (on `threads` threads, default all cores).
@@ -117,6 +148,7 @@ pub fn search(
             kept_defaults: false,
             evaluations,
             history: history.0.lock().expect("unpoisoned").clone(),
+            verification: None,
         })
     };
     let mut r = match threads {
@@ -132,16 +164,27 @@ pub fn search(
     if crate::cancel::requested() {
         return Err(crate::cancel::Cancelled.into());
     }
-    if r.objective > r.defaults || r.objective.is_nan() {
+    // No finite objective anywhere (every candidate rejected): the
+    // defaults are kept, and the result is not accepted.
+    if r.objective > r.defaults || !r.objective.is_finite() {
         r.kept_defaults = true;
         r.objective = r.defaults;
+    }
+    if r.objective.is_finite() {
+        let values: Vec<f64> = r.params.iter().map(|p| p.1).collect();
+        r.verification = Some(t.verify((!r.kept_defaults).then_some(&values[..])));
+    }
+    if crate::cancel::requested() {
+        return Err(crate::cancel::Cancelled.into());
     }
     Ok(r)
 }
 
 /// Runs a tune and writes its outputs into `out`: `tuned.toml` (the first
-/// scenario with the tuned controller, which `ehservo run` accepts),
-/// `convergence.csv` and `convergence.png`, `tune.json`.
+/// scenario with the tuned controller, which `ehservo run` accepts; only
+/// when the result is accepted, [`TuneResult::accepted`]),
+/// `convergence.csv` and `convergence.png`, `tune.json` (with the
+/// verification and, when not accepted, why).
 pub fn tune_to_dir(
     t: &Tune,
     out: &Path,
@@ -168,6 +211,7 @@ pub fn tune_to_dir(
         tuned.name, t.kind, t.file.name
     );
     tuned.name = format!("{}-tuned", t.file.name);
+    let failure = r.failure(t);
     let mut text = format!(
         "# Tuned by `ehservo tune` ({} {}): {} = {:.6} {} over {} evaluations (seed {}).\n",
         SOFTWARE.name,
@@ -181,8 +225,13 @@ pub fn tune_to_dir(
         r.evaluations,
         t.file.seed
     );
+    if let Some(v) = &r.verification {
+        text.push_str(&format!("# {}\n", v.summary(t.axis.suffix())));
+    }
     text.push_str(&toml::to_string(&tuned).context("writing tuned.toml")?);
-    write_atomic(&stage.path().join("tuned.toml"), text.as_bytes())?;
+    if failure.is_none() {
+        write_atomic(&stage.path().join("tuned.toml"), text.as_bytes())?;
+    }
     let mut csv = String::from("iteration,evaluations,best_objective\n");
     for (g, b) in r.history.iter().enumerate() {
         csv.push_str(&format!("{},{},{b}\n", g + 1, evaluations_after(t, g)));
@@ -193,6 +242,8 @@ pub fn tune_to_dir(
         "tune": t.file,
         "kind": t.kind,
         "result": r,
+        "accepted": failure.is_none(),
+        "failure": failure,
         "unit": t.axis.unit(),
     });
     write_atomic(

@@ -28,6 +28,7 @@ mod league;
 mod linear_axis;
 mod models;
 mod nn_robust;
+mod outcome;
 mod outputs;
 mod pil;
 mod properties;
