@@ -213,6 +213,7 @@ pub fn linearisation_json(l: &Linearised) -> Value {
             "model": model_json(m),
             "closed_loop_poles": lp.closed_loop_poles().map(|v| v.iter().map(|z| pair(*z)).collect::<Vec<_>>()),
             "closed_loop_stable": lp.closed_loop_stable(),
+            "hidden_modes": lp.hidden_modes().map(|v| v.iter().map(|z| pair(*z)).collect::<Vec<_>>()),
         })
     });
     let axis = l.setup.axis();

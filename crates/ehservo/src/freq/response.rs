@@ -468,15 +468,75 @@ impl LoopModel {
         super::ss::eigenvalues(&a)
     }
 
-    /// Whether the closed loop is stable (poles inside the unit circle, or
-    /// in the open left half-plane).
+    /// Whether the closed loop is stable as a map from its inputs to its
+    /// outputs: every pole inside the unit circle (or in the open left
+    /// half-plane), except a pole on the boundary that the loop neither
+    /// excites nor sees ([`hidden_modes`](Self::hidden_modes)), which
+    /// only holds a constant. Such modes are the rule on a cylinder at rest:
+    /// the chamber pressures' common mode (any pair that holds the load is
+    /// an equilibrium) and a PID's unused integrator (ki = 0) are poles at
+    /// z = 1 that the command cannot move or the position cannot see.
     pub fn closed_loop_stable(&self) -> Option<bool> {
         let p = self.closed_loop_poles()?;
-        Some(if self.sampled() {
-            p.iter().all(|z| z.norm() < 1.0)
+        let hidden = self.hidden_modes()?;
+        Some(p.iter().all(|&z| self.inside(z) || hidden.contains(&z)))
+    }
+
+    /// Whether `z` is strictly inside the stability region.
+    fn inside(&self, z: C64) -> bool {
+        if self.sampled() {
+            z.norm() < 1.0
         } else {
-            p.iter().all(|z| z.re < 0.0)
-        })
+            z.re < 0.0
+        }
+    }
+
+    /// The closed loop's poles on the stability boundary (|z| = 1, or
+    /// re s = 0, to 1e-9) that are uncontrollable from L's input or
+    /// unobservable from its output, by the Popov–Belevitch–Hautus test:
+    /// rank [λI − A; C] < n or rank [λI − A, B] < n, judged by the least
+    /// singular value against 1e-9·(1 + ‖A‖). Feedback A − B·C/(1 + D)
+    /// changes neither rank. A pole outside the boundary is never hidden
+    /// here: it is reported unstable whatever it couples to.
+    pub fn hidden_modes(&self) -> Option<Vec<C64>> {
+        let l = self.loop_l.as_ref()?;
+        let d = 1.0 + l.d[(0, 0)];
+        if d == 0.0 {
+            return None;
+        }
+        let a = &l.a - &l.b * &l.c / d;
+        let n = a.nrows();
+        let scale = 1.0 + a.norm();
+        let tol = 1e-9 * scale;
+        let on_boundary = |z: C64| {
+            if self.sampled() {
+                (z.norm() - 1.0).abs() <= 1e-9
+            } else {
+                z.re.abs() <= tol
+            }
+        };
+        let cx = |m: &nalgebra::DMatrix<f64>| m.map(|v| C64::new(v, 0.0));
+        let least_sv = |m: nalgebra::DMatrix<C64>| {
+            m.svd(false, false)
+                .singular_values
+                .iter()
+                .fold(f64::INFINITY, |acc, &v| acc.min(v))
+        };
+        let mut hidden = Vec::new();
+        for z in self.closed_loop_poles()? {
+            if !on_boundary(z) {
+                continue;
+            }
+            let shifted = nalgebra::DMatrix::<C64>::identity(n, n) * z - cx(&a);
+            // [λI − A; C] (n + p) × n, and [λI − A, B] n × (n + m): the
+            // transpose of the latter has the same singular values.
+            let obs = concat_rows(&shifted, &cx(&l.c));
+            let ctr = concat_rows(&shifted.transpose(), &cx(&l.b).transpose());
+            if least_sv(obs) <= tol || least_sv(ctr) <= tol {
+                hidden.push(z);
+            }
+        }
+        Some(hidden)
     }
 
     /// The lowest frequency worth searching for crossings (rad/s): a
@@ -502,6 +562,19 @@ impl LoopModel {
             1e-3
         }
     }
+}
+
+/// `top` over `bottom` (same column count).
+fn concat_rows(
+    top: &nalgebra::DMatrix<C64>,
+    bottom: &nalgebra::DMatrix<C64>,
+) -> nalgebra::DMatrix<C64> {
+    let (r1, c) = top.shape();
+    let r2 = bottom.nrows();
+    let mut m = nalgebra::DMatrix::<C64>::zeros(r1 + r2, c);
+    m.view_mut((0, 0), (r1, c)).copy_from(top);
+    m.view_mut((r1, 0), (r2, c)).copy_from(bottom);
+    m
 }
 
 /// A quantity of the angle renamed for `axis` ([`LoopModel`]'s
@@ -589,6 +662,28 @@ mod tests {
         }
         // The designed closed loop is stable.
         assert_eq!(lp.closed_loop_stable(), Some(true));
+    }
+
+    /// The PBH test keeps an unstable verdict unstable and hides only what
+    /// L cannot touch. A P law (ki = kd = 0) of kp = 1000 V/rad on the
+    /// paper's servo at 1 ms: Routh on s³ + ā3s² + ā2s + ā1 + b̄0·kp gives
+    /// the limit kp < (ā3ā2 − ā1)/b̄0 = (169.98·13000.27 − 0.4)/17911.75
+    /// = 123.4 V/rad, so the loop is unstable; the PID's integrator, unused
+    /// at ki = 0, is a pole at z = 1 that the output does not see: hidden,
+    /// and the one mode that is.
+    #[test]
+    fn an_unstable_loop_stays_unstable_and_an_unused_integrator_is_hidden() {
+        let toml = "[simulation]\nstep = 0.001\n[controller]\nkind = \"pid\"\nkp = 1000.0\nki = 0.0\nkd = 0.0\n";
+        let lp = loop_of(toml, Discretisation::Zoh);
+        assert_eq!(lp.closed_loop_stable(), Some(false));
+        let hidden = lp.hidden_modes().unwrap();
+        assert_eq!(hidden.len(), 1, "{hidden:?}");
+        assert!((hidden[0] - C64::new(1.0, 0.0)).norm() < 1e-9);
+        // The same law at kp = 10 (below the limit) is stable, the
+        // integrator again hidden.
+        let lp = loop_of(&toml.replace("1000.0", "10.0"), Discretisation::Zoh);
+        assert_eq!(lp.closed_loop_stable(), Some(true));
+        assert_eq!(lp.hidden_modes().unwrap().len(), 1);
     }
 
     /// The discrete loop with delays: L = C(z)·G_d(z)·z^{−(n_s + n_c)}, the

@@ -214,6 +214,18 @@ fn freq_on_a_cylinder_is_in_m_and_agrees_at_low_frequency() {
         .collect();
     assert_eq!(units, ["m/V", "m/V", "V/m", "", "", "", "", "m/V"]);
     assert!(v["computed"]["dc_gain"].get("G_m_V").is_some());
+    // The P loop at rest runs stably (the measured sines above), and the
+    // verdict says so: its two poles at z = 1 (the chamber pressures'
+    // common mode, the P law's unused integrator) are hidden from L by the
+    // PBH test, and every other pole is inside the unit circle.
+    let c = &v["computed"];
+    assert_eq!(c["closed_loop_stable"], true, "{c}");
+    let hidden = c["hidden_modes"].as_array().unwrap();
+    assert_eq!(hidden.len(), 2, "{c}");
+    for z in hidden {
+        let (re, im) = (z[0].as_f64().unwrap(), z[1].as_f64().unwrap());
+        assert!((re - 1.0).abs() < 1e-6 && im.abs() < 1e-6, "{z}");
+    }
     let csv = std::fs::read_to_string(d.join("measured_sine.csv")).unwrap();
     let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     assert!(head.contains(&"dist_re_m_V"), "{head:?}");

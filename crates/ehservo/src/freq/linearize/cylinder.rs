@@ -686,7 +686,7 @@ impl Linearize for CylinderLin {
             && v.openings(xv).iter().all(|&o| o == 0.0)
         {
             out.push(
-                "at rest with every edge closed and no leakage, any pair of chamber pressures that holds the load is an equilibrium: their common mode is a pole at s = 0 (z = 1) that the command does not move, and the closed loop's `stable` verdict counts it (the position's own response is not affected)".into(),
+                "at rest with every edge closed and no leakage, any pair of chamber pressures that holds the load is an equilibrium: their common mode is a pole at s = 0 (z = 1) that the command does not move, and the closed loop's `stable` verdict leaves it out as a hidden mode (the position's own response is not affected)".into(),
             );
         }
         for (i, name) in [(2, "A"), (3, "B")] {

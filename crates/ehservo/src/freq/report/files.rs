@@ -10,7 +10,7 @@ use crate::axis::Axis;
 use crate::freq::margins::{self, Margins};
 use crate::freq::measure::{Measured, Settings};
 use crate::freq::response::{curves, LoopModel, Responses};
-use crate::freq::ss::C64;
+use crate::freq::ss::{pair, C64};
 use crate::freq::{linearisation_json, Linearised};
 use crate::output::Staging;
 use crate::scenario::{Loop, Scenario};
@@ -189,6 +189,7 @@ impl Out {
             "discretisation": lp.discretisation.as_str(),
             "linear_controller": lp.controller.is_some(),
             "closed_loop_stable": lp.closed_loop_stable(),
+            "hidden_modes": lp.hidden_modes().map(|v| v.iter().map(|z| pair(*z)).collect::<Vec<_>>()),
             "margins": m,
             "Ms": lp.loop_l.as_ref().and_then(|_| peak(|r| r.s)),
             "Mt": lp.loop_l.as_ref().and_then(|_| peak(|r| r.t)),
@@ -353,10 +354,13 @@ fn computed_text(
             .and_then(|g| g.delay_margin_s)
             .map(|d| format!("{:.3} ms", d * 1e3))
             .unwrap_or("none".into()),
-        match lp.closed_loop_stable() {
-            Some(true) => "stable",
-            Some(false) => "UNSTABLE",
-            None => "?",
+        match (lp.closed_loop_stable(), lp.hidden_modes().map(|h| h.len())) {
+            (Some(true), Some(n)) if n > 0 => format!(
+                "stable ({n} mode(s) on the stability boundary that the loop neither moves nor sees: they hold a constant)"
+            ),
+            (Some(true), _) => "stable".into(),
+            (Some(false), _) => "UNSTABLE".into(),
+            (None, _) => "?".into(),
         }
     );
     let bt = computed_json["bandwidth_Hz"]["tracking"].as_f64();
