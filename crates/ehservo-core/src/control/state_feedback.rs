@@ -172,21 +172,31 @@ pub fn design_gains(
     a: [f64; 3],
     dt: f64,
 ) -> Result<[f64; 4], ParamError> {
-    // The polynomial's coefficients [c3, c2, c1, c0] (c0 = 0 without I).
-    let c = match cfg.poles {
+    design(cfg, a, dt).map(|(k, _)| k)
+}
+
+/// [`design_gains`] with the slowest designed pole's speed (1/s): λ of
+/// the default pattern, or the least |p| of the poles in use.
+fn design(cfg: &StateFeedbackConfig, a: [f64; 3], dt: f64) -> Result<([f64; 4], f64), ParamError> {
+    // The polynomial's coefficients [c3, c2, c1, c0] (c0 = 0 without I),
+    // and the slowest pole.
+    let (c, slow) = match cfg.poles {
         Some(p) => {
-            for &v in &p[..if cfg.integral { 4 } else { 3 }] {
+            let used = &p[..if cfg.integral { 4 } else { 3 }];
+            for &v in used {
                 if !(v.is_finite() && v < 0.0) {
                     return Err(ParamError::new("poles", "must be finite and < 0", v));
                 }
             }
-            if cfg.integral {
+            let slow = used.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()));
+            let c = if cfg.integral {
                 quartic(p)
             } else {
                 // The cubic of the first three, as the quartic's with a
                 // root at 0: its last coefficient vanishes.
                 quartic([p[0], p[1], p[2], 0.0])
-            }
+            };
+            (c, slow)
         }
         None => {
             if !(a[1].is_finite() && a[1] > 0.0) {
@@ -213,7 +223,7 @@ pub fn design_gains(
                 Some(p) => positive("pole", p)?,
                 None => (w / 3.0).min(0.2 / dt),
             };
-            if cfg.integral {
+            let c = if cfg.integral {
                 // (s + λ)²(s² + 2ζωs + ω²), expanded (module doc).
                 [
                     2.0 * l + 2.0 * z * w,
@@ -224,10 +234,11 @@ pub fn design_gains(
             } else {
                 // (s + λ)(s² + 2ζωs + ω²)·s: the cubic's coefficients.
                 [l + 2.0 * z * w, 2.0 * z * w * l + w * w, l * w * w, 0.0]
-            }
+            };
+            (c, l)
         }
     };
-    Ok([c[0] - a[2], c[1] - a[1], c[2] - a[0], c[3]])
+    Ok(([c[0] - a[2], c[1] - a[1], c[2] - a[0], c[3]], slow))
 }
 
 /// The parts of the state feedback at one instant.
@@ -340,19 +351,11 @@ impl Config for StateFeedbackConfig {
 
     fn build(&self, d: &Design) -> Result<StateFeedback, ParamError> {
         let a = d.model.coeffs.as_array();
-        let k = design_gains(self, a, d.dt)?;
+        // Tt = 1/λ: the slowest designed pole, the integral's own speed.
+        let (k, slow) = design(self, a, d.dt)?;
         let u_limit = match self.u_limit {
             Some(l) => positive("u_limit", l)?,
             None => f64::INFINITY,
-        };
-        // Tt = 1/λ: the slowest designed pole, the integral's own speed
-        // (ki = λ²ω²: √ki/ω = λ for the default pattern).
-        let slow = match self.poles {
-            Some(p) => p.iter().fold(f64::INFINITY, |m, v| m.min(v.abs())),
-            None => {
-                let w = self.frequency.unwrap_or_else(|| sqrt(a[1]));
-                self.pole.unwrap_or((w / 3.0).min(0.2 / d.dt))
-            }
         };
         let b0 = d.model.b_at_rest();
         Ok(StateFeedback {

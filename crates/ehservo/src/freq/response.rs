@@ -459,13 +459,18 @@ impl LoopModel {
     /// The closed loop's poles, from L's model under unity negative
     /// feedback: `A − B·C/(1 + D)`.
     pub fn closed_loop_poles(&self) -> Option<Vec<C64>> {
+        super::ss::eigenvalues(&self.closed_loop_a()?)
+    }
+
+    /// The closed loop's A, `A − B·C/(1 + D)` of L's model (None without
+    /// a linear controller, or with 1 + D = 0).
+    fn closed_loop_a(&self) -> Option<nalgebra::DMatrix<f64>> {
         let l = self.loop_l.as_ref()?;
         let d = 1.0 + l.d[(0, 0)];
         if d == 0.0 {
             return None;
         }
-        let a = &l.a - &l.b * &l.c / d;
-        super::ss::eigenvalues(&a)
+        Some(&l.a - &l.b * &l.c / d)
     }
 
     /// Whether the closed loop is stable as a map from its inputs to its
@@ -500,11 +505,7 @@ impl LoopModel {
     /// here: it is reported unstable whatever it couples to.
     pub fn hidden_modes(&self) -> Option<Vec<C64>> {
         let l = self.loop_l.as_ref()?;
-        let d = 1.0 + l.d[(0, 0)];
-        if d == 0.0 {
-            return None;
-        }
-        let a = &l.a - &l.b * &l.c / d;
+        let a = self.closed_loop_a()?;
         let n = a.nrows();
         let scale = 1.0 + a.norm();
         let tol = 1e-9 * scale;
