@@ -292,7 +292,39 @@ pub fn markdown(format: Format) -> String {
         let _ = write!(page.out, "\n{d}\n");
     }
     page.table(&root, "", 2, &Value::Null);
+    if format == Format::Tune {
+        declared_tunables(&mut page.out);
+    }
     page.out
+}
+
+/// The tune page's table of every kind's declared tunables
+/// (`Config::TUNABLE`), in registry order.
+fn declared_tunables(out: &mut String) {
+    let _ = write!(
+        out,
+        "\n## What each kind searches by default\n\n\
+         Without `[[param]]`, a tune searches the kind's declared tunables over these ranges \
+         (`Config::TUNABLE`; a log scale searches log10 of the value). Units are those of the \
+         key in [scenario.md](scenario.md) `[controller]`, on the axis of the scenarios \
+         (rad or m).\n\n| kind | key | low | high | scale |\n|---|---|---|---|---|\n"
+    );
+    for kind in crate::scenario::ControllerCfg::KINDS {
+        let list = crate::tune::declared(kind).unwrap_or(&[]);
+        if list.is_empty() {
+            let _ = writeln!(out, "| `{kind}` | — (nothing to tune) | | | |");
+        }
+        for t in list {
+            let _ = writeln!(
+                out,
+                "| `{kind}` | `{}` | {} | {} | {} |",
+                t.key,
+                t.low,
+                t.high,
+                if t.log { "log" } else { "linear" }
+            );
+        }
+    }
 }
 
 struct Page<'a> {

@@ -321,6 +321,19 @@ impl Config for AdrcConfig {
         }))
     }
 
+    /// The bandwidths ω_c, ω_o and the input gain b0, as designed.
+    fn designed(&self, d: &Design) -> Option<Result<Self, ParamError>> {
+        Some(self.build(d).map(|adrc| {
+            let (wc, wo) = adrc.bandwidths();
+            Self {
+                omega_c: Some(wc),
+                omega_o: Some(wo),
+                b0: Some(adrc.b0()),
+                ..*self
+            }
+        }))
+    }
+
     fn build(&self, d: &Design) -> Result<Adrc, ParamError> {
         let a = d.model.coeffs.as_array();
         let wc_given = self.omega_c.map(|w| positive("omega_c", w)).transpose()?;

@@ -528,6 +528,18 @@ pub trait Config {
     fn linear(&self, _design: &Design) -> Option<Result<LinearForm, ParamError>> {
         None
     }
+    /// These parameters with the values the design derives written out
+    /// (the PID's gains from its poles, the ADRC's bandwidths from the
+    /// axis, …): what `ehservo check` shows as designed, and what `tune`
+    /// reports when it keeps a kind's defaults. Building from the result
+    /// gives the same controller on the same design. `None` (the default):
+    /// the kind derives nothing it reports.
+    fn designed(&self, _design: &Design) -> Option<Result<Self, ParamError>>
+    where
+        Self: Sized,
+    {
+        None
+    }
 }
 
 /// A linear law's gains, in the form the frequency domain builds its

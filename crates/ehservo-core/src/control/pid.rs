@@ -332,6 +332,22 @@ impl Config for PidConfig {
         }))
     }
 
+    /// The gains and the filter and tracking times, designed or given.
+    fn designed(&self, d: &Design) -> Option<Result<Self, ParamError>> {
+        Some(self.build(d).map(|pid| {
+            let (kp, ki, kd) = pid.gains();
+            let (tf, tt) = pid.times();
+            Self {
+                kp: Some(kp),
+                ki: Some(ki),
+                kd: Some(kd),
+                filter_time: Some(tf),
+                tracking_time: Some(tt),
+                ..*self
+            }
+        }))
+    }
+
     fn build(&self, d: &Design) -> Result<Pid, ParamError> {
         let a = d.model.coeffs.as_array();
         let b0 = d.model.b_at_rest();

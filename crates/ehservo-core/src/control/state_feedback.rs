@@ -175,6 +175,35 @@ pub fn design_gains(
     design(cfg, a, dt).map(|(k, _)| k)
 }
 
+/// The default pattern's pair frequency ω and double pole λ (module doc):
+/// `frequency` or ω_h = √ā2, and `pole` or min(ω/3, 0.2/dt).
+fn pattern(cfg: &StateFeedbackConfig, a: [f64; 3], dt: f64) -> Result<(f64, f64), ParamError> {
+    if !(a[1].is_finite() && a[1] > 0.0) {
+        return Err(ParamError::new(
+            "frequency",
+            "cannot default to ω_h = √ā2: the nominal model has ā2 ≤ 0 (no hydraulic resonance); give frequency or poles",
+            a[1],
+        ));
+    }
+    let wh = sqrt(a[1]);
+    let w = match cfg.frequency {
+        Some(f) => positive("frequency", f)?,
+        None => wh,
+    };
+    if w * dt > 1.0 {
+        return Err(ParamError::new(
+            "frequency",
+            "times the sample period dt exceeds 1: the sampled loop cannot act on a resonance it sees less than six times a period (shorten simulation.step, or give a lower frequency)",
+            w,
+        ));
+    }
+    let l = match cfg.pole {
+        Some(p) => positive("pole", p)?,
+        None => (w / 3.0).min(0.2 / dt),
+    };
+    Ok((w, l))
+}
+
 /// [`design_gains`] with the slowest designed pole's speed (1/s): λ of
 /// the default pattern, or the least |p| of the poles in use.
 fn design(cfg: &StateFeedbackConfig, a: [f64; 3], dt: f64) -> Result<([f64; 4], f64), ParamError> {
@@ -199,30 +228,8 @@ fn design(cfg: &StateFeedbackConfig, a: [f64; 3], dt: f64) -> Result<([f64; 4], 
             (c, slow)
         }
         None => {
-            if !(a[1].is_finite() && a[1] > 0.0) {
-                return Err(ParamError::new(
-                    "frequency",
-                    "cannot default to ω_h = √ā2: the nominal model has ā2 ≤ 0 (no hydraulic resonance); give frequency or poles",
-                    a[1],
-                ));
-            }
-            let wh = sqrt(a[1]);
-            let w = match cfg.frequency {
-                Some(f) => positive("frequency", f)?,
-                None => wh,
-            };
-            if w * dt > 1.0 {
-                return Err(ParamError::new(
-                    "frequency",
-                    "times the sample period dt exceeds 1: the sampled loop cannot act on a resonance it sees less than six times a period (shorten simulation.step, or give a lower frequency)",
-                    w,
-                ));
-            }
+            let (w, l) = pattern(cfg, a, dt)?;
             let z = positive("damping", cfg.damping)?;
-            let l = match cfg.pole {
-                Some(p) => positive("pole", p)?,
-                None => (w / 3.0).min(0.2 / dt),
-            };
             let c = if cfg.integral {
                 // (s + λ)²(s² + 2ζωs + ω²), expanded (module doc).
                 [
@@ -347,6 +354,22 @@ impl Config for StateFeedbackConfig {
     type Law<F: Real> = StateFeedback<F>;
     fn build_in<F: Real>(&self, d: &Design) -> Result<StateFeedback<F>, ParamError> {
         Ok(self.build(d)?.cast())
+    }
+
+    /// The default pattern's `frequency` and `pole`, as designed (none
+    /// filled when `poles` are given: they are the design).
+    fn designed(&self, d: &Design) -> Option<Result<Self, ParamError>> {
+        Some(self.build(d).and_then(|_| {
+            if self.poles.is_some() {
+                return Ok(*self);
+            }
+            let (w, l) = pattern(self, d.model.coeffs.as_array(), d.dt)?;
+            Ok(Self {
+                frequency: Some(w),
+                pole: Some(l),
+                ..*self
+            })
+        }))
     }
 
     fn build(&self, d: &Design) -> Result<StateFeedback, ParamError> {

@@ -215,6 +215,27 @@ impl Loop {
         super::build::model_numbers(&self.model, self.axis.si_unit())
     }
 
+    /// The controller's parameters that its design derived on this loop's
+    /// nominal model and were not written (the PID's `kp`, `ki`, `kd`, the
+    /// ADRC's `omega_c`, `omega_o`, `b0`, state feedback's `frequency` and
+    /// `pole`, …), as `(key, value)` sorted by key; empty for a kind
+    /// that derives nothing it reports (`Config::designed`).
+    ///
+    /// ```
+    /// # fn main() -> anyhow::Result<()> {
+    /// let lp = ehservo_scenario::Loop::parse("[controller]\nkind = \"pid\"")?;
+    /// let d = lp.designed();
+    /// // The PID's gains come from its pole placement on the paper's servo.
+    /// let keys: Vec<&str> = d.iter().map(|(k, _)| k.as_str()).collect();
+    /// assert!(["kp", "ki", "kd"].iter().all(|k| keys.contains(k)));
+    /// assert!(d.iter().all(|(_, v)| v.is_finite() && *v > 0.0));
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn designed(&self) -> Vec<(String, f64)> {
+        self.controller.visit(Designed(&self.design))
+    }
+
     /// What a cylinder scenario is warned of, one line each (the CLI
     /// prints them on stderr): no `[actuator]` stage (the spool follows
     /// the command at once and without limit), and a sample step h with
@@ -363,6 +384,29 @@ impl Loop {
     /// starts from.
     pub fn table(&self) -> Result<toml::Table, ScenarioError> {
         self.scenario.table()
+    }
+}
+
+/// [`Loop::designed`]: the keys the design filled in, with their values.
+struct Designed<'a>(&'a Design);
+
+impl BuiltVisit for Designed<'_> {
+    type Out = Vec<(String, f64)>;
+    fn visit<K: ControllerConfig>(self, cfg: &K, _: &K::Controller) -> Self::Out {
+        let Some(Ok(full)) = cfg.designed(self.0) else {
+            return Vec::new();
+        };
+        let (Ok(given), Ok(full)) = (toml::Table::try_from(cfg), toml::Table::try_from(&full))
+        else {
+            return Vec::new();
+        };
+        full.into_iter()
+            .filter(|(k, _)| !given.contains_key(k))
+            .filter_map(|(k, v)| match v {
+                toml::Value::Float(x) => Some((k, x)),
+                _ => None,
+            })
+            .collect()
     }
 }
 

@@ -228,13 +228,13 @@ impl Scenario {
             line_col: None,
             reason: Reason::Syntax(first_line(e.message())),
         })?;
-        let note = switch_controller_kind(&mut table, overrides);
+        let notes = switch_kinds(&mut table, overrides);
         for o in overrides {
             apply_override(&mut table, o).map_err(|e| ScenarioError::in_file("--set", e))?;
         }
         let after = format!("{file} (after --set)");
         let mut s = Self::from_table(table, &after)?;
-        s.notes.extend(note);
+        s.notes.extend(notes);
         Ok(s)
     }
 
@@ -380,36 +380,62 @@ impl Scenario {
 /// keys. Returns the line that names what was dropped, if anything. Other
 /// `--set controller.*` values apply afterwards, and a key of the old kind
 /// set that way is still refused. An unknown `K` is left to the loader's
-/// error, which names the registered kinds.
-fn switch_controller_kind(table: &mut toml::Table, overrides: &[String]) -> Option<String> {
+/// error, which names the registered kinds. `--set reference.kind=K` is
+/// alike for `[reference]` (its keys in either unit kept where K uses
+/// them).
+fn switch_kinds(table: &mut toml::Table, overrides: &[String]) -> Vec<String> {
+    let controller = switch_kind(table, overrides, "controller", DEFAULT_KIND, |kind| {
+        let keys = ControllerCfg::keys_of(kind)?;
+        Some(Box::new(move |k: &str| keys.iter().any(|x| x == k)))
+    });
+    let reference = switch_kind(table, overrides, "reference", "sine", |kind| {
+        let kind: reference::ReferenceKind =
+            toml::Value::String(kind.to_string()).try_into().ok()?;
+        Some(Box::new(move |k: &str| kind.takes(k)))
+    });
+    controller.into_iter().chain(reference).collect()
+}
+
+/// Which keys a kind of a `[section]` takes (`None`: no such kind).
+type Takes = Box<dyn Fn(&str) -> bool>;
+
+/// [`switch_kinds`] for one section.
+fn switch_kind(
+    table: &mut toml::Table,
+    overrides: &[String],
+    section: &str,
+    default: &str,
+    takes: impl Fn(&str) -> Option<Takes>,
+) -> Option<String> {
+    let flag = format!("{section}.kind");
     let new_kind = overrides.iter().rev().find_map(|o| {
         let (path, raw) = o.split_once('=')?;
-        match (path.trim(), parse_value(raw)) {
-            ("controller.kind", toml::Value::String(k)) => Some(k),
+        match parse_value(raw) {
+            toml::Value::String(k) if path.trim() == flag => Some(k),
             _ => None,
         }
     })?;
-    let keys = ControllerCfg::keys_of(&new_kind)?;
-    let Some(toml::Value::Table(ctrl)) = table.get_mut("controller") else {
+    let takes = takes(&new_kind)?;
+    let Some(toml::Value::Table(sec)) = table.get_mut(section) else {
         return None;
     };
-    let old_kind = match ctrl.get("kind") {
-        None => DEFAULT_KIND.to_string(),
+    let old_kind = match sec.get("kind") {
+        None => default.to_string(),
         Some(toml::Value::String(k)) => k.clone(),
         Some(_) => return None,
     };
     if old_kind == new_kind {
         return None;
     }
-    let dropped: Vec<String> = ctrl.keys().filter(|k| !keys.contains(k)).cloned().collect();
+    let dropped: Vec<String> = sec.keys().filter(|k| !takes(k)).cloned().collect();
     if dropped.is_empty() {
         return None;
     }
     for k in &dropped {
-        ctrl.remove(k);
+        sec.remove(k);
     }
     Some(format!(
-        "--set controller.kind={new_kind}: dropped the file's {old_kind} key{} {} (kind {new_kind} does not take {})",
+        "--set {flag}={new_kind}: dropped the file's {old_kind} key{} {} (kind {new_kind} does not take {})",
         if dropped.len() == 1 { "" } else { "s" },
         dropped.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", "),
         if dropped.len() == 1 { "it" } else { "them" },

@@ -339,9 +339,40 @@ pub(super) fn check(a: CheckArgs, w: &mut impl Write) -> Result<()> {
     let lp = load(&scenario, &set)?;
     warn(&scenario, &lp);
     put!(w, "{}", lp.scenario().to_toml());
+    // What the design filled in, as comments: the file stays the same
+    // scenario (a comment does not pin gains to this plant).
+    let designed = lp.designed();
+    if !designed.is_empty() {
+        put!(
+            w,
+            "# [controller] as designed on this axis's nominal model (not written, derived at each build):\n"
+        );
+        for (k, v) in &designed {
+            put!(
+                w,
+                "#   {k} = {v:e}  # {}\n",
+                designed_unit(k, lp.axis().si_unit())
+            );
+        }
+    }
     note!("{}: ok ({} steps)", scenario.display(), lp.sim().steps);
     note!("{}", axis_line(&lp));
     Ok(())
+}
+
+/// The unit of a designed controller key ([`Loop::designed`]) on an axis
+/// whose position is in `si` (rad or m).
+pub(crate) fn designed_unit(key: &str, si: &str) -> String {
+    match key {
+        "kp" => format!("V/{si}"),
+        "ki" => format!("V/({si}·s)"),
+        "kd" => format!("V·s/{si}"),
+        "filter_time" | "tracking_time" => "s".into(),
+        "omega_c" | "omega_o" | "frequency" => "rad/s".into(),
+        "pole" => "1/s".into(),
+        "b0" => format!("{si}/(V·s³)"),
+        _ => "as the kind's reference gives it".into(),
+    }
 }
 
 /// The nominal third-order model the designs start from, in one line

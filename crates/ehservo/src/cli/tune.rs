@@ -78,9 +78,30 @@ pub(super) fn tune(a: TuneArgs, w: &mut impl Write) -> Result<()> {
             .iter()
             .map(|(k, v)| format!("{k} = {v:.6}"))
             .collect();
+        let swarm = r
+            .swarm_best
+            .as_ref()
+            .map(|b| {
+                let p: Vec<String> = b
+                    .params
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v:.6}"))
+                    .collect();
+                if b.objective.is_finite() {
+                    format!(
+                        "\n  (the swarm's best, {}, scored {:.5}{}: not better)",
+                        p.join(", "),
+                        b.objective,
+                        tune.axis.suffix()
+                    )
+                } else {
+                    format!("\n  (the swarm's best, {}, was rejected)", p.join(", "))
+                }
+            })
+            .unwrap_or_default();
         out!(
             w,
-            "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}{}\n  {}\n  {}\nwrote {}/tuned.toml",
+            "{}: {} tuned in {} evaluations ({:.2} s): objective {:.5}{}{}\n  {}{}{}\n  {}\nwrote {}/tuned.toml",
             tune.file.name,
             tune.kind,
             r.evaluations,
@@ -92,7 +113,17 @@ pub(super) fn tune(a: TuneArgs, w: &mut impl Write) -> Result<()> {
             } else {
                 format!(" (defaults: {:.5}{})", r.defaults, tune.axis.suffix())
             },
-            params.join(", "),
+            if r.kept_defaults && params.is_empty() {
+                "the kind's defaults".to_string()
+            } else {
+                params.join(", ")
+            },
+            if r.kept_defaults && !params.is_empty() {
+                " (the kind's defaults)"
+            } else {
+                ""
+            },
+            swarm,
             r.verification
                 .as_ref()
                 .map(|v| v.summary(tune.axis.suffix()))

@@ -202,8 +202,14 @@ pub fn common_axis(scenarios: &[Loop]) -> Result<crate::axis::Axis, usize> {
     }
 }
 
-/// The declared tunables of a kind.
+/// The declared tunables of a kind ([`declared`]).
 struct Tunables;
+
+/// The tunables `kind` declares (`Config::TUNABLE`): what a tune searches
+/// when its file gives no `[[param]]`; `None` for an unknown kind.
+pub fn declared(kind: &str) -> Option<&'static [ehservo_core::control::Tunable]> {
+    crate::scenario::ControllerCfg::default_of(kind).map(|c| c.visit(Tunables))
+}
 
 impl crate::scenario::Visit for Tunables {
     type Out = &'static [ehservo_core::control::Tunable];
@@ -407,9 +413,7 @@ impl Keys<'_> {
     /// The parameters tuned: the `[[param]]` ranges, or the kind's declared
     /// tunables; each checked.
     fn params(&self, tf: &TuneFile, kind: &'static str) -> Result<Vec<ParamRange>, InputError> {
-        let declared = ControllerCfg::default_of(kind)
-            .map(|c| c.visit(Tunables))
-            .unwrap_or(&[]);
+        let declared = declared(kind).unwrap_or(&[]);
         let params: Vec<ParamRange> = if tf.param.is_empty() {
             declared
                 .iter()

@@ -46,9 +46,10 @@ mod search;
 mod verify;
 
 pub use file::{
-    common_axis, Objective, ParamRange, Penalty, Reject, Scale, Tune, TuneFile, Verify, MAX_BUDGET,
+    common_axis, declared, Objective, ParamRange, Penalty, Reject, Scale, Tune, TuneFile, Verify,
+    MAX_BUDGET,
 };
 pub(crate) use file::{default_budget, default_draws, default_particles, default_seed};
 pub(crate) use file::{not_a_result, numeric};
-pub use search::{search, tune_to_dir, TuneResult};
+pub use search::{search, tune_to_dir, SwarmBest, TuneResult};
 pub use verify::{Verification, VerifiedRun};

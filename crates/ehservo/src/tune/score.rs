@@ -42,6 +42,33 @@ impl Tune {
         self.scenarios[i].with_values_on(self.tables[i].clone(), sets)
     }
 
+    /// The searched parameters' values at the kind's defaults on the first
+    /// scenario: given in its `[controller]`, or derived by the kind's
+    /// design there ([`Loop::designed`]); a key with neither (a kind that
+    /// does not report its derivation) is left out.
+    pub fn default_values(&self) -> Vec<(String, f64)> {
+        let Some(Ok(lp)) = self.sets_of(None).first().map(|s| self.build_run(0, s)) else {
+            return Vec::new();
+        };
+        let given = lp
+            .table()
+            .ok()
+            .and_then(|t| t.get("controller").and_then(|c| c.as_table()).cloned())
+            .unwrap_or_default();
+        let designed = lp.designed();
+        self.params
+            .iter()
+            .filter_map(|r| {
+                let v = match given.get(&r.key) {
+                    Some(toml::Value::Float(x)) => Some(*x),
+                    Some(toml::Value::Integer(i)) => Some(*i as f64),
+                    _ => designed.iter().find(|(k, _)| *k == r.key).map(|p| p.1),
+                };
+                v.map(|v| (r.key.clone(), v))
+            })
+            .collect()
+    }
+
     /// The parameter values of a point of the search space.
     pub fn values(&self, p: &[f64]) -> Vec<f64> {
         self.params

@@ -61,8 +61,14 @@ pub struct TuneResult {
     /// for a scenario of the kind tuned, its own `[controller]` table).
     pub defaults: f64,
     /// The swarm found nothing better than the defaults, which are kept:
-    /// tuned.toml then carries the default parameters.
+    /// tuned.toml then carries the default parameters, and `params` are
+    /// the defaults' values on the first scenario (given in its
+    /// `[controller]` or designed there, [`crate::scenario::Loop::designed`]).
     pub kept_defaults: bool,
+    /// When the defaults are kept: the swarm's best candidate, which was
+    /// no better (or was rejected: objective +∞), with its objective. It
+    /// is not a result; it says what the search reached.
+    pub swarm_best: Option<SwarmBest>,
     /// Evaluations made.
     pub evaluations: u64,
     /// Best objective after each iteration of the swarm (the first after
@@ -71,6 +77,15 @@ pub struct TuneResult {
     /// The chosen parameters run again, longer and over more draws
     /// (None: no candidate passed, nothing was chosen).
     pub verification: Option<super::Verification>,
+}
+
+/// The swarm's best candidate when it is not the result.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SwarmBest {
+    /// Its parameters, by key.
+    pub params: Vec<(String, f64)>,
+    /// Its objective (+∞: rejected).
+    pub objective: f64,
 }
 
 impl TuneResult {
@@ -146,6 +161,7 @@ pub fn search(
             objective: state.get_best_cost(),
             defaults: f64::INFINITY,
             kept_defaults: false,
+            swarm_best: None,
             evaluations,
             history: history.0.lock().expect("unpoisoned").clone(),
             verification: None,
@@ -168,6 +184,10 @@ pub fn search(
     // defaults are kept, and the result is not accepted.
     if r.objective > r.defaults || !r.objective.is_finite() {
         r.kept_defaults = true;
+        r.swarm_best = Some(SwarmBest {
+            params: std::mem::replace(&mut r.params, t.default_values()),
+            objective: r.objective,
+        });
         r.objective = r.defaults;
     }
     if r.objective.is_finite() {

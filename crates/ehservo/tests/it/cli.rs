@@ -404,3 +404,112 @@ fn set_controller_kind_switches_and_names_the_dropped_keys() {
         "{err}"
     );
 }
+
+/// `--set reference.kind=K` on a file of another reference kind: the keys
+/// K does not take are dropped and named, the ones it takes kept (in the
+/// axis's unit), and the run builds. The slide's step (`amplitude_mm`,
+/// `start`, `prefilter_tau`) switched to a sine keeps `amplitude_mm` and
+/// drops `start` and `prefilter_tau` (a sine has neither: docs/guide).
+#[test]
+fn set_reference_kind_switches_and_names_the_dropped_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = repo().join("scenarios/cylinders/slide.toml");
+    let table: toml::Table = toml::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    let r = table["reference"].as_table().unwrap();
+    assert_eq!(r["kind"].as_str(), Some("step"), "the test's premise");
+    let text = toml::to_string(&table).unwrap();
+    let f = write(dir.path(), "s.toml", &text);
+    let o = ehservo()
+        .arg("check")
+        .arg(&f)
+        .args(["--set", "reference.kind=sine"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let out: toml::Table = toml::from_str(&String::from_utf8_lossy(&o.stdout)).unwrap();
+    let r2 = out["reference"].as_table().unwrap();
+    // The default kind is not written out.
+    assert_eq!(
+        r2.get("kind").map_or(Some("sine"), |k| k.as_str()),
+        Some("sine")
+    );
+    assert_eq!(r2.get("amplitude_mm"), r.get("amplitude_mm"));
+    let note = err
+        .lines()
+        .find(|l| l.contains("--set reference.kind=sine"))
+        .unwrap_or_else(|| panic!("no note: {err}"));
+    for k in r.keys().filter(|k| *k != "kind") {
+        let kept = ["amplitude_mm", "offset_mm"].contains(&k.as_str());
+        assert_eq!(!note.contains(&format!("`{k}`")), kept, "{k}: {note}");
+        assert_eq!(r2.contains_key(k), kept, "{k}");
+    }
+}
+
+/// `check` shows what the design derives: the PID's kp, ki, kd on the
+/// paper's servo satisfy its pole placement (the closed loop
+/// s⁴ + ā3s³ + (ā2 + b̄0kd)s² + (ā1 + b̄0kp)s + b̄0ki has the double pole
+/// −λ, λ = design_pole = 30, module doc of `control::pid`), state
+/// feedback's frequency on the slide is ω_h = √ā2, and writing the shown
+/// values into the file runs the same loop.
+#[test]
+fn check_shows_the_designed_parameters_which_rebuild_the_same_loop() {
+    let dir = tempfile::tempdir().unwrap();
+    let designed = |f: &Path| -> Vec<(String, f64, String)> {
+        let o = ehservo().arg("check").arg(f).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = String::from_utf8_lossy(&o.stdout).to_string();
+        // The output is still a scenario: the values are comments.
+        toml::from_str::<toml::Table>(&text).unwrap();
+        text.lines()
+            .filter_map(|l| l.strip_prefix("#   "))
+            .map(|l| {
+                let (kv, unit) = l.split_once("  # ").unwrap();
+                let (k, v) = kv.split_once(" = ").unwrap();
+                (k.to_string(), v.parse().unwrap(), unit.to_string())
+            })
+            .collect()
+    };
+    let pid = write(dir.path(), "pid.toml", "[controller]\nkind = \"pid\"\n");
+    let d = designed(&pid);
+    let get = |d: &[(String, f64, String)], k: &str| d.iter().find(|x| x.0 == k).unwrap().clone();
+    let (kp, ki, kd) = (get(&d, "kp"), get(&d, "ki"), get(&d, "kd"));
+    assert_eq!(kp.2, "V/rad");
+    let lp = ehservo::scenario::Loop::parse("").unwrap();
+    let a = lp.model().coeffs.as_array();
+    let b0 = lp.model().b_at_rest();
+    let c = [1.0, a[2], a[1] + b0 * kd.1, a[0] + b0 * kp.1, b0 * ki.1];
+    let p = |s: f64| c.iter().fold(0.0, |acc, ci| acc * s + ci);
+    let dp = |s: f64| 4.0 * s.powi(3) + 3.0 * c[1] * s * s + 2.0 * c[2] * s + c[3];
+    assert!(
+        p(-30.0).abs() < 1e-9 * c[4] && dp(-30.0).abs() < 1e-9 * c[4],
+        "{c:?}"
+    );
+    // The values written in: the same run, bit for bit.
+    let run = |f: &Path, out: &str| -> String {
+        let o = ehservo()
+            .args(["run", "--no-plot", "-q", "--out"])
+            .arg(dir.path().join(out))
+            .arg(f)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read_to_string(dir.path().join(out).join("trace.csv")).unwrap()
+    };
+    let mut text = String::from("[controller]\nkind = \"pid\"\n");
+    for (k, v, _) in &d {
+        text.push_str(&format!("{k} = {v:e}\n"));
+    }
+    let written = write(dir.path(), "written.toml", &text);
+    assert!(designed(&written).is_empty(), "nothing left to derive");
+    assert_eq!(run(&pid, "a"), run(&written, "b"));
+    // State feedback on the slide: ω_h = √ā2 of its nominal model.
+    let slide = repo().join("scenarios/cylinders/slide.toml");
+    let lp = ehservo::scenario::Loop::load(&slide, &[]).unwrap();
+    let f = get(&designed(&slide), "frequency");
+    let wh = lp.model().coeffs.as_array()[1].sqrt();
+    assert!(
+        (f.1 - wh).abs() < 1e-12 * wh && f.2 == "rad/s",
+        "{f:?} vs {wh}"
+    );
+}

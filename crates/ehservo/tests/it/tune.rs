@@ -99,3 +99,73 @@ fn tune_is_deterministic_and_its_scenario_reproduces() {
     let e = s["metrics"]["e_max_deg"].as_f64().unwrap();
     assert_eq!(e.to_bits(), objective.to_bits(), "{e} vs {objective}");
 }
+
+/// A swarm held to gains far below the design's (kp, ki ∈ [1e-3, 2e-3],
+/// kd ∈ [1e-6, 2e-6]: a loop that barely acts) finds nothing better than
+/// the PID's designed defaults on Fig. 2's case: the defaults are kept, and
+/// what tune.json calls the result (`result.params`) are the defaults'
+/// values, the gains `ehservo check` shows as designed, not the swarm's
+/// best, which is stored apart (`result.swarm_best`) inside its ranges.
+#[test]
+fn kept_defaults_report_the_defaults_not_the_swarms_best() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("t.toml");
+    let mut text = format!(
+        "scenarios = [{:?}]\ncontroller = \"pid\"\nbudget = 6\nparticles = 3\nseed = 1\n",
+        repo().join("scenarios/paper/fig2.toml")
+    );
+    for (k, lo) in [("kp", 1e-3), ("ki", 1e-3), ("kd", 1e-6)] {
+        text.push_str(&format!(
+            "[[param]]\nkey = \"{k}\"\nlow = {lo:e}\nhigh = {:e}\nscale = \"linear\"\n",
+            2.0 * lo
+        ));
+    }
+    std::fs::write(&file, text).unwrap();
+    let out = tmp.path().join("out");
+    let o = ehservo(&[
+        "tune".as_ref(),
+        file.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--no-plot".as_ref(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.contains("(the kind's defaults)") && stdout.contains("the swarm's best"),
+        "{stdout}"
+    );
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("tune.json")).unwrap()).unwrap();
+    let r = &j["result"];
+    assert_eq!(r["kept_defaults"], true);
+    // The designed gains, as `check` prints them for a PID on this case.
+    let c = std::process::Command::new(env!("CARGO_BIN_EXE_ehservo"))
+        .args(["check", "--set", "controller={kind=\"pid\"}"])
+        .arg(repo().join("scenarios/paper/fig2.toml"))
+        .output()
+        .unwrap();
+    let shown = String::from_utf8_lossy(&c.stdout).to_string();
+    let designed = |k: &str| -> f64 {
+        let l = shown
+            .lines()
+            .find_map(|l| l.strip_prefix(&format!("#   {k} = ")))
+            .unwrap_or_else(|| panic!("{k} not shown: {shown}"));
+        l.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let params = r["params"].as_array().unwrap();
+    assert_eq!(params.len(), 3);
+    for p in params {
+        let (k, v) = (p[0].as_str().unwrap(), p[1].as_f64().unwrap());
+        assert_eq!(v.to_bits(), designed(k).to_bits(), "{k}");
+    }
+    for p in r["swarm_best"]["params"].as_array().unwrap() {
+        let v = p[1].as_f64().unwrap();
+        assert!(v < 2.1e-3, "{p}: inside its range");
+    }
+}

@@ -109,6 +109,17 @@ impl ReferenceKind {
         }
     }
 
+    /// Whether this kind's `[reference]` takes `key`, as a file writes it
+    /// on either axis (`kind` and the offsets always).
+    pub fn takes(self, key: &str) -> bool {
+        let rotary = match key {
+            "amplitude_mm" => "amplitude_deg",
+            "slope_mm_per_s" => "slope_deg_per_s",
+            k => k,
+        };
+        key == "kind" || key.starts_with("offset_") || self.keys().contains(&rotary)
+    }
+
     fn is_sine(&self) -> bool {
         *self == Self::Sine
     }
