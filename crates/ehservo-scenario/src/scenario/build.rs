@@ -5,7 +5,7 @@
 //! succeeds, and each key is checked here, in the step that uses it.
 
 use super::closed_loop::{Loop, Parts};
-use super::{AnyReference, EstimatorCfg, SafeCommandCfg, Scenario, MAX_STEPS};
+use super::{AnyReference, ControllerCfg, EstimatorCfg, SafeCommandCfg, Scenario, MAX_STEPS};
 use ehservo_core::control::Design;
 use ehservo_core::error::ParamError;
 use ehservo_core::sampled::{FaultPolicy, Limits, SafeCommand};
@@ -55,6 +55,20 @@ pub(super) fn build(s: &Scenario) -> Result<Parts, KeyError> {
                 s.controller.kind()
             ),
         );
+    }
+    if let (Axis::Linear, ControllerCfg::OpenLoop(c)) = (plant.axis(), &s.controller) {
+        if c.volts_per_deg.is_some() {
+            return bad(
+                "controller.volts_per_deg",
+                "is a rotary axis's gain (V/°): on this linear axis give volts_per_mm (V/mm)",
+            );
+        }
+        if c.volts_per_mm.is_none() {
+            return bad(
+                "controller.volts_per_mm",
+                "is required by kind `open-loop` on a linear axis (the default of 1 is V/°, a rotary axis's)",
+            );
+        }
     }
     if s.output.decimate == 0 {
         return bad("output.decimate", "must be >= 1");

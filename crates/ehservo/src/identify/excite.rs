@@ -644,7 +644,12 @@ fn scenario_table(
     match plan.kp {
         None => {
             ctrl.insert("kind".into(), "open-loop".into());
-            ctrl.insert("volts_per_deg".into(), 1.0.into());
+            // 1 V per unit of the reference table (° or mm).
+            let key = match prior.axis() {
+                crate::axis::Axis::Rotary => "volts_per_deg",
+                crate::axis::Axis::Linear => "volts_per_mm",
+            };
+            ctrl.insert(key.into(), 1.0.into());
         }
         Some(k) => {
             ctrl.insert("kind".into(), "pid".into());

@@ -342,3 +342,54 @@ fn every_kind_settles_the_slide_or_refuses_naming_the_axis() {
     // The law made for such an axis is among those that settle.
     assert!(settled >= 1);
 }
+
+/// The open loop's gain in the axis's unit: on the slide (a linear axis)
+/// `volts_per_deg` is refused and `volts_per_mm` required (exit 2, one
+/// line naming where the key came from, and the key); 0.5 V/mm on a 4 mm
+/// step commands 0.5·4 = 2 V once the prefiltered step has arrived.
+#[test]
+fn open_loop_on_a_linear_axis_takes_volts_per_mm() {
+    let dir = tempfile::tempdir().unwrap();
+    let slide = crate::common::repo().join("scenarios/cylinders/slide.toml");
+    let run = |sets: &[&str], out: &str| {
+        let mut c = crate::common::ehservo();
+        c.arg("run")
+            .arg(&slide)
+            .args(["--no-plot", "-q", "--out"])
+            .arg(dir.path().join(out));
+        c.args(["--set", "controller={kind=\"open-loop\"}"]);
+        for s in sets {
+            c.args(["--set", s]);
+        }
+        c.output().unwrap()
+    };
+    let o = run(&["controller.volts_per_deg=1"], "a");
+    // Set by --set: the flag is blamed (docs/guide/getting-started.md).
+    crate::common::rejected_naming("--set", &o, "controller.volts_per_deg");
+    let o = run(&[], "b");
+    crate::common::rejected_naming("--set", &o, "controller.volts_per_mm");
+    assert!(!dir.path().join("a").exists() && !dir.path().join("b").exists());
+    let o = run(
+        &[
+            "controller.volts_per_mm=0.5",
+            "simulation.horizon=0.5",
+            "reference.offset_mm=0",
+            "reference.amplitude_mm=4",
+        ],
+        "c",
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut r = csv::Reader::from_path(dir.path().join("c/trace.csv")).unwrap();
+    let col = r
+        .headers()
+        .unwrap()
+        .iter()
+        .position(|h| h == "u_V")
+        .unwrap();
+    let last = r.records().last().unwrap().unwrap();
+    let u: f64 = last[col].parse().unwrap();
+    // The step of 4 mm, at 0.1 s through four 20 ms lags, has arrived by
+    // 0.5 s: its residue, Σ_{k<4} 20^k/k!·e^−20 ≈ 3.2e-6 of it (6e-6 V),
+    // is inside the bound; u = 0.5 V/mm · 4 mm = 2 V.
+    assert!((u - 2.0).abs() < 1e-5, "u {u}");
+}
