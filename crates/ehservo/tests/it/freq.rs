@@ -293,3 +293,55 @@ fn at_a_time_is_the_runs_state() {
     assert!((l.point.drift[1] - smp.x[2]).abs() < 1e-12);
     assert!(l.point.drift[2].abs() > 0.0);
 }
+
+/// A measured band above the loop's gain crossover (the PID's computed one
+/// is at 5.6 Hz: `freq` without `--measure`) has no crossover to measure:
+/// the margins say so and name the band, rather than a bare "none".
+#[test]
+fn a_measured_band_without_a_crossover_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = crate::common::ehservo()
+        .arg("freq")
+        .arg(crate::common::repo().join("scenarios/frequency/pid-nominal.toml"))
+        .args([
+            "--measure",
+            "sine",
+            "--measure-f-min",
+            "20",
+            "--measure-f-max",
+            "40",
+        ])
+        .args(["--measure-points", "3", "--no-plot", "--out"])
+        .arg(dir.path().join("f"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("measured (sine"))
+        .unwrap();
+    assert!(
+        line.contains("phase margin none (|L| does not cross 1 between 20.")
+            && line.contains(" Hz, where L was measured)"),
+        "{line}"
+    );
+    // The computed crossover lies below the band: the premise.
+    let c = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("L: gain margin"))
+        .unwrap();
+    let f: f64 = c
+        .split("phase margin ")
+        .nth(1)
+        .unwrap()
+        .split(" at ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(f < 20.0, "{c}");
+}

@@ -240,6 +240,19 @@ impl Out {
             let q_min = |v: &[Measured]| v.iter().map(|m| m.quality).fold(f64::INFINITY, f64::min);
             let bw = measured_bandwidth(&set.tracking);
             let mm = measured_margins(&loop_pts);
+            // Why a margin is absent: |L| did not cross 1 between the
+            // measured frequencies (or too few of them were measured).
+            let measured_l: Vec<f64> = loop_pts
+                .iter()
+                .filter(|p| p.1.is_some())
+                .map(|p| p.0)
+                .collect();
+            let no_crossover = match (measured_l.first(), measured_l.last()) {
+                (Some(a), Some(b)) if measured_l.len() > 1 => format!(
+                    "none (|L| does not cross 1 between {a:.3} and {b:.3} Hz, where L was measured)"
+                ),
+                _ => "none (L measured at fewer than two frequencies)".into(),
+            };
             let _ = writeln!(
                 self.text,
                 "measured ({}, {} frequencies): tracking −3 dB bandwidth {}; loop at the plant's input: phase margin {}, delay margin {}{}",
@@ -252,11 +265,15 @@ impl Out {
                 mm["phase_margin"]["phase_margin_deg"]
                     .as_f64()
                     .map(|p| format!("{p:.2}°"))
-                    .unwrap_or("none".into()),
+                    .unwrap_or_else(|| no_crossover.clone()),
                 mm["delay_margin"]["delay_margin_s"]
                     .as_f64()
                     .map(|d| format!("{:.2} ms", d * 1e3))
-                    .unwrap_or("none".into()),
+                    .unwrap_or_else(|| if mm["phase_margin"].is_null() {
+                        "none".into()
+                    } else {
+                        "none (no crossover of non-negative phase margin)".into()
+                    }),
                 if diverged > 0 {
                     format!("; {diverged} runs unbounded")
                 } else {
@@ -353,7 +370,11 @@ fn computed_text(
         m.delay_margin
             .and_then(|g| g.delay_margin_s)
             .map(|d| format!("{:.3} ms", d * 1e3))
-            .unwrap_or("none".into()),
+            .unwrap_or(if m.phase_margin.is_none() {
+                "none (no gain crossover)".into()
+            } else {
+                "none (no crossover of non-negative phase margin)".into()
+            }),
         match (lp.closed_loop_stable(), lp.hidden_modes().map(|h| h.len())) {
             (Some(true), Some(n)) if n > 0 => format!(
                 "stable ({n} mode(s) on the stability boundary that the loop neither moves nor sees: they hold a constant)"
