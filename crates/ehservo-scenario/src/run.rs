@@ -185,7 +185,7 @@ pub fn accumulator<P: Plant, C: Controller>(lp: &Loop, plant: &P, ctrl: &C) -> M
         end_stops: plant.end_stops(),
         limit,
         has_limit: limit.is_finite() || lp.stages().policy.limits.u.is_finite(),
-        reference_period: lp.reference_period(),
+        forcing: lp.forcing(),
         ..Checks::default()
     };
     let after = ((lp.horizon() - lp.settle()).max(0.0) / lp.sim().step) as u64 + 2;

@@ -39,6 +39,62 @@ pub const OSCILLATION_DECAY_FLOOR: f64 = 0.5;
 /// oscillation of the loop's own.
 pub const FORCED_PERIOD_TOLERANCE: f64 = 0.1;
 
+/// What the reference does after the transient, for [`detect_oscillation`]:
+/// the frequencies at which the error's forced response cycles, so that
+/// it is not taken for an oscillation of the loop's own.
+///
+/// ```
+/// use ehservo_core::reference::Chirp;
+/// use ehservo_sim::behaviour::Forcing;
+///
+/// // A 2 Hz sine forces cycles of 0.5 s (and 0.25 s, 0.1667 s, 0.125 s).
+/// let sine = Forcing::Tones(vec![2.0]);
+/// assert!(sine.forces(0.5, 0.0) && sine.forces(0.25, 9.0) && !sine.forces(0.4, 0.0));
+/// // A sweep from 1 to 11 Hz over 10 s is at 6 Hz at t = 5 s.
+/// let chirp = Forcing::Chirp { chirp: Chirp::try_new(1.0, 1.0, 11.0, 10.0).unwrap(), t0: 2.0 };
+/// assert!(chirp.forces(1.0 / 6.0, 3.0) && !chirp.forces(1.0 / 6.0, 7.0));
+/// ```
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Forcing {
+    /// Nothing after the transient forces a cycle (a step, a ramp), or
+    /// what does is not known (a CSV table): every cycle is the loop's own.
+    #[default]
+    None,
+    /// Tones present throughout (Hz): a sine's or a square wave's
+    /// frequency, a multisine's components.
+    Tones(Vec<f64>),
+    /// A linear sweep: at time t the forced cycles are those of its
+    /// instantaneous frequency. `t0` is the time (s) of the error window's
+    /// first sample on the reference's clock.
+    Chirp {
+        /// The sweep.
+        chirp: ehservo_core::reference::Chirp,
+        /// The window's start (s).
+        t0: f64,
+    },
+}
+
+impl Forcing {
+    /// Whether a cycle of period `period` (s) whose middle is `t` seconds
+    /// into the window is the forced response: `period` within
+    /// [`FORCED_PERIOD_TOLERANCE`] of 1/(n·f), n = 1…4, for a frequency f
+    /// of the reference at that time.
+    pub fn forces(&self, period: f64, t: f64) -> bool {
+        let near = |f: f64| {
+            f > 0.0
+                && (1..=4).any(|n| {
+                    let tn = 1.0 / (n as f64 * f);
+                    ((period - tn) / tn).abs() <= FORCED_PERIOD_TOLERANCE
+                })
+        };
+        match self {
+            Self::None => false,
+            Self::Tones(fs) => fs.iter().any(|&f| near(f)),
+            Self::Chirp { chirp, t0 } => near(chirp.frequency_at(t0 + t)),
+        }
+    }
+}
+
 /// The share of samples at the command's limit above which a run counts
 /// as saturated (the verdict, sweeps, leagues; `ehservo tune`'s default
 /// rejection).
@@ -73,8 +129,9 @@ pub struct Oscillation {
     pub period_s: Option<f64>,
     /// The last cycle's amplitude over the first's; null with none.
     pub decay: Option<f64>,
-    /// The period is the reference's (or a half, third, quarter of it):
-    /// the loop's forced response to a periodic reference.
+    /// The loop's forced response to a moving reference ([`Forcing`]):
+    /// the mean period is a tone's (or a half, third, quarter of it), or,
+    /// under a sweep, at least half of the cycles are, each at its time.
     pub forced: bool,
     /// Sustained: at least [`OSCILLATION_MIN_CYCLES`] cycles, an
     /// amplitude ≥ [`OSCILLATION_TOLERANCE`], a decay ≥
@@ -260,8 +317,8 @@ pub fn is_verdict_cell(c: &str) -> bool {
 
 /// Detects a sustained oscillation in `e`, the error after the transient
 /// sampled every `dt` seconds, in the axis's display unit, against the
-/// amplitude `tolerance`; `reference_period` is the period of a periodic
-/// reference (sine, square), whose forced response is not counted.
+/// amplitude `tolerance`; `forcing` is what the reference does there
+/// ([`Forcing`]), whose forced response is not counted.
 ///
 /// 1. d = e − mean(e) over the window.
 /// 2. Upward zero crossings of d, each at the linear interpolation
@@ -276,8 +333,10 @@ pub fn is_verdict_cell(c: &str) -> bool {
 /// 5. `sustained` when there are at least [`OSCILLATION_MIN_CYCLES`]
 ///    cycles, `amplitude` ≥ `tolerance`, `decay` ≥
 ///    [`OSCILLATION_DECAY_FLOOR`] (a growing oscillation has decay > 1),
-///    and the period is not within [`FORCED_PERIOD_TOLERANCE`] of the
-///    reference's period over n = 1…4.
+///    and the oscillation is not forced: for steady tones, the mean period
+///    is not within [`FORCED_PERIOD_TOLERANCE`] of 1/(n·f), n = 1…4, for
+///    a tone f; for a sweep, fewer than half of the cycles (each by its
+///    own period, at its middle's time) are ([`Forcing::forces`]).
 ///
 /// None with fewer than eight samples, or a non-finite one (a run that
 /// diverged has no window to judge).
@@ -290,7 +349,7 @@ pub fn is_verdict_cell(c: &str) -> bool {
 /// let e: Vec<f64> = (0..=2000)
 ///     .map(|k| 2.0 * (2.0 * std::f64::consts::PI * 5.0 * k as f64 * dt).sin())
 ///     .collect();
-/// let o = detect_oscillation(&e, dt, 0.5, None).unwrap();
+/// let o = detect_oscillation(&e, dt, 0.5, &Default::default()).unwrap();
 /// assert!(o.sustained);
 /// assert!((o.period_s.unwrap() - 0.2).abs() < 1e-6);
 /// assert!((o.amplitude - 2.0).abs() < 1e-3);
@@ -299,7 +358,7 @@ pub fn detect_oscillation(
     e: &[f64],
     dt: f64,
     tolerance: f64,
-    reference_period: Option<f64>,
+    forcing: &Forcing,
 ) -> Option<Oscillation> {
     if e.len() < 8 || !e.iter().all(|v| v.is_finite()) || dt.is_nan() || dt <= 0.0 {
         return None;
@@ -354,12 +413,19 @@ pub fn detect_oscillation(
     let last_half = &amps[cycles / 2..];
     let amplitude = last_half.iter().sum::<f64>() / last_half.len() as f64;
     let decay = (amps[0] > 0.0).then(|| amps[cycles - 1] / amps[0]);
-    let forced = reference_period.is_some_and(|tr| {
-        (1..=4).any(|n| {
-            let tn = tr / n as f64;
-            ((period - tn) / tn).abs() <= FORCED_PERIOD_TOLERANCE
-        })
-    });
+    // Steady tones are judged by the mean period (a limit cycle's cycles
+    // scatter about its own period, some of them into a tone's band); a
+    // sweep, whose forced period moves, cycle by cycle at each one's time.
+    let forced = match forcing {
+        Forcing::Chirp { .. } => {
+            let by_cycle = crossings
+                .windows(2)
+                .filter(|w| forcing.forces(w[1].0 - w[0].0, 0.5 * (w[0].0 + w[1].0)))
+                .count();
+            2 * by_cycle >= cycles
+        }
+        _ => forcing.forces(period, 0.0),
+    };
     let sustained = cycles >= OSCILLATION_MIN_CYCLES
         && amplitude >= tolerance
         && decay.is_some_and(|r| r >= OSCILLATION_DECAY_FLOOR)
@@ -437,6 +503,39 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
+    /// A chirp's forced response is not an oscillation of the loop's own:
+    /// the error 2·(1 + t)·sin φ(t) of a sweep from 1 to 11 Hz over 10 s,
+    /// φ(t) = 2π(f0·t + (f1 − f0)t²/(2T)) (its instantaneous frequency
+    /// f0 + (f1 − f0)t/T), seen from t0 = 2 s, grows (decay > 1) and has
+    /// no steady period: it is forced, not sustained. The loop's own 25 Hz
+    /// limit cycle under the same sweep (well away from its 3 to 11 Hz)
+    /// still is sustained.
+    #[test]
+    fn a_chirps_forced_response_is_not_an_oscillation() {
+        let (dt, t0) = (1e-3, 2.0);
+        let chirp = ehservo_core::reference::Chirp::try_new(1.0, 1.0, 11.0, 10.0).unwrap();
+        let forcing = Forcing::Chirp { chirp, t0 };
+        let phase = |t: f64| 2.0 * PI * (t + 10.0 * t * t / 20.0);
+        let forced: Vec<f64> = (0..8000)
+            .map(|k| {
+                let t = t0 + k as f64 * dt;
+                2.0 * (1.0 + t) * phase(t).sin()
+            })
+            .collect();
+        let o = detect_oscillation(&forced, dt, 0.5, &forcing).unwrap();
+        assert!(o.forced && !o.sustained && o.decay.unwrap() > 1.0, "{o:?}");
+        // Without knowing the sweep the same error is flagged: what a
+        // chirp's run reported before.
+        assert!(
+            detect_oscillation(&forced, dt, 0.5, &Forcing::None)
+                .unwrap()
+                .sustained
+        );
+        let own = sine(1.0, 1.0 / 25.0, dt, 8000, 0.0);
+        let o = detect_oscillation(&own, dt, 0.5, &forcing).unwrap();
+        assert!(!o.forced && o.sustained, "{o:?}");
+    }
+
     fn sine(amp: f64, period: f64, dt: f64, n: usize, decay_rate: f64) -> Vec<f64> {
         (0..n)
             .map(|k| {
@@ -464,7 +563,7 @@ mod tests {
                 .iter()
                 .map(|v| v + offset)
                 .collect();
-            let o = detect_oscillation(&e, dt, 0.5, None).unwrap();
+            let o = detect_oscillation(&e, dt, 0.5, &Forcing::None).unwrap();
             assert!(o.sustained, "{o:?}");
             assert!(!o.forced);
             assert_eq!(o.cycles, 8, "{o:?}");
@@ -486,7 +585,7 @@ mod tests {
         let (amp, period) = (50.0, 0.2);
         let dt = period / 100.0;
         let e = sine(amp, period, dt, 1001, 1.0 / (3.0 * period));
-        let o = detect_oscillation(&e, dt, 0.5, None).unwrap();
+        let o = detect_oscillation(&e, dt, 0.5, &Forcing::None).unwrap();
         assert!(!o.sustained, "{o:?}");
         assert!(o.cycles >= OSCILLATION_MIN_CYCLES as u64, "{o:?}");
         assert!(o.amplitude > 0.5, "{o:?}");
@@ -504,7 +603,7 @@ mod tests {
         let period = 1.0 / 17.0;
         let dt = 1e-3;
         let e = sine(0.2, period, dt, 2000, -1.0);
-        let o = detect_oscillation(&e, dt, 0.5, None).unwrap();
+        let o = detect_oscillation(&e, dt, 0.5, &Forcing::None).unwrap();
         assert!(o.sustained, "{o:?}");
         assert!(o.decay.unwrap() > 1.0);
         assert!((o.period_s.unwrap() - period).abs() < 1e-3 * period);
@@ -515,24 +614,26 @@ mod tests {
     #[test]
     fn small_forced_or_short_oscillations_are_not_sustained() {
         let dt = 1e-3;
-        let small = detect_oscillation(&sine(0.4, 0.1, dt, 2000, 0.0), dt, 0.5, None).unwrap();
+        let small =
+            detect_oscillation(&sine(0.4, 0.1, dt, 2000, 0.0), dt, 0.5, &Forcing::None).unwrap();
         assert!(!small.sustained && (small.amplitude - 0.4).abs() < 1e-3);
         for n in [1.0, 2.0, 3.0] {
             let e = sine(5.0, 0.5 / n, dt, 4000, 0.0);
-            let o = detect_oscillation(&e, dt, 0.5, Some(0.5)).unwrap();
+            let o = detect_oscillation(&e, dt, 0.5, &Forcing::Tones(vec![2.0])).unwrap();
             assert!(o.forced && !o.sustained, "{n}: {o:?}");
         }
-        let short = detect_oscillation(&sine(5.0, 1.0, dt, 2500, 0.0), dt, 0.5, None).unwrap();
+        let short =
+            detect_oscillation(&sine(5.0, 1.0, dt, 2500, 0.0), dt, 0.5, &Forcing::None).unwrap();
         assert_eq!(short.cycles, 2);
         assert!(!short.sustained);
         // A constant or a ramp has no crossing; NaN or too few samples: none.
         let ramp: Vec<f64> = (0..100).map(|k| k as f64).collect();
-        let o = detect_oscillation(&ramp, dt, 0.5, None).unwrap();
+        let o = detect_oscillation(&ramp, dt, 0.5, &Forcing::None).unwrap();
         assert_eq!((o.cycles, o.sustained), (0, false));
-        assert_eq!(detect_oscillation(&[1.0; 7], dt, 0.5, None), None);
+        assert_eq!(detect_oscillation(&[1.0; 7], dt, 0.5, &Forcing::None), None);
         let mut nan = vec![0.0; 10];
         nan[3] = f64::NAN;
-        assert_eq!(detect_oscillation(&nan, dt, 0.5, None), None);
+        assert_eq!(detect_oscillation(&nan, dt, 0.5, &Forcing::None), None);
     }
 
     /// Noise of ±0.04 about a constant (inside the hysteresis band of
@@ -542,7 +643,7 @@ mod tests {
         let e: Vec<f64> = (0..1000)
             .map(|k| if k % 2 == 0 { 0.04 } else { -0.04 })
             .collect();
-        let o = detect_oscillation(&e, 1e-3, 0.5, None).unwrap();
+        let o = detect_oscillation(&e, 1e-3, 0.5, &Forcing::None).unwrap();
         assert_eq!(o.cycles, 0);
     }
 

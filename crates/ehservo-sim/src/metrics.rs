@@ -34,7 +34,7 @@
 
 use crate::axis::Axis;
 use crate::behaviour::OSCILLATION_TOLERANCE;
-use crate::behaviour::{detect_oscillation, Behaviour, EndStops, ErrorWindow};
+use crate::behaviour::{detect_oscillation, Behaviour, EndStops, ErrorWindow, Forcing};
 use crate::simulation::{Divergence, Sample};
 use ehservo_core::control::flags;
 use serde::ser::SerializeMap;
@@ -347,7 +347,7 @@ pub struct MetricsAccumulator {
 /// What the accumulator needs to know of the loop for
 /// [`Metrics::behaviour`]; by default none of it (no end stops, no limit,
 /// no periodic reference).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Checks {
     /// The plant's end stops (`Plant::end_stops`).
     pub end_stops: Option<[f64; 2]>,
@@ -359,9 +359,10 @@ pub struct Checks {
     /// valve range): otherwise the saturation share is undefined unless
     /// the law itself flagged a sample saturated (ADRC's `u_limit`).
     pub has_limit: bool,
-    /// The period of a periodic reference (s), whose forced response is
-    /// not an oscillation.
-    pub reference_period: Option<f64>,
+    /// What the reference does after the transient, whose forced
+    /// response is not an oscillation (a chirp's `t0` is filled in with
+    /// the window's first sample time).
+    pub forcing: Forcing,
     /// The amplitude of a sustained oscillation (the axis's display unit).
     pub tolerance: f64,
 }
@@ -372,7 +373,7 @@ impl Default for Checks {
             end_stops: None,
             limit: f64::INFINITY,
             has_limit: false,
-            reference_period: None,
+            forcing: Forcing::None,
             tolerance: OSCILLATION_TOLERANCE,
         }
     }
@@ -547,12 +548,14 @@ impl MetricsAccumulator {
         let oscillation = if diverged || h <= 0.0 {
             None
         } else {
-            detect_oscillation(
-                kept,
-                h * stride as f64,
-                self.checks.tolerance,
-                self.checks.reference_period,
-            )
+            let forcing = match &self.checks.forcing {
+                Forcing::Chirp { chirp, .. } => Forcing::Chirp {
+                    chirp: *chirp,
+                    t0: self.t_first_after.unwrap_or(0.0),
+                },
+                f => f.clone(),
+            };
+            detect_oscillation(kept, h * stride as f64, self.checks.tolerance, &forcing)
         };
         Behaviour {
             end_stops,

@@ -333,13 +333,18 @@ impl Loop {
         self.horizon
     }
 
-    /// The period of a periodic reference (a sine or a square wave), whose
-    /// forced response the oscillation check leaves alone; None for the
-    /// others.
-    pub fn reference_period(&self) -> Option<f64> {
+    /// What the reference does after the transient, whose forced response
+    /// the oscillation check leaves alone: a sine's or a square wave's
+    /// frequency, a multisine's components, a chirp's sweep; nothing for a
+    /// step or a ramp (at rest after the transient) or a CSV table (not
+    /// analysed: a cycle the table itself has is reported).
+    pub fn forcing(&self) -> ehservo_sim::behaviour::Forcing {
+        use super::ReferenceKind as K;
+        use ehservo_sim::behaviour::Forcing;
         match self.scenario.reference.kind {
-            super::ReferenceKind::Sine | super::ReferenceKind::Square => Some(self.period),
-            _ => None,
+            K::Sine | K::Square if self.period > 0.0 => Forcing::Tones(vec![1.0 / self.period]),
+            K::Multisine | K::Chirp => self.reference.forcing().unwrap_or_default(),
+            _ => Forcing::None,
         }
     }
 

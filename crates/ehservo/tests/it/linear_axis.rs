@@ -249,7 +249,11 @@ fn every_kind_runs_on_a_single_rod_cylinder() {
         s.controller = ControllerCfg::default_of(kind).unwrap();
         Loop::new(s).map(|lp| run(&lp, Keep::Nothing).metrics)
     };
-    let open = e_max("open-loop").unwrap();
+    // The open loop takes its gain in V/mm on a linear axis (1 V/mm).
+    let mut open_set = set.clone();
+    open_set.push("controller={kind=\"open-loop\", volts_per_mm=1.0}".into());
+    let open_lp = Loop::load(&chrono(), &open_set).unwrap();
+    let open = run(&open_lp, Keep::Nothing).metrics;
     assert_eq!(open.axis.unit(), "mm");
     let open_e = open.e_max.unwrap();
     assert!(open_e > 100.0, "open loop e_max {open_e} mm");

@@ -31,6 +31,22 @@ impl AnyReference {
     }
 }
 
+impl AnyReference {
+    /// A multisine's tones or a chirp's sweep (through an offset), for the
+    /// oscillation check ([`crate::Loop::forcing`]).
+    pub(crate) fn forcing(&self) -> Option<ehservo_sim::behaviour::Forcing> {
+        use ehservo_sim::behaviour::Forcing;
+        match self {
+            Self::Multisine(m) => Some(Forcing::Tones(
+                m.components().iter().map(|c| c.frequency).collect(),
+            )),
+            Self::Chirp(c) => Some(Forcing::Chirp { chirp: *c, t0: 0.0 }),
+            Self::Shifted(r, _) => r.forcing(),
+            _ => None,
+        }
+    }
+}
+
 impl From<Sine> for AnyReference {
     fn from(s: Sine) -> Self {
         Self::Sine(s)
