@@ -364,3 +364,53 @@ fn a_sweep_counts_end_stops_apart_from_unbounded_runs() {
         csv
     );
 }
+
+/// The y_mm column of a run's trace.csv.
+fn positions(out: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = head.iter().position(|h| *h == "y_mm").unwrap();
+    lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// Issue #46, item 1: Chrono's single rod (scenarios/cylinders/
+/// chrono-single-rod.toml) with Coulomb and stiction forces of 1e9 and
+/// 1e12 N, which the hostile corpus saw move 109 mm and run from −53 m to
+/// +54 m. By hand, the most the hydraulics and the load can push the rod
+/// at rest is A_A·Ps + M·g = π/4·0.08²·7.6e6 + 500·9.80665 = 38 201 +
+/// 4 903 = 43 104 N (no chamber exceeds the supply while nothing moves),
+/// far below either: the rod stays at 142 mm to the trace's last digit,
+/// and the run is not a divergence. With 1e3 N the P law moves it through
+/// the 10 mm sine.
+#[test]
+fn friction_beyond_the_hydraulics_holds_the_rod() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = repo().join("scenarios/cylinders/chrono-single-rod.toml");
+    for (fs, held) in [("1e9", true), ("1e12", true), ("1e3", false)] {
+        let out = tmp.path().join(fs);
+        let sets = [
+            format!("plant.load.friction.coulomb={fs}"),
+            format!("plant.load.friction.stiction={fs}"),
+            "simulation.horizon=2.0".to_string(),
+        ];
+        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+        let o = run(&file, &out, &sets);
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+        assert!(summary(&out)["divergence"].is_null(), "F_s = {fs}");
+        let y = positions(&out);
+        let (lo, hi) = y
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+        if held {
+            assert!(
+                lo >= 142.0 - 1e-6 && hi <= 142.0 + 1e-6,
+                "F_s = {fs}: y in [{lo}, {hi}] mm"
+            );
+        } else {
+            assert!(hi - lo > 15.0, "F_s = {fs}: y in [{lo}, {hi}] mm");
+        }
+    }
+}
