@@ -17,10 +17,33 @@
 //! p = max(p̃, 0)                                                    cavitation: a state below 0 is a cavity
 //! (V_A/βe)·dp̃_A/dt = Q_A − A_A·ẏ − C_l·(p_A − p_B)
 //! (V_B/βe)·dp̃_B/dt = Q_B + A_B·ẏ + C_l·(p_A − p_B)
-//! M·ÿ = A_A·p_A − A_B·p_B − B·ẏ − F_f(ẏ) − K·(y − y_K) − M·g·sin α − F(t) + F_stop(y, ẏ)
+//! M·ÿ = F_d − F_f,   F_d = A_A·p_A − A_B·p_B − (B + B_v)·ẏ − K·(y − y_K) − M·g·sin α − F(t) + F_stop(y, ẏ)
 //! F_stop = max(k_s·(−y) − c_s·ẏ, 0)             for y < 0
 //!        = min(k_s·(stroke − y) − c_s·ẏ, 0)      for y > stroke
 //! ```
+//!
+//! **Friction** (`[plant.load.friction]`) is Karnopp's stick–slip model
+//! (D. Karnopp, "Computer simulation of stick-slip friction in mechanical
+//! dynamic systems", ASME J. Dyn. Sys., Meas., Control 107(1):100–103,
+//! 1985; the Stribeck curve as in Armstrong-Hélouvry, Dupont, Canudas de
+//! Wit, Automatica 30(7):1083–1138, 1994), with its force bounded
+//! so that explicit RK4 cannot overshoot at any friction level. With
+//! F_stop* = F_d + M·ẏ/τ, the force that leaves ÿ = −ẏ/τ:
+//!
+//! ```text
+//! |ẏ| ≤ D_v = 10⁻³·v_s (stick window):  F_f = clamp(F_stop*, −F_s, F_s)       held while |F_stop*| ≤ F_s
+//! |ẏ| > D_v (slip):  F_f = sgn(ẏ)·min(g(ẏ), max(sgn(ẏ)·F_stop*, 0)),   g = F_c + (F_s − F_c)·e^{−(ẏ/v_s)²}
+//! ```
+//!
+//! So a rod at rest stays exactly at rest (ÿ = 0, ẏ = 0) while the other
+//! forces are within ±F_s, whatever F_s is, and breaks away with
+//! ÿ = (F_d ∓ F_s)/M beyond it; sliding friction opposes the motion and
+//! never exceeds what stops the rod within τ, so it cannot reverse the
+//! speed in a step, and a residual speed decays as e^{−t/τ}. τ = 1/ω_h
+//! with ω_h = √(βe·(A_A²/V_A + A_B²/V_B)/M) at mid-stroke, a rate the
+//! integrator already resolves (Plant::stiffness), so holding costs no
+//! extra steps. The core's `smoothing` (tanh(ẏ/v₀)) is the nominal
+//! model's only: the plant's sign is exact, its window D_v.
 //!
 //! The cavitation rule is Hopsan's (`HydraulicCylinderC` and
 //! `Hydraulic43Valve`: a port whose pressure would fall below 0 is held at
@@ -32,6 +55,10 @@
 //! a real cylinder does; by default k_s is 100 times the oil column's
 //! stiffness βe·(A_A²/V_A + A_B²/V_B) at mid-stroke and c_s = 2·√(k_s·M)
 //! (critically damped): a modelling choice, stated, not a measured stop.
+//! The stops' stated penetration δ ([`Cylinder::stated_penetration`]) is
+//! where the stop has held the largest force that can press on it and
+//! absorbed that force's work over the whole stroke; a rod beyond it is a
+//! divergence ([`crate::simulation::DivergenceReason::BeyondEndStop`]).
 //!
 //! With `[plant.transmission] radius = r` (a rack and pinion) the axis is
 //! rotary: θ = (y − stroke/2)/r, the pinion at 0 with the piston at
@@ -105,6 +132,12 @@ pub struct Cylinder {
     pub force: Force,
     /// k_s, c_s of the end stops.
     pub stop: [f64; 2],
+    /// The stops' stated penetration δ at factors 1 (m):
+    /// [`Cylinder::stated_penetration`].
+    pub penetration: f64,
+    /// 1/τ, the rate at which held friction stops the rod (1/s): the oil
+    /// column's ω_h = √(βe·(A_A²/V_A + A_B²/V_B)/M) at mid-stroke.
+    pub stick_rate: f64,
     /// The valve.
     pub valve: SpoolValve,
     /// The supply.
@@ -165,6 +198,35 @@ const CYLINDER_STATES: [Signal; 6] = [
     Signal::new("f_stop", "f_stop_N", "N", "end-stop contact force"),
 ];
 
+/// Karnopp's velocity window as a share of the Stribeck velocity v_s:
+/// the friction may hold the rod at |ẏ| ≤ 10⁻³·v_s. Small beside the
+/// friction curve's own velocity scale, so that a rod sliding at the
+/// Coulomb level is not caught (Karnopp 1985 asks for a window small
+/// against the velocities of interest); the held rod's residual speed
+/// decays at 1/τ, so the window need not be crossed in one step.
+pub const STICK_WINDOW: f64 = 1e-3;
+
+/// The rod's dry friction at a state ([`Cylinder::dry_friction`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DryFriction {
+    /// The force, opposing extension (N).
+    pub force: f64,
+    /// Whether it holds the rod (stuck in the window, or sliding friction
+    /// bounded by the force that stops the rod within τ): ÿ = −ẏ/τ.
+    pub held: bool,
+    /// d(force)/dẏ of the sliding law when not held (N·s/m).
+    pub slope: f64,
+}
+
+impl DryFriction {
+    /// No dry friction.
+    pub const NONE: Self = Self {
+        force: 0.0,
+        held: false,
+        slope: 0.0,
+    };
+}
+
 /// The volumes' floor as a share of the dead volume: a stop's
 /// penetration can otherwise shrink a chamber to nothing.
 pub const VOLUME_FLOOR: f64 = 0.01;
@@ -213,28 +275,112 @@ impl Cylinder {
         )
     }
 
-    /// The friction force at ẏ (N) and its slope dF/dẏ, scaled.
+    /// The viscous coefficient on the rod, B_p + damping + the friction's
+    /// B_v, scaled (N·s/m).
     #[inline]
-    fn friction(&self, v: f64, f: &Factors) -> (f64, f64) {
-        let visc = self.viscous * v;
-        match &self.friction {
-            None => (f.friction * visc, f.friction * self.viscous),
-            Some(fr) => (
-                f.friction * (visc + fr.torque(v)),
-                f.friction * (self.viscous + fr.slope(v)),
-            ),
+    pub fn viscous_coeff(&self, f: &Factors) -> f64 {
+        f.friction * (self.viscous + self.friction.map_or(0.0, |fr| fr.viscous))
+    }
+
+    /// The sliding law's dry part, sgn(ẏ)·g(ẏ) with g = F_c + (F_s − F_c)·
+    /// e^{−(ẏ/v_s)²}, scaled, and its slope d/dẏ (0 at rest and without
+    /// friction).
+    #[inline]
+    fn slip(&self, v: f64, f: &Factors) -> (f64, f64) {
+        let Some(fr) = &self.friction else {
+            return (0.0, 0.0);
+        };
+        let s = sgn(v);
+        let r = v / fr.stribeck_velocity;
+        let e = (-r * r).exp();
+        let g = f.friction * (fr.coulomb + (fr.stiction - fr.coulomb) * e);
+        let dg = f.friction * (fr.stiction - fr.coulomb) * e * (-2.0 * r / fr.stribeck_velocity);
+        (s * g, s * dg)
+    }
+
+    /// The dry friction at ẏ = `v` under the drive `drive` (every other
+    /// force on the rod, N) for the moving mass `m`: Karnopp's stick–slip
+    /// model with its force bounded by the one that stops the rod within
+    /// τ = 1/[`Cylinder::stick_rate`] (the module doc).
+    #[inline]
+    pub fn dry_friction(&self, v: f64, drive: f64, m: f64, f: &Factors) -> DryFriction {
+        let Some(fr) = &self.friction else {
+            return DryFriction::NONE;
+        };
+        // The force that leaves ÿ = −ẏ/τ: the rod held, its residual speed
+        // decaying.
+        let stop = drive + m * v * self.stick_rate;
+        if v.abs() <= STICK_WINDOW * fr.stribeck_velocity {
+            let fs = f.friction * fr.stiction;
+            return DryFriction {
+                force: stop.clamp(-fs, fs),
+                held: stop.abs() <= fs,
+                slope: 0.0,
+            };
+        }
+        let (force, slope) = self.slip(v, f);
+        // Sliding friction opposes the motion and never more than stops
+        // it: it cannot reverse the speed, whatever its size.
+        // (When the other forces alone stop it faster than τ, none.)
+        let cap = sgn(v) * stop;
+        if force.abs() <= cap {
+            DryFriction {
+                force,
+                held: false,
+                slope,
+            }
+        } else if cap > 0.0 {
+            DryFriction {
+                force: sgn(v) * cap,
+                held: true,
+                slope: 0.0,
+            }
+        } else {
+            DryFriction::NONE
         }
     }
 
-    /// The net force on the rod and the parts a trace shows (load, stop).
+    /// The stated penetration δ of the end stops under the factors `f`
+    /// (m): the depth at which a stop of stiffness k_s holds the largest
+    /// force F that can press the rod into it and has absorbed that
+    /// force's work over the whole stroke L, ½·k_s·δ² = F·(L + δ):
+    /// δ = (F + √(F² + 2·k_s·F·L))/k_s, with F = A_A·p_max + |M·g·sin α| +
+    /// max|F(t)| + K·max(|y_K|, |L − y_K|), p_max the supply's holding
+    /// pressure (docs/cylinder.md, "End stops"). The factors scale F by at
+    /// most their largest, and δ(c·F) ≤ c·δ(F) for c ≥ 1.
+    pub fn stated_penetration(&self, f: &Factors) -> f64 {
+        let scale = [f.supply_pressure, f.mass, f.load]
+            .into_iter()
+            .fold(1.0f64, f64::max);
+        scale * self.penetration
+    }
+
+    /// Whether y lies outside the stroke by more than the stops' stated
+    /// penetration ([`Cylinder::stated_penetration`]): the model no longer
+    /// holds, a divergence.
     #[inline]
-    fn forces(&self, t: f64, s: &[f64; 6], f: &Factors) -> (f64, f64, f64) {
+    pub fn beyond_stops(&self, y: f64, f: &Factors) -> bool {
+        let d = self.stated_penetration(f);
+        !(-d..=self.stroke + d).contains(&y)
+    }
+
+    /// The dry friction at the state `s` at time `t` ([`Cylinder::dry_friction`]
+    /// under the state's other forces).
+    pub fn friction_at(&self, t: f64, s: &[f64; 6], f: &Factors) -> DryFriction {
+        self.forces(t, s, f).3
+    }
+
+    /// The net force on the rod and the parts a trace shows (load, stop),
+    /// with the dry friction's state.
+    #[inline]
+    fn forces(&self, t: f64, s: &[f64; 6], f: &Factors) -> (f64, f64, f64, DryFriction) {
         let [y, v, pa, pb, _, _] = *s;
         let (pa, pb) = (pa.max(0.0), pb.max(0.0));
         let (fl, _) = self.load_force(t, y, v, f);
-        let (ff, _) = self.friction(v, f);
         let fs = self.stop_force(y, v);
-        (self.area[0] * pa - self.area[1] * pb - ff - fl + fs, fl, fs)
+        let drive = self.area[0] * pa - self.area[1] * pb - self.viscous_coeff(f) * v - fl + fs;
+        let dry = self.dry_friction(v, drive, self.mass * f.mass, f);
+        (drive - dry.force, fl, fs, dry)
     }
 
     /// The state derivative under the spool command `u` (V).
@@ -248,7 +394,7 @@ impl Cylinder {
         let [va, vb] = self.volumes(y);
         let beta = self.beta * f.bulk_modulus;
         let leak = self.leakage * f.leakage * (pa - pb);
-        let (force, _, _) = self.forces(t, s, f);
+        let (force, _, _, _) = self.forces(t, s, f);
         ds[0] = v;
         ds[1] = force / (self.mass * f.mass);
         ds[2] = beta / va * (q.a - self.area[0] * v - leak);
@@ -261,7 +407,7 @@ impl Cylinder {
     /// The largest rate the state's dynamics have here (1/s): chamber and
     /// supply pressure time constants through the open edges, the oil
     /// column, a stop in contact, friction, the relief spool.
-    pub fn stiffness(&self, s: &[f64; 6], u: f64, f: &Factors) -> f64 {
+    pub fn stiffness(&self, t: f64, s: &[f64; 6], u: f64, f: &Factors) -> f64 {
         let [y, _, pa_s, pb_s, ps_s, _] = *s;
         let (pa, pb) = (pa_s.max(0.0), pb_s.max(0.0));
         let ps = self.supply_pressure(ps_s, f);
@@ -286,8 +432,15 @@ impl Cylinder {
         if y < 0.0 || y > self.stroke {
             lam = lam.max((self.stop[0] / m).sqrt() + self.stop[1] / m);
         }
-        let (_, dfdv) = self.friction(s[1], f);
-        lam = lam.max(dfdv / m);
+        // Friction: the viscous terms, and the dry force's slope when it
+        // slides or the rate 1/τ at which it holds the rod.
+        lam = lam.max(self.viscous_coeff(f) / m);
+        let (_, _, _, dry) = self.forces(t, s, f);
+        lam = lam.max(if dry.held {
+            self.stick_rate
+        } else {
+            dry.slope.abs() / m
+        });
         if let Supply::Pump(p) = &self.supply {
             let relief = p.x_max.max(s[5]) * 0.5 / (ps - pt).max(1.0).sqrt();
             lam = lam.max(p.stiffness * f.bulk_modulus * (p.leakage + relief + s_pa + s_pb));
@@ -312,7 +465,8 @@ impl Cylinder {
                 let ps = self.supply.holding_pressure(self.pt) * f.supply_pressure;
                 let pm = 0.5 * (ps + self.pt);
                 let (fl, _) = self.load_force(0.0, y0, v0, f);
-                let (ff, _) = self.friction(v0, f);
+                // Moving: the sliding friction; at rest none is needed.
+                let ff = self.viscous_coeff(f) * v0 + self.slip(v0, f).0;
                 let force = self.mass * f.mass * a0 + fl + ff - self.stop_force(y0, v0);
                 let [a, b] = self.area;
                 let pa = (force + 2.0 * b * pm) / (a + b);
@@ -508,7 +662,8 @@ impl CylinderPlant {
             .map(|&(i, hi, lo)| c.valve.orifice(c.valve.cdw[i] * o[i], hi - lo) * (pi(hi) - pi(lo)))
             .sum();
         let leak = c.leakage * (pa - pb) * (pi(pa) - pi(pb));
-        let (ff, _) = c.friction(v, &f);
+        let (_, _, _, dry) = c.forces(t, s, &f);
+        let ff = c.viscous_coeff(&f) * v + dry.force;
         let stop = if y < 0.0 || y > c.stroke {
             // Only the damper dissipates; the spring is stored.
             let fs = c.stop_force(y, v);
@@ -552,9 +707,16 @@ impl Plant for CylinderPlant {
         })
     }
 
+    /// The rod outside [−δ, stroke + δ], δ the stops' stated penetration
+    /// ([`Cylinder::stated_penetration`]).
+    #[inline]
+    fn beyond_stops(&self, s: &[f64; 6], v: &CylinderVariation) -> bool {
+        self.c.beyond_stops(s[0], &v.f)
+    }
+
     fn states(&self, t: f64, s: &[f64; 6], _x: &[f64; 3], out: &mut [f64; MAX_STATES]) {
         let f = Factors::ONE;
-        let (_, fl, fs) = self.c.forces(t, s, &f);
+        let (_, fl, fs, _) = self.c.forces(t, s, &f);
         *out = [
             s[2].max(0.0),
             s[3].max(0.0),
@@ -573,7 +735,7 @@ impl Plant for CylinderPlant {
 
     #[inline]
     fn measure(&self, t: f64, s: &[f64; 6], v: &CylinderVariation) -> [f64; 3] {
-        let (force, _, _) = self.c.forces(t, s, &v.f);
+        let (force, _, _, _) = self.c.forces(t, s, &v.f);
         let a = force / (self.c.mass * v.f.mass);
         match self.c.radius {
             None => [s[0], s[1], a],
@@ -594,8 +756,8 @@ impl Plant for CylinderPlant {
     }
 
     #[inline]
-    fn stiffness(&self, _t: f64, s: &[f64; 6], u: f64, v: &CylinderVariation) -> f64 {
-        self.c.stiffness(s, u, &v.f)
+    fn stiffness(&self, t: f64, s: &[f64; 6], u: f64, v: &CylinderVariation) -> f64 {
+        self.c.stiffness(t, s, u, &v.f)
     }
 
     fn nominal(&self) -> &NominalModel {
@@ -631,16 +793,21 @@ impl Plant for CylinderPlant {
         let dpa = if pa > 0.0 { ds[2] } else { 0.0 };
         let dpb = if pb > 0.0 { ds[3] } else { 0.0 };
         let (_, fl_rate) = c.load_force(0.0, y, yd, f);
-        let (_, dfdv) = c.friction(yd, f);
+        let (_, _, _, dry) = c.forces(0.0, s, f);
         let ydd = ds[1];
         let stop_rate = if y < 0.0 || y > c.stroke {
             -c.stop[0] * yd - c.stop[1] * ydd
         } else {
             0.0
         };
-        let jerk = (c.area[0] * dpa - c.area[1] * dpb - dfdv * ydd - fl_rate + stop_rate)
-            / (c.mass * f.mass)
-            / c.radius.unwrap_or(1.0);
+        // Held by friction, ÿ = −ẏ/τ whatever the other forces do.
+        let jerk = if dry.held {
+            -c.stick_rate * ydd
+        } else {
+            let dfdv = c.viscous_coeff(f) + dry.slope;
+            (c.area[0] * dpa - c.area[1] * dpb - dfdv * ydd - fl_rate + stop_rate)
+                / (c.mass * f.mass)
+        } / c.radius.unwrap_or(1.0);
         let m = &self.model;
         let a = m.coeffs.as_array();
         let (b, d) = m.b_and_d(x, sgn(u));

@@ -381,7 +381,7 @@ impl CylinderCfg {
                 "give both pressure_a and pressure_b, or neither",
             )));
         }
-        let c = Cylinder {
+        let mut c = Cylinder {
             area,
             stroke,
             v0: [v0a, v0b],
@@ -396,6 +396,8 @@ impl CylinderCfg {
             friction: l.friction,
             force,
             stop: [ks, cs],
+            penetration: 0.0,
+            stick_rate: (kh / mass).sqrt(),
             valve,
             supply,
             pt,
@@ -405,6 +407,14 @@ impl CylinderCfg {
         // The relief must be able to hold the static load: a supply that
         // cannot push the load off the bottom of the stroke is a mistake.
         let ps = c.supply.holding_pressure(pt);
+        c.penetration = {
+            // Cylinder::stated_penetration's bound at factors 1.
+            let f = c.area[0] * ps
+                + c.gravity_force.abs()
+                + c.force.peak()
+                + spring * spring_origin.abs().max((stroke - spring_origin).abs());
+            (f + (f * f + 2.0 * ks * f * stroke).sqrt()) / ks
+        };
         let hold = c.area[0] * (ps - pt) - (c.area[0] - c.area[1]) * pt;
         let static_load = c.gravity_force + c.force.static_part();
         if static_load > 0.0 && hold <= static_load {

@@ -620,3 +620,6 @@ fn bad_geometry_is_named() {
         "`plant.supply.tank_pressure`: must be below the supply pressure 10000000 Pa (got 10000000)"
     );
 }
+
+#[path = "cylinder_friction_tests.rs"]
+mod friction;

@@ -199,6 +199,20 @@ impl Force {
         }
     }
 
+    /// The largest |F(t)| over all t (N): what can press the rod into a
+    /// stop ([`crate::cylinder::Cylinder::stated_penetration`]).
+    pub fn peak(&self) -> f64 {
+        match self {
+            Force::Zero => 0.0,
+            Force::Constant(v) => v.abs(),
+            Force::Step { initial, value, .. } => initial.abs().max(value.abs()),
+            Force::Sine {
+                amplitude, offset, ..
+            } => offset.abs() + amplitude.abs(),
+            Force::Table(rows) => rows.iter().fold(0.0, |m, r| m.max(r.1.abs())),
+        }
+    }
+
     /// The constant part the nominal model can know: the value of a
     /// constant force, the initial value of a step, a sine's offset, a
     /// table's first row (N).

@@ -158,6 +158,15 @@ pub trait Plant {
     fn end_stops(&self) -> Option<[f64; 2]> {
         None
     }
+    /// Whether the state lies where the model no longer holds (a
+    /// cylinder's rod past an end stop by more than the stop's stated
+    /// penetration): the simulator then reports a divergence
+    /// ([`crate::simulation::DivergenceReason::BeyondEndStop`]). False (the
+    /// default) for a plant without such a bound.
+    #[inline(always)]
+    fn beyond_stops(&self, _s: &Self::State, _v: &Self::Variation) -> bool {
+        false
+    }
     /// The values of [`Plant::STATES`] at time `t` and state `s`, whose
     /// output is `x`.
     fn states(&self, _t: f64, _s: &Self::State, _x: &[f64; 3], _out: &mut [f64; MAX_STATES]) {}

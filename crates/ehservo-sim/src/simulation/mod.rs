@@ -25,7 +25,8 @@
 //! over it. [`Simulation::step`] produces one sample and advances to the
 //! next; [`Simulation::run_until`] and [`Simulation::run`] repeat it. A run
 //! stops at its horizon, or early — as a result, never as NaN — when the
-//! state stops being finite, |θ| exceeds `theta_limit`, or the controller
+//! state stops being finite, |θ| exceeds `theta_limit`, a cylinder's rod
+//! is past a stop by more than its stated penetration, or the controller
 //! faults (a non-finite command or state update) ([`Stop`]). Nothing here
 //! does I/O.
 
@@ -598,6 +599,8 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             self.diverge(t_next, DivergenceReason::NonFiniteState);
         } else if self.plant.measure(t_next, &self.y.pa.x, &var)[0].abs() > self.cfg.theta_limit {
             self.diverge(t_next, DivergenceReason::ThetaLimit);
+        } else if self.plant.beyond_stops(&self.y.pa.x, &var) {
+            self.diverge(t_next, DivergenceReason::BeyondEndStop);
         }
         true
     }

@@ -150,6 +150,9 @@ pub enum DivergenceReason {
     NonFiniteState,
     /// |θ| exceeded the limit.
     ThetaLimit,
+    /// A cylinder's rod went past an end stop by more than the stop's
+    /// stated penetration ([`crate::plant::Plant::beyond_stops`]).
+    BeyondEndStop,
     /// The law returned a non-finite u, or a non-finite part of its law
     /// (σ, ‖E‖, WᵀΦ, …) that would have been logged.
     NonFiniteControl,
@@ -161,6 +164,9 @@ impl DivergenceReason {
         match self {
             DivergenceReason::NonFiniteState => "the state became non-finite",
             DivergenceReason::ThetaLimit => "|θ| exceeded the divergence limit",
+            DivergenceReason::BeyondEndStop => {
+                "the rod went past an end stop by more than the stop's stated penetration"
+            }
             DivergenceReason::NonFiniteControl => {
                 "the control law returned a non-finite value (u or one of its parts)"
             }

@@ -504,3 +504,49 @@ fn computation_and_measurement_delays() {
         Simulation::new(plant, nn(), Sine::paper(), stages(Actuator::IDENTITY), cc).unwrap_err();
     assert_eq!(e.name, "computation_delay");
 }
+
+/// A rod past an end stop by more than the stop's stated penetration is a
+/// divergence, reported as such: the doc example's 63/36 mm cylinder
+/// (δ ≈ 5.3 mm, cylinder.rs's tests) started 100 mm below its lower stop
+/// diverges at the first step's end; started 1 mm into it, it does not.
+#[test]
+fn a_rod_beyond_its_stop_is_a_divergence() {
+    use crate::cylinder::CylinderCfg;
+    use crate::plant::{PlantConfig, PlantContext};
+    let cfg: CylinderCfg = toml::from_str(
+        "[cylinder]\nbore = 0.063\nrod_diameter = 0.036\nstroke = 0.5\ndead_volume_a = 2e-4\ndead_volume_b = 2e-4\n\
+         [fluid]\ndensity = 870.0\nbulk_modulus = 1.4e9\n\
+         [valve]\nspool_limit = 5e-4\ngain = 5e-5\ndischarge_coefficient = 0.65\narea_gradient = 0.02\n\
+         [supply]\nkind = \"fixed\"\npressure = 2e7\n[load]\nmass = 250.0\n",
+    )
+    .unwrap();
+    let ctx = PlantContext {
+        load: None,
+        load_given: false,
+        uncertainty: UncertaintySpec::NONE,
+        x0: [0.0; 3],
+        base_dir: None,
+        reference_range: None,
+    };
+    let plant = cfg.build(&ctx).unwrap();
+    let mut st = stages(Actuator::IDENTITY);
+    st.uncertainty = UncertaintySpec::NONE;
+    for (y0, diverges) in [(-0.1, true), (-1e-3, false)] {
+        let c = SimConfig {
+            steps: 10,
+            step: 1e-3,
+            mode: Mode::Sampled,
+            substeps: 1,
+            theta_limit: 1e3,
+            x0: [y0, 0.0, 0.0],
+            computation_delay: false,
+        };
+        let mut s = Simulation::new(plant.clone(), nn(), Sine::paper(), st.clone(), c).unwrap();
+        let out = s.run(&mut |_| {});
+        let want = diverges.then_some(Divergence {
+            t: 1e-3,
+            reason: DivergenceReason::BeyondEndStop,
+        });
+        assert_eq!(out.diverged, want, "y0 = {y0}");
+    }
+}

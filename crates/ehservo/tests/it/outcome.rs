@@ -364,3 +364,96 @@ fn a_sweep_counts_end_stops_apart_from_unbounded_runs() {
         csv
     );
 }
+
+/// The y_mm column of a run's trace.csv.
+fn positions(out: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = head.iter().position(|h| *h == "y_mm").unwrap();
+    lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// Issue #46, item 1: Chrono's single rod (scenarios/cylinders/
+/// chrono-single-rod.toml) with Coulomb and stiction forces of 1e9 and
+/// 1e12 N, which the hostile corpus saw move 109 mm and run from −53 m to
+/// +54 m. By hand, the most the hydraulics and the load can push the rod
+/// at rest is A_A·Ps + M·g = π/4·0.08²·7.6e6 + 500·9.80665 = 38 201 +
+/// 4 903 = 43 104 N (no chamber exceeds the supply while nothing moves),
+/// far below either: the rod stays at 142 mm to the trace's last digit,
+/// sampled (RK4 sub-steps) and continuous alike, and the run is not a
+/// divergence. With 1e3 N the P law moves it through the 10 mm sine.
+#[test]
+fn friction_beyond_the_hydraulics_holds_the_rod() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = repo().join("scenarios/cylinders/chrono-single-rod.toml");
+    let cases = [
+        ("1e9", "sampled", true),
+        ("1e12", "sampled", true),
+        ("1e12", "continuous", true),
+        ("1e3", "sampled", false),
+    ];
+    for (fs, mode, held) in cases {
+        let out = tmp.path().join(format!("{fs}-{mode}"));
+        let sets = [
+            format!("plant.load.friction.coulomb={fs}"),
+            format!("plant.load.friction.stiction={fs}"),
+            format!("simulation.mode={mode}"),
+            "simulation.horizon=2.0".to_string(),
+        ];
+        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+        let o = run(&file, &out, &sets);
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+        assert!(summary(&out)["divergence"].is_null(), "F_s = {fs}");
+        let y = positions(&out);
+        let (lo, hi) = y
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+        if held {
+            assert!(
+                lo >= 142.0 - 1e-6 && hi <= 142.0 + 1e-6,
+                "F_s = {fs}, {mode}: y in [{lo}, {hi}] mm"
+            );
+        } else {
+            assert!(hi - lo > 15.0, "F_s = {fs}: y in [{lo}, {hi}] mm");
+        }
+    }
+}
+
+/// The same rod started at 0.1 m/s into 1e12 N of friction stops, and
+/// no later than friction alone would make it: held friction is at most
+/// the force that leaves ÿ = −ẏ/τ (τ = 1/ω_h), so the rod travels at most
+/// v₀/ω_h (less here: the viscous 1e5 N·s/m and the load brake it too).
+/// By hand ω_h² = βe·(A_A²/V_A + A_B²/V_B)/M at mid-stroke with
+/// A_A = 5.026548e-3, A_B = 4.064435e-3 m², V_A = 7.161e-5 + A_A·0.142 =
+/// 7.853822e-4, V_B = 1.11015e-4 + A_B·0.142 = 6.881653e-4 m³:
+/// 8.380419e8·(3.217003e-2 + 2.400549e-2)/500 = 94 155.5 s⁻² (the
+/// scenario's a2), ω_h = 306.848 rad/s, v₀/ω_h = 0.325 895 mm.
+#[test]
+fn huge_friction_stops_a_moving_rod_within_its_bound() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = repo().join("scenarios/cylinders/chrono-single-rod.toml");
+    let out = tmp.path().join("moving");
+    let sets = [
+        "plant.load.friction.coulomb=1e12",
+        "plant.load.friction.stiction=1e12",
+        "simulation.x0=[0.142, 0.1, 0.0]",
+        "simulation.horizon=0.5",
+    ];
+    let o = run(&file, &out, &sets);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    assert!(summary(&out)["divergence"].is_null());
+    let y = positions(&out);
+    let reach = 142.0 + 0.325_895;
+    assert!(y.iter().all(|&v| (142.0..=reach).contains(&v)), "{y:?}");
+    assert!(y[y.len() - 1] > 142.1, "it moved first: {}", y[y.len() - 1]);
+    let last = y[y.len() - 100..]
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    assert!(
+        last.1 - last.0 <= 1e-9,
+        "at rest over the last 0.1 s: {last:?}"
+    );
+}

@@ -28,9 +28,10 @@
 //!
 //! **What is linearised at the trim (a stated choice).** The load is taken
 //! at its value there: the spring's stiffness, the force signal F(t) at the
-//! trim's time (t = 0, constant in the linear model), the smoothed Coulomb–
-//! Stribeck friction by its slope at the trim's speed (at rest that slope is
-//! the model's tanh, (F_c + …)/v_s: a stiff viscous term, not stick–slip),
+//! trim's time (t = 0, constant in the linear model), the Coulomb–Stribeck
+//! friction by its slope at the trim's speed, or, where it holds the rod
+//! (at rest below the break-away force: ehservo_sim::cylinder's stick
+//! model), ÿ = −ẏ/τ with the rod deaf to the pressures,
 //! an end stop by its spring and damper when it is in contact and not at
 //! all otherwise. **A metering edge at its opening point** (a closed-centre
 //! valve at rest, x_v at the lap) is taken at its turbulent limit: the
@@ -226,12 +227,11 @@ impl CylinderLin {
         let na = q.a - c.area[0] * v - leak;
         let nb = q.b + c.area[1] * v + leak;
         let m = c.mass * f.mass;
-        let friction_slope = f.friction
-            * (c.viscous
-                + match &c.friction {
-                    Some(fr) => fr.slope(v),
-                    None => 0.0,
-                });
+        // Friction: held (stuck, or bounded by the force that stops the
+        // rod within τ), ÿ = −ẏ/τ and nothing else moves the rod; else the
+        // viscous terms and the sliding law's slope.
+        let dry = c.friction_at(0.0, s, f);
+        let friction_slope = c.viscous_coeff(f) + dry.slope;
         let [ks, cs] = c.stop;
         let pressing = (y < 0.0 && -ks * y - cs * v > 0.0)
             || (y > c.stroke && ks * (c.stroke - y) - cs * v < 0.0);
@@ -239,10 +239,14 @@ impl CylinderLin {
         let mut a = [[0.0; 6]; 6];
         let mut b = [0.0; 6];
         a[0][1] = 1.0;
-        a[1][0] = (-f.load * c.spring + stop_y) / m;
-        a[1][1] = (-friction_slope + stop_v) / m;
-        a[1][2] = c.area[0] * hpa / m;
-        a[1][3] = -c.area[1] * hpb / m;
+        if dry.held {
+            a[1][1] = -c.stick_rate;
+        } else {
+            a[1][0] = (-f.load * c.spring + stop_y) / m;
+            a[1][1] = (-friction_slope + stop_v) / m;
+            a[1][2] = c.area[0] * hpa / m;
+            a[1][3] = -c.area[1] * hpb / m;
+        }
         let (ka, kb) = (beta / va, beta / vb);
         a[2][0] = -ka * dva / va * na;
         a[2][1] = -ka * c.area[0];
