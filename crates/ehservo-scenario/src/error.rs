@@ -91,6 +91,39 @@ macro_rules! bad_input {
     };
 }
 
+/// The longest error line the command line prints (characters).
+pub const MAX_ERROR_CHARS: usize = 300;
+
+/// An error message as the command line prints it: a line longer than
+/// [`MAX_ERROR_CHARS`] (one that quotes too much of what a file holds,
+/// where the quote was not cut at its source by
+/// [`quote_start`](ehservo_sim::error::quote_start)) keeps its start and
+/// says how long it was.
+///
+/// ```
+/// use ehservo_scenario::error::{one_line, MAX_ERROR_CHARS};
+/// assert_eq!(one_line("x.csv: line 1: bad"), "x.csv: line 1: bad");
+/// let long = format!("x.csv: the header has: {}", "a,".repeat(10_000));
+/// let l = one_line(&long);
+/// assert!(l.chars().count() <= MAX_ERROR_CHARS, "{l}");
+/// assert!(l.starts_with("x.csv: the header has: a,a,"));
+/// assert!(l.ends_with("(20023 characters in all)"), "{l}");
+/// ```
+pub fn one_line(msg: &str) -> String {
+    msg.split('\n').map(cut).collect::<Vec<_>>().join("\n")
+}
+
+/// One line cut to [`MAX_ERROR_CHARS`].
+fn cut(line: &str) -> String {
+    let n = line.chars().count();
+    if n <= MAX_ERROR_CHARS {
+        return line.to_string();
+    }
+    let tail = format!("… ({n} characters in all)");
+    let keep = MAX_ERROR_CHARS - tail.chars().count();
+    line.chars().take(keep).collect::<String>() + &tail
+}
+
 /// Whether any cause in the chain is bad input.
 pub fn is_bad_input(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {

@@ -55,7 +55,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if closed_stdout(&e) => ExitCode::from(1),
         Err(e) => {
-            note!("error: {e:#}");
+            note!("{}", ehservo::error::one_line(&format!("error: {e:#}")));
             ExitCode::from(ehservo::error::exit_code(&e))
         }
     }
