@@ -91,6 +91,51 @@ macro_rules! bad_input {
     };
 }
 
+/// The longest error line the command line prints (characters): a net
+/// under the messages, which are written to stay under about 300 (their
+/// quotes of a file's content cut at the source, [`quote_start`](ehservo_sim::error::quote_start));
+/// a few name a long path and list the known keys, so the net is wider.
+pub const MAX_ERROR_CHARS: usize = 1000;
+
+/// An error message as the command line prints it: a line longer than
+/// [`MAX_ERROR_CHARS`] (one that quotes too much of what a file holds,
+/// where the quote was not cut at its source by
+/// [`quote_start`](ehservo_sim::error::quote_start)) keeps its start (the
+/// file, the key) and its end (what to do), and says how long it was.
+///
+/// ```
+/// use ehservo_scenario::error::{one_line, MAX_ERROR_CHARS};
+/// assert_eq!(one_line("x.csv: line 1: bad"), "x.csv: line 1: bad");
+/// let long = format!(
+///     "x.csv: the header has: {}; name it with --time",
+///     "a,".repeat(10_000)
+/// );
+/// let l = one_line(&long);
+/// assert!(l.chars().count() <= MAX_ERROR_CHARS, "{l}");
+/// assert!(l.starts_with("x.csv: the header has: a,a,"));
+/// // 23 + 2·10000 + 21 characters.
+/// assert!(l.contains("[20044 characters, cut]"), "{l}");
+/// assert!(l.ends_with("a,a,; name it with --time"), "{l}");
+/// ```
+pub fn one_line(msg: &str) -> String {
+    msg.split('\n').map(cut).collect::<Vec<_>>().join("\n")
+}
+
+/// One line cut to [`MAX_ERROR_CHARS`]: its start and its last 300
+/// characters.
+fn cut(line: &str) -> String {
+    const TAIL: usize = 300;
+    let n = line.chars().count();
+    if n <= MAX_ERROR_CHARS {
+        return line.to_string();
+    }
+    let mid = format!(" … [{n} characters, cut] … ");
+    let head = MAX_ERROR_CHARS - TAIL - mid.chars().count();
+    let start: String = line.chars().take(head).collect();
+    let end: String = line.chars().skip(n - TAIL).collect();
+    start + &mid + &end
+}
+
 /// Whether any cause in the chain is bad input.
 pub fn is_bad_input(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {

@@ -1,6 +1,11 @@
 //! Reading input files with a bound: a scenario, study or manifest is a
 //! small text file, so a device (`/dev/zero`), a directory or a file of
-//! hundreds of megabytes is refused before it is read into memory.
+//! hundreds of megabytes is refused before it is read into memory; a file
+//! that holds a NUL byte is not text, and is refused at the first chunk
+//! that shows one, before the rest is read.
+//!
+//! A message that quotes what a file holds quotes its start only
+//! ([`quote_start`]): no error line grows with the input.
 
 use std::io::Read;
 use std::path::Path;
@@ -36,7 +41,15 @@ pub enum ReadError {
     /// Not UTF-8.
     #[error("is not UTF-8 text: {0}")]
     NotUtf8(String),
+    /// A NUL byte: a binary file, not text.
+    #[error("is not text: byte {offset} is NUL (0x00)")]
+    Binary {
+        /// The 0-based offset of the first NUL byte.
+        offset: u64,
+    },
 }
+
+pub use ehservo_sim::error::{quote_start, QUOTE_CHARS};
 
 /// The text of `path`, refused (with the reason) when it is not a regular
 /// file, is larger than [`MAX_INPUT_BYTES`], or is not UTF-8.
@@ -67,14 +80,35 @@ pub fn read_text_at_most(path: &Path, limit: u64) -> Result<String, ReadError> {
             max,
         });
     }
+    let bytes = read_bounded(path, max)?;
+    String::from_utf8(bytes).map_err(|e| ReadError::NotUtf8(e.to_string()))
+}
+
+/// The bytes of `path`, at most `max`, read a chunk at a time: a NUL byte
+/// stops the read at the chunk that holds it.
+fn read_bounded(path: &Path, max: u64) -> Result<Vec<u8>, ReadError> {
+    let io = |e: std::io::Error| ReadError::Io(e.to_string());
+    let mut f = std::fs::File::open(path).map_err(io)?.take(max + 1);
     let mut bytes = Vec::new();
-    std::fs::File::open(path)
-        .and_then(|f| f.take(max + 1).read_to_end(&mut bytes))
-        .map_err(|e| ReadError::Io(e.to_string()))?;
+    let mut chunk = vec![0u8; 64 << 10];
+    loop {
+        let n = match f.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(io(e)),
+        };
+        if let Some(i) = chunk[..n].iter().position(|b| *b == 0) {
+            return Err(ReadError::Binary {
+                offset: (bytes.len() + i) as u64,
+            });
+        }
+        bytes.extend_from_slice(&chunk[..n]);
+    }
     if bytes.len() as u64 > max {
         return Err(ReadError::Grew { max });
     }
-    String::from_utf8(bytes).map_err(|e| ReadError::NotUtf8(e.to_string()))
+    Ok(bytes)
 }
 
 #[cfg(test)]
@@ -102,6 +136,12 @@ mod tests {
         let bin = dir.path().join("bin.toml");
         std::fs::write(&bin, [0xff, 0xfe]).unwrap();
         assert!(matches!(read_text(&bin), Err(ReadError::NotUtf8(_))));
+        // A NUL byte: refused at the first chunk, with where it is.
+        let nul = dir.path().join("nul.csv");
+        let mut text = b"t,theta_deg\n".to_vec();
+        text.extend(vec![0u8; 200_000]);
+        std::fs::write(&nul, &text).unwrap();
+        assert_eq!(read_text(&nul), Err(ReadError::Binary { offset: 12 }));
         let ok = dir.path().join("ok.toml");
         std::fs::write(&ok, "name = \"x\"\n").unwrap();
         assert_eq!(read_text(&ok).unwrap(), "name = \"x\"\n");

@@ -12,6 +12,13 @@
 //!   (about 80 core-hours), every run counted with a fixed
 //!   [`RUN_OVERHEAD`] for building it; the message names the key that asks
 //!   for most of it and the figure asked.
+//!
+//! Every planned count (samples, settling samples, segments, frequencies,
+//! evaluations) is made from its float figure by [`count_from_f64`], which
+//! refuses a figure that is not finite, negative, or above [`MAX_COUNT`]
+//! with the key that asked and the figure; counts are then multiplied and
+//! summed with saturating arithmetic ([`work_of`], [`saturating_sum`]), so
+//! a sum never wraps round below a limit.
 
 use crate::scenario::{EstimatorCfg, Scenario};
 use crate::simulation::Mode;
@@ -29,6 +36,90 @@ pub const MAX_BATCH_WORK: f64 = 1.0e12;
 /// set-up made from a TOML table with overrides takes some hundred
 /// microseconds, a few hundred evaluations (1000 is counted).
 pub const RUN_OVERHEAD: f64 = 1.0e3;
+
+/// The largest count a plan may hold: 2⁵³ ≈ 9.0·10¹⁵, the largest
+/// integer below which every integer is exact in an f64 (so the count and
+/// its figure agree), far beyond every work limit.
+pub const MAX_COUNT: f64 = 9_007_199_254_740_992.0;
+
+/// Why a figure is no count.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum Uncountable {
+    /// NaN or infinite.
+    #[error("not a finite number")]
+    NotFinite,
+    /// Below zero.
+    #[error("negative")]
+    Negative,
+    /// Above [`MAX_COUNT`].
+    #[error("more than 2^53 (9.0e15), the most a plan can count")]
+    TooLarge,
+}
+
+/// A count that cannot be planned: the key (or flag) that asked for it,
+/// what is counted and the figure asked.
+///
+/// ```
+/// use ehservo_scenario::limits::{count_from_f64, Uncountable};
+/// assert_eq!(count_from_f64("--settle", "settling samples", 200.0), Ok(200));
+/// let e = count_from_f64("--settle", "settling samples", 1e302).unwrap_err();
+/// assert_eq!((e.key.as_str(), e.why), ("--settle", Uncountable::TooLarge));
+/// assert_eq!(
+///     e.to_string(),
+///     "1.000e302 settling samples asked: more than 2^53 (9.0e15), the most a plan can count"
+/// );
+/// ```
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{value:.3e} {what} asked: {why}")]
+pub struct CountError {
+    /// The key or flag that asked.
+    pub key: String,
+    /// What is counted (`settling samples`).
+    pub what: &'static str,
+    /// The figure asked.
+    pub value: f64,
+    /// Why it is no count.
+    pub why: Uncountable,
+}
+
+impl From<CountError> for KeyError {
+    fn from(e: CountError) -> Self {
+        KeyError::new(e.key.clone(), e.to_string())
+    }
+}
+
+/// The count of a whole-number figure `value` (already rounded as the
+/// plan wants it), asked for by `key`: refused when not finite, negative,
+/// or above [`MAX_COUNT`].
+pub fn count_from_f64(key: &str, what: &'static str, value: f64) -> Result<u64, CountError> {
+    let why = if !value.is_finite() {
+        Uncountable::NotFinite
+    } else if value < 0.0 {
+        Uncountable::Negative
+    } else if value > MAX_COUNT {
+        Uncountable::TooLarge
+    } else {
+        // In [0, 2⁵³]: exact, no saturation.
+        return Ok(value as u64);
+    };
+    Err(CountError {
+        key: key.to_string(),
+        what,
+        value,
+        why,
+    })
+}
+
+/// The evaluations of `samples` samples of `per_sample` evaluations each,
+/// saturating at `u64::MAX` (beyond every limit) instead of wrapping.
+pub fn work_of(samples: u64, per_sample: u64) -> u64 {
+    samples.saturating_mul(per_sample)
+}
+
+/// The sum of counts, saturating at `u64::MAX` instead of wrapping.
+pub fn saturating_sum(counts: impl IntoIterator<Item = u64>) -> u64 {
+    counts.into_iter().fold(0, u64::saturating_add)
+}
 
 /// The evaluations of one run of `s` (whose step, horizon and sub-steps
 /// are valid): N·(1 + m + e) sampled, 4·N continuous.
@@ -220,6 +311,32 @@ mod tests {
             substeps: 100_000,
         });
         assert!(check_run(&s).is_ok());
+    }
+
+    /// A count is the figure itself up to 2⁵³; beyond, and for the
+    /// non-finite and negative figures, the key and the figure come back.
+    #[test]
+    fn counts_are_refused_with_their_key_and_figure() {
+        assert_eq!(count_from_f64("k", "samples", 0.0), Ok(0));
+        assert_eq!(count_from_f64("k", "samples", MAX_COUNT), Ok(1 << 53));
+        for (v, why) in [
+            (f64::NAN, Uncountable::NotFinite),
+            (f64::INFINITY, Uncountable::NotFinite),
+            (-1.0, Uncountable::Negative),
+            (MAX_COUNT * 2.0, Uncountable::TooLarge),
+            (1e300, Uncountable::TooLarge),
+        ] {
+            let e = count_from_f64("--settle", "samples", v).unwrap_err();
+            assert_eq!((e.key.as_str(), e.why), ("--settle", why), "{v}");
+            assert!(v.is_nan() || e.value == v);
+            let k = KeyError::from(e);
+            assert_eq!(k.key, "--settle");
+        }
+        // u64::MAX · 2 and (u64::MAX − 1) + 2 saturate instead of wrapping
+        // to u64::MAX − 1 and 0.
+        assert_eq!(work_of(u64::MAX, 2), u64::MAX);
+        assert_eq!(saturating_sum([u64::MAX - 1, 2]), u64::MAX);
+        assert_eq!(saturating_sum([3, 4]), 7);
     }
 
     /// 10⁶ runs of 2000 evaluations (+1000 each) = 3e9: fine; 10⁹ of them

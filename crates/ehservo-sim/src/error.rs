@@ -19,6 +19,37 @@
 use ehservo_core::error::ParamError;
 use std::fmt;
 
+/// How many characters of a file's content an error quotes.
+pub const QUOTE_CHARS: usize = 60;
+
+/// The start of `s` for a one-line message: its first [`QUOTE_CHARS`]
+/// characters, escaped (`\u{0}`, `\t`), in backticks, and when there are more,
+/// how many in all. The line stays short whatever `s` holds.
+///
+/// ```
+/// use ehservo_sim::error::quote_start;
+/// assert_eq!(quote_start("t,theta"), "`t,theta`");
+/// let long = "x".repeat(1000);
+/// assert_eq!(
+///     quote_start(&long),
+///     format!("`{}…` (1000 characters)", "x".repeat(60))
+/// );
+/// assert_eq!(quote_start("a\tb"), "`a\\tb`");
+/// ```
+pub fn quote_start(s: &str) -> String {
+    let mut chars = s.chars();
+    let head: String = chars
+        .by_ref()
+        .take(QUOTE_CHARS)
+        .flat_map(char::escape_debug)
+        .collect();
+    if chars.next().is_none() {
+        format!("`{head}`")
+    } else {
+        format!("`{head}…` ({} characters)", s.chars().count())
+    }
+}
+
 /// Why a value was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Reason {

@@ -268,7 +268,8 @@ pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
     let cols: Vec<&str> = header.split(',').map(str::trim).collect();
     if cols != ["t_s", "force_N"] {
         return Err(file(format!(
-            "{name}: line {hl}: expected the header `t_s,force_N`, got `{header}`"
+            "{name}: line {hl}: expected the header `t_s,force_N`, got {}",
+            crate::error::quote_start(header)
         )));
     }
     let mut rows: Vec<(f64, f64)> = Vec::new();
@@ -289,13 +290,13 @@ pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
         for (j, col) in ["t_s", "force_N"].iter().enumerate() {
             let x: f64 = f[j].parse().map_err(|_| {
                 file(format!(
-                    "{name}: line {line}, column {col}: cannot read `{}` as a number",
-                    f[j]
+                    "{name}: line {line}, column {col}: cannot read {} as a number",
+                    crate::error::quote_start(f[j])
                 ))
             })?;
             if !x.is_finite() {
                 return Err(file(format!(
-                    "{name}: line {line}, column {col}: {x}: values must be finite"
+                    "{name}: line {line}, column {col}: {x:?}: values must be finite"
                 )));
             }
             v[j] = x;

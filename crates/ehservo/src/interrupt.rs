@@ -161,6 +161,7 @@ impl Drop for TempFile {
 pub fn install() -> Result<(), ctrlc::Error> {
     ignore_sigxfsz();
     ctrlc::set_handler(|| {
+        SIGNALLED.store(true, std::sync::atomic::Ordering::SeqCst);
         #[cfg(unix)]
         kill_children();
         // Waits for a commit in progress; never released: the process ends.
@@ -182,6 +183,31 @@ fn ignore_sigxfsz() {
 
 #[cfg(all(feature = "cli", not(unix)))]
 fn ignore_sigxfsz() {}
+
+/// Set by the handler of [`install`] as it starts.
+static SIGNALLED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether a signal that ends the run (`SIGINT`, `SIGTERM`, `SIGHUP`) has
+/// reached the handler.
+pub fn signalled() -> bool {
+    SIGNALLED.load(std::sync::atomic::Ordering::SeqCst)
+}
+
+/// When a signal has reached the handler, this never returns: the
+/// handler removes the staging folders and exits with [`EXIT_CODE`] (this
+/// waits for it on the registry it holds), or, should this take the
+/// registry first, this does the same. Called by `main` before it
+/// reports an error, so that the error a signal caused (a read cut
+/// short) never beats the handler's exit code.
+pub fn exit_if_signalled() {
+    if signalled() {
+        #[cfg(all(feature = "cli", unix))]
+        kill_children();
+        let mut reg = registry();
+        reg.clean_all();
+        std::process::exit(EXIT_CODE);
+    }
+}
 
 /// How many staging directories are alive (for tests).
 pub fn live_staging_dirs() -> usize {

@@ -55,7 +55,9 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if closed_stdout(&e) => ExitCode::from(1),
         Err(e) => {
-            note!("error: {e:#}");
+            // An error a signal caused: the handler's exit code, 130.
+            ehservo::interrupt::exit_if_signalled();
+            note!("{}", ehservo::error::one_line(&format!("error: {e:#}")));
             ExitCode::from(ehservo::error::exit_code(&e))
         }
     }

@@ -73,6 +73,9 @@ pub(super) struct PilArgs {
     /// How long to wait for each reply (ms) before applying the fault policy.
     #[arg(long, default_value_t = 200.0)]
     timeout_ms: f64,
+    /// How long to wait for the board to connect and answer the handshake (s), 0 < S <= 3600.
+    #[arg(long, value_name = "SECONDS", default_value_t = 20.0)]
+    handshake_timeout: f64,
     /// Inject a fault between host and board at sample K (testing): KIND@K with KIND one of corrupt-request, corrupt-reply, drop-request, drop-reply, late-reply, reset-board (repeatable).
     #[arg(long, value_name = "KIND@K")]
     inject: Vec<String>,
@@ -178,11 +181,22 @@ pub(super) fn pil(a: PilArgs, w: &mut impl Write) -> Result<()> {
         firmware,
         float,
         timeout_ms,
+        handshake_timeout,
         inject,
         no_plot,
         quiet,
     } = a;
     use crate::pil::{Options, Target};
+    // The link's flags first: a board address that cannot be one is
+    // refused before any work (it was once retried to the deadline).
+    if let Some(addr) = &connect {
+        crate::pil::check_address(addr)?;
+    }
+    if !(handshake_timeout.is_finite() && handshake_timeout > 0.0 && handshake_timeout <= 3600.0) {
+        crate::bad_input!(
+            "--handshake-timeout {handshake_timeout}: must be > 0 and at most 3600 s"
+        );
+    }
     let lp = load(&scenario, &set)?;
     if !quiet {
         warn(&scenario, &lp);
@@ -227,7 +241,7 @@ pub(super) fn pil(a: PilArgs, w: &mut impl Write) -> Result<()> {
         target,
         float: ehservo_wire_float(&float),
         timeout: std::time::Duration::from_secs_f64(timeout_ms / 1e3),
-        handshake_timeout: std::time::Duration::from_secs(20),
+        handshake_timeout: std::time::Duration::from_secs_f64(handshake_timeout),
         inject: plan,
     };
     let start = Instant::now();

@@ -38,6 +38,7 @@
 //! bounded before any run (`scenario::MAX_WORK` per measurement).
 
 use super::ss::C64;
+use crate::limits::{count_from_f64, sample_evaluations, work_of, CountError};
 use crate::plant::Plant;
 use crate::scenario::{ControllerConfig, Loop, LoopPlant, LoopVisit, Typed};
 use crate::simulation::{Simulation, Stop};
@@ -332,18 +333,43 @@ pub struct SinePlan {
 
 /// The plan of a sinestream at `f` Hz: at least `cycles` periods and
 /// `min_window` samples in the window, the frequency moved to the nearest
-/// whole number of periods in a whole number of samples.
-pub fn plan_sine(f: f64, h: f64, s: &Settings) -> SinePlan {
+/// whole number of periods in a whole number of samples. A count beyond
+/// what a plan can hold is refused with the flag that asked for it
+/// (`--measure-f-min` for the window, `--settle` or `--measure-f-min` for
+/// the settling).
+pub fn plan_sine(f: f64, h: f64, s: &Settings) -> Result<SinePlan, CountError> {
     let per = 1.0 / (f * h); // samples per period
-    let window = ((f64::from(s.cycles) * per).round() as u64).max(s.min_window);
-    let cycles = ((f * h * window as f64).round() as u64).max(1);
+    let window = count_from_f64(
+        "--measure-f-min",
+        "samples in a sine's window",
+        (f64::from(s.cycles) * per).round(),
+    )?
+    .max(s.min_window);
+    let cycles = count_from_f64(
+        "--measure-f-min",
+        "periods in a sine's window",
+        (f * h * window as f64).round(),
+    )?
+    .max(1);
     let f_hz = cycles as f64 / (window as f64 * h);
-    let settle_t = s.settle_s.max(s.settle_cycles / f_hz);
-    SinePlan {
+    let by_cycles = s.settle_cycles / f_hz;
+    let (key, settle_t) = if s.settle_s >= by_cycles {
+        ("--settle", s.settle_s)
+    } else {
+        ("--measure-f-min", by_cycles)
+    };
+    Ok(SinePlan {
         f_hz,
         cycles,
         window,
-        settle: (settle_t / h).ceil() as u64,
+        settle: count_from_f64(key, "settling samples", (settle_t / h).ceil())?,
+    })
+}
+
+impl SinePlan {
+    /// Samples in the run: the settling and the window (saturating).
+    pub fn samples(&self) -> u64 {
+        self.settle.saturating_add(self.window)
     }
 }
 
@@ -377,31 +403,49 @@ impl Measured {
     }
 }
 
-/// The work of a plan of `samples` samples, in law and RK4 evaluations.
-pub fn work(setup: &Loop, samples: u64) -> f64 {
-    let per = match setup.sim().mode {
-        crate::simulation::Mode::Sampled => 1.0 + f64::from(setup.sim().substeps),
-        crate::simulation::Mode::Continuous => 4.0,
-    };
-    samples as f64 * per
+/// The work of a plan of `samples` samples, in evaluations (the law, the
+/// plant's RK4 sub-steps, an estimator's sub-steps: as
+/// [`crate::limits::sample_evaluations`] counts them), saturating.
+pub fn work(setup: &Loop, samples: u64) -> u64 {
+    work_of(samples, sample_evaluations(setup.sim(), setup.stages()))
 }
 
 /// A sinestream at `freqs` (Hz) of one input: one run per frequency, in
-/// parallel, in order.
-pub fn sinestream(setup: &Loop, input: Input, freqs: &[f64], s: &Settings) -> Vec<Measured> {
+/// parallel, in order (a count that cannot be planned is refused before
+/// any run).
+pub fn sinestream(
+    setup: &Loop,
+    input: Input,
+    freqs: &[f64],
+    s: &Settings,
+) -> Result<Vec<Measured>, CountError> {
     let h = setup.sim().step;
-    freqs
+    let plans = freqs
+        .iter()
+        .map(|&f| plan_sine(f, h, s))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(sinestream_planned(setup, input, &plans, s))
+}
+
+/// A sinestream of checked plans (one run per plan, in parallel, in
+/// order).
+pub fn sinestream_planned(
+    setup: &Loop,
+    input: Input,
+    plans: &[SinePlan],
+    s: &Settings,
+) -> Vec<Measured> {
+    plans
         .par_iter()
-        .map(|&f| {
-            let p = plan_sine(f, h, s);
+        .map(|p| {
             let w = 2.0 * PI * p.f_hz;
             let amp = match input {
                 Input::Tracking => s.amplitude,
                 Input::Disturbance => s.disturbance,
             };
             let e = Arc::new(Excitation::Sine { amp, w });
-            let r = run(setup, input, e, s, p.settle, p.settle + p.window);
-            sine_point(&p, input, &r)
+            let r = run(setup, input, e, s, p.settle, p.samples());
+            sine_point(p, input, &r)
         })
         .collect()
 }
@@ -468,13 +512,15 @@ pub struct WelchPlan {
 impl WelchPlan {
     /// Samples in the run.
     pub fn samples(&self) -> u64 {
-        self.settle + self.periods * self.nperseg
+        self.settle
+            .saturating_add(work_of(self.periods, self.nperseg))
     }
 }
 
 /// The plan over `[f_lo, f_hi]` Hz: segments of a power of two samples,
 /// at least 4 periods of `f_lo` (and `4·points`), `periods` of them after
-/// the settling time; `points` log-spaced bins.
+/// the settling time; `points` log-spaced bins. A count beyond what a plan
+/// can hold is refused with its flag (`--measure-f-min`, `--settle`).
 pub fn plan_welch(
     kind: Broadband,
     f_lo: f64,
@@ -483,12 +529,17 @@ pub fn plan_welch(
     periods: u64,
     h: f64,
     settle_s: f64,
-) -> WelchPlan {
+) -> Result<WelchPlan, CountError> {
     let need = (4.0 / (f_lo * h)).max(4.0 * points as f64);
-    let nperseg = (need.ceil() as u64).next_power_of_two().max(64);
+    let key = "--measure-f-min";
+    let nperseg = count_from_f64(key, "samples per segment", need.ceil())?;
+    // ≤ 2⁵³, so its next power of two is at most 2⁵³ too.
+    let nperseg = nperseg.next_power_of_two().max(64);
     let df = 1.0 / (nperseg as f64 * h);
-    let k_lo = ((f_lo / df).ceil() as u64).max(1);
-    let k_hi = ((f_hi / df).floor() as u64).min(nperseg / 2 - 1).max(k_lo);
+    let k_lo = count_from_f64(key, "bins below it", (f_lo / df).ceil())?.max(1);
+    let k_hi = count_from_f64("--measure-f-max", "bins below it", (f_hi / df).floor())?
+        .min(nperseg / 2 - 1)
+        .max(k_lo);
     let mut bins: Vec<u64> = (0..points.max(1))
         .map(|i| {
             let r = if points > 1 {
@@ -496,17 +547,18 @@ pub fn plan_welch(
             } else {
                 0.0
             };
+            // Between k_lo and k_hi, both counts.
             (k_lo as f64 * (k_hi as f64 / k_lo as f64).powf(r)).round() as u64
         })
         .collect();
     bins.dedup();
-    WelchPlan {
+    Ok(WelchPlan {
         kind,
         nperseg,
         periods: periods.max(2),
-        settle: (settle_s / h).ceil() as u64,
+        settle: count_from_f64("--settle", "settling samples", (settle_s / h).ceil())?,
         bins,
-    }
+    })
 }
 
 /// The excitation of a plan: the multisine with amplitude `amp` at its
@@ -612,7 +664,7 @@ pub fn welch_measure(setup: &Loop, input: Input, plan: &WelchPlan, s: &Settings)
     let e = Arc::new(broadband(plan, amp, h));
     let r = run(setup, input, e, s, plan.settle, plan.samples());
     let df = 1.0 / (plan.nperseg as f64 * h);
-    if r.diverged_at_s.is_some() || (r.theta.len() as u64) < plan.periods * plan.nperseg {
+    if r.diverged_at_s.is_some() || (r.theta.len() as u64) < work_of(plan.periods, plan.nperseg) {
         return plan
             .bins
             .iter()
@@ -699,7 +751,7 @@ mod tests {
             cycles: 4,
             min_window: 10,
         };
-        let p = plan_sine(3.0, 0.01, &s);
+        let p = plan_sine(3.0, 0.01, &s).unwrap();
         assert_eq!((p.window, p.cycles), (133, 4));
         assert!((p.f_hz - 4.0 / 1.33).abs() < 1e-12);
         assert_eq!(p.settle, 100);
@@ -710,7 +762,7 @@ mod tests {
     #[test]
     fn welch_of_a_delay_by_hand() {
         let h = 0.01;
-        let plan = plan_welch(Broadband::Multisine, 0.5, 20.0, 12, 4, h, 0.0);
+        let plan = plan_welch(Broadband::Multisine, 0.5, 20.0, 12, 4, h, 0.0).unwrap();
         let e = broadband(&plan, 1.0, h);
         let n = plan.samples() as usize;
         let x: Vec<f64> = (0..n).map(|k| e.z(k as f64 * h)[0]).collect();

@@ -43,6 +43,27 @@ pub fn bad(file: &str, key: &str, reason: impl Into<String>) -> ScenarioError {
     }
 }
 
+/// A figure for a one-line message: as written (`50`, `0.1`) within
+/// 10⁻⁴ ≤ |v| < 10¹⁵, in scientific notation beyond (`1e-300`, never three
+/// hundred digits).
+///
+/// ```
+/// use ehservo::freq::fig;
+/// assert_eq!(fig(50.0), "50");
+/// assert_eq!(fig(0.1), "0.1");
+/// assert_eq!(fig(1e-300), "1e-300");
+/// assert_eq!(fig(1e300), "1e300");
+/// assert_eq!(fig(0.0), "0");
+/// ```
+pub fn fig(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && a.is_finite() && !(1e-4..1e15).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// What `ehservo linearize` builds.
 #[derive(Debug, Clone)]
 pub struct Linearised {

@@ -23,16 +23,19 @@ mod figures;
 mod files;
 mod measured;
 
+use super::fig;
 use super::measure::{self, Broadband, Input, Measured, Settings};
 use super::oppoint::At;
 use super::response::Discretisation;
 use super::ss::C64;
+use crate::limits::saturating_sum;
 use crate::output::Staging;
 use crate::scenario::{Loop, ScenarioError};
 use files::write;
 
-/// The work limit of a run, for a whole measurement.
-const MAX_WORK: f64 = 4.0e8;
+/// The work limit of a run, for a whole measurement (evaluations): the
+/// run limit of `limits::MAX_RUN_WORK`.
+const MAX_WORK: u64 = crate::limits::MAX_RUN_WORK as u64;
 use anyhow::{anyhow, Result};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -149,17 +152,19 @@ fn check_range(
 ) -> Result<(), ScenarioError> {
     let bad = |k: &str, r: String| Err(super::bad(file, k, r));
     if !(lo.1.is_finite() && lo.1 > 0.0) {
-        return bad(lo.0, format!("{}: must be a frequency > 0 Hz", lo.1));
+        return bad(lo.0, format!("{}: must be a frequency > 0 Hz", fig(lo.1)));
     }
     if !(hi.1.is_finite() && hi.1 > 0.0) {
-        return bad(hi.0, format!("{}: must be a frequency > 0 Hz", hi.1));
+        return bad(hi.0, format!("{}: must be a frequency > 0 Hz", fig(hi.1)));
     }
     if hi.1 > nyquist {
         return bad(
             hi.0,
             format!(
-                "{} Hz is above the Nyquist frequency {nyquist} Hz of simulation.step = {h} s",
-                hi.1
+                "{} Hz is above the Nyquist frequency {} Hz of simulation.step = {} s",
+                fig(hi.1),
+                fig(nyquist),
+                fig(h)
             ),
         );
     }
@@ -168,7 +173,9 @@ fn check_range(
             lo.0,
             format!(
                 "{} Hz to {} = {} Hz is an empty frequency range",
-                lo.1, hi.0, hi.1
+                fig(lo.1),
+                hi.0,
+                fig(hi.1)
             ),
         );
     }
@@ -210,7 +217,8 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
     )?;
     let mf_max = o.measure_f_max.unwrap_or(0.9 * nyq);
     if !o.methods.is_empty() {
-        check_measure_options(file, o, mf_max, h)?;
+        let per = crate::limits::sample_evaluations(setup.sim(), setup.stages());
+        check_measure_options(file, o, mf_max, h, per)?;
     }
     // The computed part, where the plant is linearised.
     let computed = match super::oppoint::LinPlant::of(setup) {
@@ -240,57 +248,17 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
         ..o.settings
     };
     // The measured frequencies and the work, bounded before any run.
-    let mgrid = measure_grid(o, mf_max);
-    let mut total = 0.0;
-    let welch_plan = |kind| {
-        measure::plan_welch(
-            kind,
-            o.measure_f_min,
-            mf_max,
-            o.measure_points,
-            o.periods,
-            h,
-            settings.settle_s,
-        )
-    };
-    for m in &o.methods {
-        total += 2.0
-            * match m {
-                Method::Sine => mgrid
-                    .iter()
-                    .map(|&f| {
-                        let p = measure::plan_sine(f, h, &settings);
-                        measure::work(setup, p.settle + p.window)
-                    })
-                    .sum::<f64>(),
-                Method::Multisine => {
-                    measure::work(setup, welch_plan(Broadband::Multisine).samples())
-                }
-                Method::Chirp => measure::work(setup, welch_plan(Broadband::Chirp).samples()),
-            };
-    }
-    if total > MAX_WORK {
-        Err(super::bad(file,
-            "--measure-f-min",
-            format!(
-                "the measurement is about {total:.2e} law and RK4 evaluations, more than the limit of {MAX_WORK:.0e}: raise --measure-f-min, lower --measure-points, --cycles or --periods"
-            ),
-        ))?;
-    }
+    let plans = plan_measurements(setup, file, o, mf_max, &settings)?;
     // The output folder is checked before the work.
     let stage = Staging::new(dir)?;
     let mut sets = Vec::new();
-    for &m in &o.methods {
-        let set = match m {
-            Method::Sine => {
+    for (m, plan) in plans {
+        let set = match plan {
+            Plan::Sine(plans) => {
                 let (tr, di) = rayon::join(
-                    || measure::sinestream(setup, Input::Tracking, &mgrid, &settings),
-                    || measure::sinestream(setup, Input::Disturbance, &mgrid, &settings),
+                    || measure::sinestream_planned(setup, Input::Tracking, &plans, &settings),
+                    || measure::sinestream_planned(setup, Input::Disturbance, &plans, &settings),
                 );
-                let plans: Vec<_> = mgrid
-                    .iter()
-                    .map(|&f| measure::plan_sine(f, h, &settings))
-                    .collect();
                 MeasuredSet {
                     method: m,
                     tracking: tr,
@@ -298,13 +266,7 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
                     plan: json!(plans),
                 }
             }
-            Method::Multisine | Method::Chirp => {
-                let kind = if m == Method::Chirp {
-                    Broadband::Chirp
-                } else {
-                    Broadband::Multisine
-                };
-                let plan = welch_plan(kind);
+            Plan::Welch(plan) => {
                 let (tr, di) = measure::welch_both(setup, &plan, &settings);
                 MeasuredSet {
                     method: m,
@@ -319,10 +281,121 @@ pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Res
     write(setup, o, &computed, &sets, f_max, settings, stage)
 }
 
+/// The checked plan of one measurement method.
+enum Plan {
+    /// One plan per frequency.
+    Sine(Vec<measure::SinePlan>),
+    /// One long run.
+    Welch(measure::WelchPlan),
+}
+
+/// The plans of every method, their counts checked (a count that cannot
+/// be planned names its flag and figure) and their work, summed with
+/// saturating arithmetic over both inputs, within [`MAX_WORK`].
+fn plan_measurements(
+    setup: &Loop,
+    file: &str,
+    o: &FreqOptions,
+    mf_max: f64,
+    settings: &Settings,
+) -> Result<Vec<(Method, Plan)>, ScenarioError> {
+    let h = setup.sim().step;
+    let counted = |e: crate::limits::CountError| super::bad(file, &e.key, e.to_string());
+    let mgrid = measure_grid(o, mf_max);
+    let mut plans = Vec::new();
+    for &m in &o.methods {
+        let plan = match m {
+            Method::Sine => Plan::Sine(
+                mgrid
+                    .iter()
+                    .map(|&f| measure::plan_sine(f, h, settings))
+                    .collect::<Result<_, _>>()
+                    .map_err(counted)?,
+            ),
+            Method::Multisine | Method::Chirp => Plan::Welch(
+                measure::plan_welch(
+                    if m == Method::Chirp {
+                        Broadband::Chirp
+                    } else {
+                        Broadband::Multisine
+                    },
+                    o.measure_f_min,
+                    mf_max,
+                    o.measure_points,
+                    o.periods,
+                    h,
+                    settings.settle_s,
+                )
+                .map_err(counted)?,
+            ),
+        };
+        plans.push((m, plan));
+    }
+    // Each input (tracking, disturbance) runs every plan.
+    let total = saturating_sum(plans.iter().map(|(_, p)| match p {
+        Plan::Sine(v) => saturating_sum(v.iter().map(|p| measure::work(setup, p.samples()))),
+        Plan::Welch(p) => measure::work(setup, p.samples()),
+    }))
+    .saturating_mul(2);
+    if total > MAX_WORK {
+        let (flag, what) = if o.settings.settle_s > 0.0 && settle_dominates(&plans) {
+            ("--settle", "lower --settle")
+        } else {
+            (
+                "--measure-f-min",
+                "raise --measure-f-min, lower --measure-points, --cycles or --periods",
+            )
+        };
+        return Err(super::bad(
+            file,
+            flag,
+            format!(
+                "the measurement is about {:.2e} law and RK4 evaluations, more than the limit of {:.0e}: {what}",
+                total as f64,
+                MAX_WORK as f64
+            ),
+        ));
+    }
+    Ok(plans)
+}
+
+/// Whether the settling samples are most of the plans' samples.
+fn settle_dominates(plans: &[(Method, Plan)]) -> bool {
+    let (settle, all) = plans.iter().fold((0u64, 0u64), |(s, a), (_, p)| match p {
+        Plan::Sine(v) => v.iter().fold((s, a), |(s, a), p| {
+            (s.saturating_add(p.settle), a.saturating_add(p.samples()))
+        }),
+        Plan::Welch(p) => (s.saturating_add(p.settle), a.saturating_add(p.samples())),
+    });
+    settle > all / 2
+}
+
+/// The lowest frequency (Hz) a measured record within [`MAX_WORK`] can
+/// resolve for `o`'s methods: a record of `per` evaluations a sample holds
+/// at most `N = MAX_WORK / (2·per)` samples (both inputs run it), `N·h`
+/// seconds, and must hold whole periods of the frequency: `cycles` plus
+/// the 2 settling periods of a sinestream, 4 in each of the `periods`
+/// segments of a Welch measurement. Returns the frequency, the record's
+/// length (s) and the periods.
+fn lowest_resolvable(o: &FreqOptions, per: u64, h: f64) -> (f64, f64, f64) {
+    let periods = o
+        .methods
+        .iter()
+        .map(|m| match m {
+            Method::Sine => f64::from(o.settings.cycles) + o.settings.settle_cycles,
+            Method::Multisine | Method::Chirp => 4.0 * o.periods as f64,
+        })
+        .fold(0.0, f64::max);
+    let record_s = MAX_WORK as f64 / (2.0 * per.max(1) as f64) * h;
+    (periods / record_s, record_s, periods)
+}
+
 /// The measurement's options: its frequency range and points, the
 /// excitation's amplitudes, the settling time, the cycles and the Welch
-/// periods (`mf_max` the highest measured frequency, `h` the period).
-fn check_measure_options(file: &str, o: &FreqOptions, mf_max: f64, h: f64) -> Result<()> {
+/// periods, and the lowest frequency a record can resolve (`mf_max` the
+/// highest measured frequency, `h` the period, `per` the evaluations of a
+/// sample).
+fn check_measure_options(file: &str, o: &FreqOptions, mf_max: f64, h: f64, per: u64) -> Result<()> {
     let nyq = 0.5 / h;
     check_range(
         file,
@@ -349,6 +422,20 @@ fn check_measure_options(file: &str, o: &FreqOptions, mf_max: f64, h: f64) -> Re
     }
     if o.periods < 2 || o.periods > 10_000 {
         Err(super::bad(file, "--periods", "must be between 2 and 10000"))?;
+    }
+    let (lowest, record_s, periods) = lowest_resolvable(o, per, h);
+    if o.measure_f_min < lowest {
+        Err(super::bad(
+            file,
+            "--measure-f-min",
+            format!(
+                "{} Hz is below what a record can resolve: {:.0e} evaluations at most, {record_s:.3e} s at simulation.step = {} s, must hold {periods} periods; allowed: {lowest:.3e} to {} Hz",
+                fig(o.measure_f_min),
+                MAX_WORK as f64,
+                fig(h),
+                fig(nyq)
+            ),
+        ))?;
     }
     Ok(())
 }

@@ -176,6 +176,48 @@ impl Options {
     }
 }
 
+/// A `--connect` address as `HOST:PORT` with a port from 1 to 65535 that
+/// resolves, or bad input naming the flag (exit 2, before any work: it
+/// was once retried until the handshake's deadline).
+///
+/// ```
+/// use ehservo::pil::check_address;
+/// assert!(check_address("127.0.0.1:5555").is_ok());
+/// for bad in ["127.0.0.1:99999", "127.0.0.1", "127.0.0.1:0", "[::1]:x"] {
+///     let e = check_address(bad).unwrap_err();
+///     assert!(e.to_string().starts_with(&format!("--connect {bad}: ")), "{e}");
+/// }
+/// ```
+pub fn check_address(addr: &str) -> Result<(), crate::error::InputError> {
+    use std::net::ToSocketAddrs;
+    let bad = |why: String| {
+        crate::error::InputError::Request(format!(
+            "--connect {}: {why}",
+            crate::input::quote_start(addr).trim_matches('`')
+        ))
+    };
+    let Some((host, port)) = addr.rsplit_once(':') else {
+        return Err(bad("expected HOST:PORT (e.g. 127.0.0.1:5555)".into()));
+    };
+    match port.parse::<u16>() {
+        Ok(p) if p > 0 => {}
+        _ => {
+            return Err(bad(format!(
+                "the port `{}` is not a number from 1 to 65535",
+                port.chars().take(20).collect::<String>()
+            )))
+        }
+    }
+    if host.is_empty() {
+        return Err(bad("expected HOST:PORT: the host is empty".into()));
+    }
+    match addr.to_socket_addrs().map(|mut a| a.next()) {
+        Ok(Some(_)) => Ok(()),
+        Ok(None) => Err(bad("resolves to no address".into())),
+        Err(e) => Err(bad(format!("not an address: {e}"))),
+    }
+}
+
 /// Accepts one connection before `deadline`, watching QEMU.
 fn accept(l: &TcpListener, deadline: Instant, qemu: &mut Option<qemu::Qemu>) -> Result<TcpStream> {
     l.set_nonblocking(true)?;

@@ -32,6 +32,20 @@ fn left(deadline: Instant) -> Option<Duration> {
     (now < deadline).then(|| (deadline - now).max(Duration::from_micros(1)))
 }
 
+/// After a read interrupted by a signal: an error of kind `Interrupted`
+/// when the signal is one that ends the run (its handler then exits with
+/// 130, which `main` waits for), else nothing (read on).
+fn interrupted() -> io::Result<()> {
+    if crate::interrupt::signalled() {
+        Err(io::Error::new(
+            io::ErrorKind::Interrupted,
+            "interrupted by a signal",
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// A TCP connection (Nagle off: a frame goes out as it is written).
 pub struct Tcp {
     stream: TcpStream,
@@ -55,26 +69,34 @@ impl Transport for Tcp {
         self.stream.write_all(bytes)
     }
     fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
-        let Some(t) = left(deadline) else {
-            return Ok(0);
-        };
-        self.stream.set_read_timeout(Some(t))?;
-        match self.stream.read(buf) {
-            Ok(0) => Err(io::Error::new(
-                io::ErrorKind::UnexpectedEof,
-                "the board closed the connection",
-            )),
-            Ok(n) => Ok(n),
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
-                ) =>
-            {
-                Ok(0)
-            }
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => Ok(0),
-            Err(e) => Err(e),
+        // A signal interrupts the read (EINTR): read on until the deadline
+        // (a signal that ends the run is the handler's to act on, exit
+        // 130), never report the deadline passed before it has.
+        loop {
+            let Some(t) = left(deadline) else {
+                return Ok(0);
+            };
+            self.stream.set_read_timeout(Some(t))?;
+            return match self.stream.read(buf) {
+                Ok(0) => Err(io::Error::new(
+                    io::ErrorKind::UnexpectedEof,
+                    "the board closed the connection",
+                )),
+                Ok(n) => Ok(n),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {
+                    interrupted()?;
+                    continue;
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    Ok(0)
+                }
+                Err(e) => Err(e),
+            };
         }
     }
     fn describe(&self) -> String {
@@ -115,24 +137,30 @@ impl Transport for Serial {
         self.port.flush()
     }
     fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
-        let Some(t) = left(deadline) else {
-            return Ok(0);
-        };
-        self.port
-            .set_timeout(t)
-            .map_err(|e| io::Error::other(e.to_string()))?;
-        match self.port.read(buf) {
-            Ok(n) => Ok(n),
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
-                ) =>
-            {
-                Ok(0)
-            }
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => Ok(0),
-            Err(e) => Err(e),
+        // EINTR: read on until the deadline (as [`Tcp`]'s).
+        loop {
+            let Some(t) = left(deadline) else {
+                return Ok(0);
+            };
+            self.port
+                .set_timeout(t)
+                .map_err(|e| io::Error::other(e.to_string()))?;
+            return match self.port.read(buf) {
+                Ok(n) => Ok(n),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {
+                    interrupted()?;
+                    continue;
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
+                    ) =>
+                {
+                    Ok(0)
+                }
+                Err(e) => Err(e),
+            };
         }
     }
     fn describe(&self) -> String {

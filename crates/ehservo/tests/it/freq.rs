@@ -74,7 +74,7 @@ fn bad_requests_are_refused_clearly() {
         (
             vec!["freq", fig2, "--out", o, "--measure-f-min", "1e-6"],
             "--measure-f-min",
-            "more than the limit",
+            "below what a record can resolve",
         ),
         (
             vec!["freq", fig2, "--out", o, "--at", "20"],
@@ -159,10 +159,10 @@ fn measured_agrees_with_computed_on_a_linear_case() {
             .map(|i| 0.2 * (225.0f64).powf(i as f64 / 23.0))
             .collect();
         let (tr, di) = rayon::join(
-            || measure::sinestream(&l.setup, Input::Tracking, &freqs, &settings),
-            || measure::sinestream(&l.setup, Input::Disturbance, &freqs, &settings),
+            || measure::sinestream(&l.setup, Input::Tracking, &freqs, &settings).unwrap(),
+            || measure::sinestream(&l.setup, Input::Disturbance, &freqs, &settings).unwrap(),
         );
-        let plan = measure::plan_welch(Broadband::Multisine, 0.2, 45.0, 30, 3, 0.01, 2.0);
+        let plan = measure::plan_welch(Broadband::Multisine, 0.2, 45.0, 30, 3, 0.01, 2.0).unwrap();
         // (The chirp's H1 is not held to this bound: docs/frequency.md.)
         let (wt, wd) = measure::welch_both(&l.setup, &plan, &settings);
         let mut checked = 0;
@@ -344,4 +344,74 @@ fn a_measured_band_without_a_crossover_says_so() {
         .parse()
         .unwrap();
     assert!(f < 20.0, "{c}");
+/// Issue 46, item 2: the measurement's counts are made in checked
+/// arithmetic. `--settle 1e300` once planned u64::MAX samples, the work
+/// sum wrapped round below the limit, and every cell came out empty with
+/// exit 0; `--measure-f-min 1e-300` was measured from 1.56 Hz. Each is now
+/// refused in one short line naming its flag, nothing written.
+#[test]
+fn work_counts_that_cannot_be_planned_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fig2 = common::repo().join("scenarios/paper/fig2.toml");
+    let fig2 = fig2.to_str().unwrap();
+    let out = tmp.path().join("out");
+    let o = out.to_str().unwrap();
+    // Fig. 2: h = 0.01 s, sampled, 1 sub-step: 2 evaluations a sample. A
+    // record within 4e8 evaluations, run for both inputs, is at most
+    // 4e8 / (2·2) = 1e8 samples = 1e6 s; a sinestream needs 4 cycles + 2
+    // settling periods in it: 6 / 1e6 s = 6e-6 Hz, the lowest allowed.
+    let cases: Vec<(Vec<&str>, &str, &str)> = vec![
+        // The sinestream's settling samples: 1e300 / 0.01 = 1e302.
+        (
+            vec!["--settle", "1e300"],
+            "--settle",
+            "1.000e302 settling samples asked",
+        ),
+        // Welch's settling samples, the same figure.
+        (
+            vec!["--settle", "1e300", "--measure", "multisine"],
+            "--settle",
+            "1.000e302 settling samples asked",
+        ),
+        // Finite counts whose sum is beyond the limit: 40 frequencies × 2
+        // inputs × 1e10 s / 0.01 s × 2 evaluations = 1.6e14.
+        (vec!["--settle", "1e10"], "--settle", "about 1.60e14"),
+        // Below what a record can resolve, with the range allowed.
+        (
+            vec!["--measure-f-min", "1e-300"],
+            "--measure-f-min",
+            "allowed: 6.000e-6 to 50 Hz",
+        ),
+        (
+            vec!["--measure-f-min", "5.9e-6"],
+            "--measure-f-min",
+            "allowed: 6.000e-6 to 50 Hz",
+        ),
+        // Just above it the record resolves the frequency, and the work
+        // of the 40 frequencies is what is refused.
+        (
+            vec!["--measure-f-min", "6.1e-6"],
+            "--measure-f-min",
+            "more than the limit of 4e8",
+        ),
+        // Welch: 4 periods of f in each of 4 segments: 16 / 1e6 s.
+        (
+            vec!["--measure-f-min", "1e-300", "--measure", "chirp"],
+            "--measure-f-min",
+            "allowed: 1.600e-5 to 50 Hz",
+        ),
+        (vec!["--f-max", "1e300"], "--f-max", "1e300 Hz is above"),
+    ];
+    for (extra, key, expect) in cases {
+        let r = common::ehservo()
+            .args(["freq", fig2, "--out", o, "--no-plot"])
+            .args(&extra)
+            .output()
+            .unwrap();
+        let err = common::rejected_naming("fig2.toml", &r, expect);
+        assert!(err.contains(key), "{extra:?}: names {key}: {err}");
+        assert!(err.trim().chars().count() < 300, "{extra:?}: short: {err}");
+        assert!(!out.exists(), "{extra:?}: output written for bad input");
+    }
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
 }

@@ -34,6 +34,7 @@ mod pil;
 mod properties;
 mod realistic;
 mod reliability;
+mod reliability_four;
 mod reproduce_bad_input;
 mod reproduction;
 mod sampled_loop;

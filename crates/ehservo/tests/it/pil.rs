@@ -5,7 +5,7 @@
 //! firmware exist; skipped with the reason printed where not).
 #![allow(clippy::float_cmp)] // exact values (held commands, zeros) are the point
 
-use super::common::{ehservo, repo};
+use super::common::{self, ehservo, repo};
 use ehservo::pil::session::Session;
 use ehservo::pil::transport::{InProcess, Inject, Transport};
 use ehservo::pil::{self, Options, Target};
@@ -503,4 +503,77 @@ fn faults_from_a_proxy_in_front_of_qemu_are_named() {
     assert_eq!(u[30].to_bits(), u[29].to_bits());
     assert_eq!(u[60].to_bits(), u[59].to_bits());
     t.join().unwrap();
+}
+
+/// Issue 46, item 5: SIGINT while a silent board holds the handshake,
+/// at 50 moments from its connection on: exit 130 every time, the output
+/// folder absent. In about 1 try in 10 it was exit 1: the read's timeout
+/// turned the EINTR into "deadline passed" and the main thread's exit
+/// beat the handler's.
+#[cfg(unix)]
+#[test]
+fn sigint_during_a_silent_handshake_is_exit_130_every_time() {
+    use nix::sys::signal::{kill, Signal};
+    use nix::unistd::Pid;
+    let board = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = board.local_addr().unwrap().to_string();
+    let tmp = tempfile::tempdir().unwrap();
+    let scenario = common::repo().join("scenarios/paper/fig2.toml");
+    for i in 0..50u64 {
+        let out = tmp.path().join(format!("out{i}"));
+        let child = common::ehservo()
+            .arg("pil")
+            .arg(&scenario)
+            .args(["--connect", &addr, "--handshake-timeout", "10", "--out"])
+            .arg(&out)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The board accepts and stays silent; the signal comes 0 to 49 ms
+        // after (spread over the moments of the handshake's first reads).
+        let (conn, _) = board.accept().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(i));
+        kill(Pid::from_raw(child.id() as i32), Signal::SIGINT).unwrap();
+        let o = child.wait_with_output().unwrap();
+        drop(conn);
+        assert_eq!(
+            o.status.code(),
+            Some(130),
+            "try {i}: {:?} {}",
+            o.status,
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(!out.exists(), "try {i}: the output folder was left");
+    }
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+}
+
+/// Issue 46, item 5: a `--connect` address that cannot be one (a port out
+/// of range, no port) is exit 2 at once, naming the flag; it was once
+/// retried until the 20 s handshake deadline, then exit 1.
+#[test]
+fn a_malformed_connect_address_is_refused_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let scenario = common::repo().join("scenarios/paper/fig2.toml");
+    for addr in ["127.0.0.1:99999", "127.0.0.1", "127.0.0.1:0"] {
+        let start = std::time::Instant::now();
+        let o = common::ehservo()
+            .arg("pil")
+            .arg(&scenario)
+            .args(["--connect", addr, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = common::rejected(addr, &o, &format!("--connect {addr}: "));
+        assert!(start.elapsed().as_secs_f64() < 5.0, "{addr}: {err}");
+        assert!(!out.exists());
+    }
+    let o = common::ehservo()
+        .arg("pil")
+        .arg(&scenario)
+        .args(["--connect", "127.0.0.1:5", "--handshake-timeout", "0"])
+        .output()
+        .unwrap();
+    common::rejected("timeout", &o, "--handshake-timeout 0: must be > 0");
 }

@@ -76,7 +76,10 @@ pub fn read_csv_on(path: &Path, axis: Axis) -> Result<Vec<Knot>, CsvError> {
         return Err(fail(
             Some(hl),
             None,
-            format!("expected the header `t,{col}`, got `{header}`"),
+            format!(
+                "expected the header `t,{col}`, got {}",
+                crate::input::quote_start(header)
+            ),
         ));
     }
     let mut knots: Vec<Knot> = Vec::new();
@@ -96,8 +99,8 @@ pub fn read_csv_on(path: &Path, axis: Axis) -> Result<Vec<Knot>, CsvError> {
         for (j, col) in ["t", col].iter().enumerate() {
             let Ok(x) = fields[j].parse::<f64>() else {
                 return bad(format!(
-                    "cannot read `{}` in column {col} as a number",
-                    fields[j]
+                    "cannot read {} in column {col} as a number",
+                    crate::input::quote_start(fields[j])
                 ));
             };
             if x.is_nan() {
@@ -111,7 +114,7 @@ pub fn read_csv_on(path: &Path, axis: Axis) -> Result<Vec<Knot>, CsvError> {
         if let Some(prev) = knots.last() {
             if v[0] <= prev.t {
                 return bad(format!(
-                    "non-monotonic time: t = {} after {} (times must strictly increase)",
+                    "non-monotonic time: t = {:?} after {:?} (times must strictly increase)",
                     v[0], prev.t
                 ));
             }
