@@ -363,7 +363,20 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
                 false,
             );
         };
-        let (s_hat, weak) = weakest(&jac, &r, free.len(), opts.ident_threshold);
+        let Some((s_hat, weak)) = weakest(&jac, &r, free.len(), opts.ident_threshold) else {
+            return report(
+                problem,
+                params,
+                &free,
+                None,
+                evaluations,
+                format!(
+                    "the SVD of the Jacobian did not converge in {} sweeps",
+                    super::oe::svd_sweeps(free.len())
+                ),
+                false,
+            );
+        };
         if let Some(k) = weak {
             let j = free[k];
             // Back to where the round started: along a direction the data
@@ -458,11 +471,17 @@ fn minimise(
 /// and, when the Jacobian leaves a direction unfixed (its smallest
 /// singular value at most 10⁻⁹ of the largest, or ŝ over it above
 /// `threshold`), the free parameter (by index among the free ones) that
-/// weighs most in that direction.
-fn weakest(jac: &DMatrix<f64>, r: &[f64], n_free: usize, threshold: f64) -> (f64, Option<usize>) {
+/// weighs most in that direction; `None` when J's SVD does not converge
+/// within [`super::oe::svd_sweeps`].
+fn weakest(
+    jac: &DMatrix<f64>,
+    r: &[f64],
+    n_free: usize,
+    threshold: f64,
+) -> Option<(f64, Option<usize>)> {
     let dof = (r.len().saturating_sub(n_free)).max(1) as f64;
     let s_hat = (r.iter().map(|v| v * v).sum::<f64>() / dof).sqrt();
-    let svd = jac.clone().svd(false, true);
+    let svd = bounded_svd(jac)?;
     let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
     let (imin, smin) =
         sv.iter().enumerate().fold(
@@ -472,7 +491,7 @@ fn weakest(jac: &DMatrix<f64>, r: &[f64], n_free: usize, threshold: f64) -> (f64
     let smax = sv.iter().fold(0.0f64, |a, &s| a.max(s));
     let weak = smin <= 1e-9 * smax || s_hat / smin > threshold;
     if !weak {
-        return (s_hat, None);
+        return Some((s_hat, None));
     }
     let vt = svd.v_t.as_ref().expect("V asked for");
     let row = vt.row(imin);
@@ -487,7 +506,13 @@ fn weakest(jac: &DMatrix<f64>, r: &[f64], n_free: usize, threshold: f64) -> (f64
                 }
             },
         );
-    (s_hat, Some(k))
+    Some((s_hat, Some(k)))
+}
+
+/// J's SVD (V only), or `None` past [`super::oe::svd_sweeps`] sweeps.
+fn bounded_svd(j: &DMatrix<f64>) -> Option<nalgebra_lm::linalg::SVD<f64, Dyn, Dyn>> {
+    j.clone()
+        .try_svd(false, true, f64::EPSILON, super::oe::svd_sweeps(j.ncols()))
 }
 
 /// The report at the final values, with the covariance from `jac`.
@@ -513,8 +538,8 @@ fn report(
     let n = free.len();
     let mut cov_x = vec![vec![f64::NAN; n]; n];
     let mut sv = Vec::new();
-    if let Some((j, s)) = &jac {
-        let svd = j.clone().svd(false, true);
+    let jac = jac.and_then(|(j, s)| bounded_svd(&j).map(|svd| (svd, s)));
+    if let Some((svd, s)) = &jac {
         sv = svd.singular_values.iter().copied().collect();
         let vt = svd.v_t.as_ref().expect("V asked for");
         for a in 0..n {

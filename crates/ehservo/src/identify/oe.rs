@@ -28,6 +28,16 @@ use super::frf::Frf;
 use super::model::{divergence_limit, spectral_radius, substeps, Model, SimOut};
 use realfft::num_complex::Complex64;
 
+/// The most implicit-shift QR sweeps a singular value decomposition of a
+/// matrix with `n` columns may take: LAPACK's bound of 6 per singular
+/// value on each of n (`dbdsqr`'s MAXITR = 6, times n²), and at least 100.
+/// nalgebra's `svd` has none and loops forever on some data (a log with a
+/// 10⁻²⁰⁰ s period): past the bound the decomposition is `None` and the
+/// start it served is not used.
+pub fn svd_sweeps(n: usize) -> usize {
+    n.saturating_mul(n).saturating_mul(6).max(100)
+}
+
 /// The linear model on a set of experiments.
 #[derive(Debug, Clone)]
 pub struct Linear {
@@ -167,7 +177,10 @@ pub fn frequency_fit(frf: &Frf, h: f64) -> Option<[f64; 4]> {
             let mut col = a.column_mut(c);
             col /= *nc;
         }
-        let x = a.svd(true, true).solve(&rhs, 1e-12).ok()?;
+        let x = a
+            .try_svd(true, true, f64::EPSILON, svd_sweeps(4))?
+            .solve(&rhs, 1e-12)
+            .ok()?;
         let p = [
             x[0] / norms[0],
             x[1] / norms[1],
@@ -262,7 +275,11 @@ pub fn grid_start(experiments: &[Experiment]) -> Option<([f64; 4], f64, Vec<f64>
                 }
                 row += e.len();
             }
-            let c = x.clone().svd(true, true).solve(&y, 1e-12).ok()?;
+            let c = x
+                .clone()
+                .try_svd(true, true, f64::EPSILON, svd_sweeps(2 + ne))?
+                .solve(&y, 1e-12)
+                .ok()?;
             let cost = (&x * &c - &y).norm_squared();
             (cost.is_finite() && c[0].is_finite() && c[0] != 0.0).then(|| {
                 (
