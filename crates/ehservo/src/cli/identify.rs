@@ -166,16 +166,18 @@ pub(super) fn excite(a: ExciteArgs, w: &mut impl Write) -> Result<()> {
     let wr = excite_to_dir(&spec, a.prior.as_deref(), &a.set, &a.out)?;
     out!(
         w,
-        "{:?} ({} loop{}): {} samples at {} Hz, peak {:.4}, RMS {:.4}, crest factor {:.3}; predicted peak |θ| {:.4} rad on the prior",
+        "{:?} ({} loop{}): {} samples at {} Hz, peak {:.4}, RMS {:.4}, crest factor {:.3}; predicted peak |position| {:.4} {} on the prior",
         spec.signal,
         if wr.kp.is_some() { "closed" } else { "open" },
-        wr.kp.map_or(String::new(), |k| format!(", kp = {k:.4} V/rad")),
+        wr.kp
+            .map_or(String::new(), |k| format!(", kp = {k:.4} V/{}", wr.unit)),
         wr.design.values.len(),
         spec.rate,
         wr.design.peak,
         wr.design.rms,
         wr.design.crest_factor,
-        wr.predicted_peak_rad
+        wr.predicted_peak_rad,
+        wr.unit
     );
     out!(
         w,

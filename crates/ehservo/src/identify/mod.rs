@@ -45,6 +45,7 @@ pub use bounds::Bounds;
 
 use crate::error::InputError;
 use crate::scenario::{Loop, Scenario};
+use anyhow::Context;
 use bounds::{spread, Fitted};
 use data::{Axis, ColumnMap, Experiment, ReadOptions};
 use derived::{greybox_derived, linear_derived};
@@ -242,19 +243,49 @@ fn read_all(opts: &Options) -> anyhow::Result<(Vec<Experiment>, Vec<Experiment>)
     Ok((exps, vals))
 }
 
-/// The prior scenario, built.
-fn prior(opts: &Options) -> anyhow::Result<Loop> {
-    Ok(match &opts.prior {
-        Some(p) => crate::formats::load(p, &opts.set)?,
+/// The prior scenario, built, and checked against the data before any
+/// fit: its axis must be the data's, and on rotary data the scenario
+/// `identify` will write from it must be valid at the prior's own
+/// parameters (a refusal names `--prior` and its file).
+fn prior(opts: &Options, axis: Axis) -> anyhow::Result<Loop> {
+    let flag = || match &opts.prior {
+        Some(p) => format!("--prior {}", p.display()),
+        None => "the default prior (the paper's Fig. 2 case)".into(),
+    };
+    let prior = match &opts.prior {
+        Some(p) => crate::formats::load(p, &opts.set).with_context(flag)?,
         None => Loop::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", &opts.set)?,
-    })
+    };
+    let (pa, model) = (prior.axis(), prior.scenario().plant.model());
+    if (pa == ehservo_sim::axis::Axis::Linear) != (axis == Axis::Linear) {
+        return Err(bad(format!(
+            "{}: a {} plant (plant.model = \"{model}\"), where the data measure a {} axis ({}): give a prior of the data's axis",
+            flag(),
+            pa.name(),
+            match axis {
+                Axis::Rotary => "rotary",
+                Axis::Linear => "linear",
+            },
+            axis.unit()
+        )));
+    }
+    if axis == Axis::Rotary && !opts.no_greybox {
+        let at_prior = greybox::to_vec(&prior.model().params, &prior.model().load);
+        identified_scenario(&prior, &at_prior, None, &opts.files).map_err(|e| {
+            bad(format!(
+                "{}: the identified scenario written from it would be refused: {e:#}",
+                flag()
+            ))
+        })?;
+    }
+    Ok(prior)
 }
 
 /// Runs the identification (no file written).
 pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let (exps, vals) = read_all(opts)?;
-    let prior = prior(opts)?;
     let axis = exps[0].axis;
+    let prior = prior(opts, axis)?;
     let mut notes = Vec::new();
     let seg = welch_segment(opts, &exps)?;
     // 1. Nonparametric estimates.
@@ -297,7 +328,7 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let scenario = match &greybox_result {
         Some(g) if !g.fit.diverged => Some(identified_scenario(
             &prior,
-            g,
+            &g.fit.values(),
             bounds.as_ref(),
             &opts.files,
         )?),
