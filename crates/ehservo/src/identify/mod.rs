@@ -244,7 +244,7 @@ fn read_all(opts: &Options) -> anyhow::Result<(Vec<Experiment>, Vec<Experiment>)
 }
 
 /// The prior scenario, built, and checked against the data before any
-/// fit: its axis must be the data's, and on rotary data the scenario
+/// fit: a `--prior`'s axis must be the data's, and on rotary data the scenario
 /// `identify` will write from it must be valid at the prior's own
 /// parameters (a refusal names `--prior` and its file).
 fn prior(opts: &Options, axis: Axis) -> anyhow::Result<Loop> {
@@ -257,7 +257,8 @@ fn prior(opts: &Options, axis: Axis) -> anyhow::Result<Loop> {
         None => Loop::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", &opts.set)?,
     };
     let (pa, model) = (prior.axis(), prior.scenario().plant.model());
-    if (pa == ehservo_sim::axis::Axis::Linear) != (axis == Axis::Linear) {
+    // The default prior is only the linear fit's start on linear data.
+    if opts.prior.is_some() && (pa == ehservo_sim::axis::Axis::Linear) != (axis == Axis::Linear) {
         return Err(bad(format!(
             "{}: a {} plant (plant.model = \"{model}\"), where the data measure a {} axis ({}): give a prior of the data's axis",
             flag(),
