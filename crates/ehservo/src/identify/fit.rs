@@ -190,6 +190,12 @@ pub struct FitReport {
     pub evaluations: usize,
     /// Why the last Levenberg–Marquardt run stopped.
     pub termination: String,
+    /// Whether the fit converged: its last Levenberg–Marquardt run stopped
+    /// on a convergence test (ftol, xtol, gtol, or zero residuals; not on
+    /// running out of evaluations, a numerical failure or a model that
+    /// diverged) and the Jacobian there gave the standard errors. A fit
+    /// that did not is not a result (`identify` exits 1).
+    pub converged: bool,
     /// Whether the model diverged at the start (nothing was fitted then).
     pub diverged: bool,
 }
@@ -334,7 +340,8 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             );
         }
         if free.is_empty() {
-            return report(
+            // Nothing to fit: nothing failed to converge.
+            let mut rep = report(
                 problem,
                 params,
                 &free,
@@ -343,9 +350,12 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
                 termination,
                 false,
             );
+            rep.converged = true;
+            return rep;
         }
         let min = minimise(problem, &params, &free, base, x0, &r0, opts);
-        evaluations += min.evaluations;
+        evaluations = evaluations.saturating_add(min.evaluations);
+        let success = min.success;
         termination = min.termination;
         if min.r.is_some() {
             for (i, &j) in free.iter().enumerate() {
@@ -388,7 +398,7 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             params[j].value = params[j].prior;
             continue;
         }
-        return report(
+        let mut rep = report(
             problem,
             params,
             &free,
@@ -397,6 +407,8 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             termination,
             false,
         );
+        rep.converged = success && !rep.singular_values.is_empty();
+        return rep;
     }
     let free: Vec<usize> = (0..n_all)
         .filter(|&j| params[j].status == Status::Free)
@@ -424,6 +436,8 @@ struct Minimum {
     evaluations: usize,
     /// Why it stopped.
     termination: String,
+    /// Whether it stopped on a convergence test.
+    success: bool,
 }
 
 /// One round: Levenberg–Marquardt over the `free` parameters from `x0`
@@ -464,6 +478,13 @@ fn minimise(
         jac,
         evaluations: rep.number_of_evaluations,
         termination: format!("{:?}", rep.termination),
+        // NoImprovementPossible: the tolerances are below what the machine
+        // can tell apart there, i.e. converged to rounding.
+        success: rep.termination.was_successful()
+            || matches!(
+                rep.termination,
+                levenberg_marquardt::TerminationReason::NoImprovementPossible(_)
+            ),
     }
 }
 
@@ -632,6 +653,7 @@ fn report(
         free_keys: free.iter().map(|&j| params[j].key.clone()).collect(),
         evaluations,
         termination,
+        converged: false,
         diverged,
     }
 }

@@ -327,7 +327,7 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let bounds = spread(opts, &exps, &fitted, &job.pl, opts.load_terms, k)?;
     // 5. The scenario.
     let scenario = match &greybox_result {
-        Some(g) if !g.fit.diverged => Some(identified_scenario(
+        Some(g) if g.fit.converged => Some(identified_scenario(
             &prior,
             &g.fit.values(),
             bounds.as_ref(),
@@ -539,7 +539,7 @@ impl Job<'_> {
         if !load_terms {
             if let Some((c, uo, th)) = oe::grid_start(self.exps) {
                 candidates.push((
-                    "the grid of denominators s(s^2 + 2 zeta omega s + omega^2), b by least squares",
+                    "the grid of denominators (s + p)(s^2 + 2 zeta omega s + omega^2), b by least squares",
                     c,
                     Some((uo, th)),
                 ));
@@ -685,10 +685,22 @@ impl LinearStarts<'_> {
     fn params(&self, start: [f64; 4]) -> Vec<Param> {
         let (unit, u_unit, prior_d) = (self.unit, self.u_unit, self.prior_d);
         let [a1, a2, a3, b] = start;
+        // a1's scale: a2 times the slowest rate the records resolve,
+        // 2π/T (a real pole there: a1 = p·ω² ≈ p·a2). At 10⁻⁹·a2, as it
+        // was, a start at a1 = 0 made its Jacobian column vanish and a1
+        // was "unidentifiable" at every threshold.
+        let t = self
+            .exps
+            .iter()
+            .map(|e| e.h * e.len() as f64)
+            .fold(f64::INFINITY, f64::min);
+        let a1_scale = a1
+            .abs()
+            .max(a2.abs().max(1.0) * 2.0 * std::f64::consts::PI / t);
         let mut v = vec![
             Param {
                 prior: 0.0,
-                ..Param::signed("a1", "1/s^3", a1, a1.abs().max(1e-9 * a2.abs().max(1.0)))
+                ..Param::signed("a1", "1/s^3", a1, a1_scale)
             },
             Param::new("a2", "1/s^2", a2.max(1e-9), 1.0),
             Param::new("a3", "1/s", a3.max(1e-9), 1.0),
