@@ -269,11 +269,14 @@ fn check_uncertainty(s: &Scenario) -> Result<UncertaintySpec, KeyError> {
 /// needs it: a linear axis's stroke, a plant with end stops, or a rotary
 /// reference with an offset (the kinds' own checks cover the rest, and a
 /// sweep builds this for every run). A rotary reference must stay inside
-/// the position limit.
+/// the position limit. The open loop's reference is a command
+/// (`volts_per_deg`·θd), not a position: it has no range to check.
 fn reference_range(s: &Scenario, reference: &AnyReference) -> Result<Option<(f64, f64)>, KeyError> {
     let axis = s.plant.axis();
-    let range = (axis == Axis::Linear || s.plant.end_stops() || s.reference.offset_deg.is_some())
-        .then(|| range_of(reference, s.simulation.horizon, s.simulation.step));
+    let position = s.controller.kind() != "open-loop";
+    let range = (position
+        && (axis == Axis::Linear || s.plant.end_stops() || s.reference.offset_deg.is_some()))
+    .then(|| range_of(reference, s.simulation.horizon, s.simulation.step));
     if range
         .filter(|_| axis == Axis::Rotary && !s.plant.end_stops())
         .is_some_and(|(lo, hi)| lo.abs().max(hi.abs()) >= s.simulation.theta_limit)

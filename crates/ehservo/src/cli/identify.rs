@@ -124,6 +124,9 @@ pub(super) struct IdentifyArgs {
     /// Identifiability threshold: a direction the data fix to no better than this relative standard error is unidentifiable.
     #[arg(long, default_value_t = 0.3)]
     ident_threshold: f64,
+    /// Most residual evaluations of one Levenberg–Marquardt run (1 to 100000); a fit that runs out has not converged (exit 1).
+    #[arg(long, default_value_t = 400)]
+    max_evaluations: usize,
     /// Bootstrap resamples of one experiment for the bounds of A1 (0: none).
     #[arg(long, default_value_t = 0)]
     bootstrap: usize,
@@ -166,16 +169,18 @@ pub(super) fn excite(a: ExciteArgs, w: &mut impl Write) -> Result<()> {
     let wr = excite_to_dir(&spec, a.prior.as_deref(), &a.set, &a.out)?;
     out!(
         w,
-        "{:?} ({} loop{}): {} samples at {} Hz, peak {:.4}, RMS {:.4}, crest factor {:.3}; predicted peak |θ| {:.4} rad on the prior",
+        "{:?} ({} loop{}): {} samples at {} Hz, peak {:.4}, RMS {:.4}, crest factor {:.3}; predicted peak |position| {:.4} {} on the prior",
         spec.signal,
         if wr.kp.is_some() { "closed" } else { "open" },
-        wr.kp.map_or(String::new(), |k| format!(", kp = {k:.4} V/rad")),
+        wr.kp
+            .map_or(String::new(), |k| format!(", kp = {k:.4} V/{}", wr.unit)),
         wr.design.values.len(),
         spec.rate,
         wr.design.peak,
         wr.design.rms,
         wr.design.crest_factor,
-        wr.predicted_peak_rad
+        wr.predicted_peak_rad,
+        wr.unit
     );
     out!(
         w,
@@ -221,6 +226,12 @@ pub(super) fn identify(a: IdentifyArgs, w: &mut impl Write) -> Result<()> {
             a.ident_threshold
         );
     }
+    if !(1..=100_000).contains(&a.max_evaluations) {
+        crate::bad_input!(
+            "--max-evaluations {}: must be 1 to 100000",
+            a.max_evaluations
+        );
+    }
     if !(1..=10_000).contains(&a.lags) {
         crate::bad_input!("--lags {}: must be 1 to 10000", a.lags);
     }
@@ -250,7 +261,7 @@ pub(super) fn identify(a: IdentifyArgs, w: &mut impl Write) -> Result<()> {
         segment: a.segment,
         fit: fit::FitOptions {
             ident_threshold: a.ident_threshold,
-            ..Default::default()
+            max_evaluations: a.max_evaluations,
         },
         bootstrap: a.bootstrap,
         seed: a.seed,
@@ -272,6 +283,17 @@ pub(super) fn identify(a: IdentifyArgs, w: &mut impl Write) -> Result<()> {
             start.elapsed().as_secs_f64(),
             a.out.display(),
             names.join(", ")
+        );
+    }
+    // A fit that did not converge is not a result: the outputs say where it
+    // stopped (identify.json's `converged`, `termination`, `evaluations`),
+    // no identified.toml is written from it, and the command exits 1.
+    let failed = report::not_converged(&o);
+    if !failed.is_empty() {
+        anyhow::bail!(
+            "identify: {} (wrote {}/identify.json; no identified.toml from it)",
+            failed.join("; "),
+            a.out.display()
         );
     }
     Ok(())

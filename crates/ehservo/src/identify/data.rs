@@ -14,7 +14,11 @@
 //! (exit code 2): a missing column, a field that is not a number, NaN or
 //! infinity, time that does not increase, a sample period that is not
 //! uniform (beyond `tolerance` of a period: loggers that print rounded
-//! times stay within it), too few rows, a command that never moves.
+//! times stay within it), too few rows, a command, a position or a
+//! pressure that never moves, and a period the fits cannot work with
+//! ([`check_period`]): not a normal positive number, outside
+//! [[`MIN_PERIOD`], [`MAX_PERIOD`]], or below what the times' own
+//! resolution tells apart ([`TIME_RESOLUTION`]).
 
 use crate::error::InputError;
 use std::path::Path;
@@ -218,6 +222,43 @@ impl Default for ReadOptions {
 
 /// Most rows read from one file.
 pub const MAX_ROWS: usize = 5_000_000;
+
+/// Shortest sample period accepted (s): 1 ns, a 1 GHz logger. Below it
+/// the frequency grid (ω up to π/h) makes ω³ in the frequency fit overflow
+/// its scale, and no servo is logged so fast.
+pub const MIN_PERIOD: f64 = 1e-9;
+/// Longest sample period accepted (s): 1000 s, where a servo's dynamics
+/// (tens of Hz) are long past any Nyquist frequency.
+pub const MAX_PERIOD: f64 = 1e3;
+/// The times' resolution must be finer than this share of a period:
+/// ulp(max |t|) = max |t|·ε ≤ 10⁻³·h, or t0 + k·h cannot be told from
+/// its neighbours to a thousandth of a period (a Unix time stamp in s at
+/// 1 kHz keeps 2.4·10⁻⁴ of a period: accepted).
+pub const TIME_RESOLUTION: f64 = 1e-3;
+
+/// The sample period `h` of times from `t0` to `t_last` checked for what
+/// the fits need (module doc): a normal positive number within
+/// [[`MIN_PERIOD`], [`MAX_PERIOD`]], resolved by the times themselves.
+pub fn check_period(file: &str, tname: &str, h: f64, t0: f64, t_last: f64) -> anyhow::Result<()> {
+    if !(h.is_finite() && h.is_normal() && h > 0.0) {
+        return Err(bad(format!(
+            "{file}: column `{tname}`: the sample period {h:e} s is not a normal positive number (subnormal, zero or not finite)"
+        )));
+    }
+    if !(MIN_PERIOD..=MAX_PERIOD).contains(&h) {
+        return Err(bad(format!(
+            "{file}: column `{tname}`: the sample period {h:e} s is outside [{MIN_PERIOD:e}, {MAX_PERIOD:e}] s: check the time column's unit suffix (`_s`, `_ms`)"
+        )));
+    }
+    let tmax = t0.abs().max(t_last.abs());
+    let ulp = tmax * f64::EPSILON;
+    if ulp > TIME_RESOLUTION * h {
+        return Err(bad(format!(
+            "{file}: column `{tname}`: times up to {tmax:e} s are resolved to {ulp:e} s, more than {TIME_RESOLUTION:e} of the period {h:e} s: subtract the start time from the column"
+        )));
+    }
+    Ok(())
+}
 
 /// Reads and checks one experiment.
 pub fn read(path: &Path, map: &ColumnMap, opts: ReadOptions) -> anyhow::Result<Experiment> {
@@ -492,6 +533,7 @@ impl Rows {
     fn uniform_period(&self, file: &str, tname: &str, tolerance: f64) -> anyhow::Result<f64> {
         let (t, n) = (&self.t, self.t.len());
         let h = (t[n - 1] - t[0]) / (n - 1) as f64;
+        check_period(file, tname, h, t[0], t[n - 1])?;
         for k in 0..n {
             let dev = t[k] - (t[0] + k as f64 * h);
             if dev.abs() > tolerance * h {
@@ -531,17 +573,14 @@ fn experiment(
         }
     };
     let u = channel(1);
-    let (lo, hi) = u
-        .values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-    if hi - lo <= 1e-12 * hi.abs().max(lo.abs()) || hi - lo == 0.0 {
-        return Err(bad(format!(
-            "{file}: column `{}`: the command never moves (every row is {}): nothing can be identified",
-            u.column, data[1][0]
-        )));
+    let y = channel(2);
+    for (ch, what, j) in [(&u, "the command", 1), (&y, "the position", 2)] {
+        if !moves(&ch.values) {
+            return Err(bad(format!(
+                "{file}: column `{}`: {what} never moves (every row is {}): nothing can be identified",
+                ch.column, data[j][0]
+            )));
+        }
     }
     let mut j = 3;
     let mut next = |present: bool| {
@@ -556,6 +595,12 @@ fn experiment(
     let pressure = next(c.pi.is_some());
     let velocity = next(c.vi.is_some());
     if let Some(p) = &pressure {
+        if !moves(&p.values) {
+            return Err(bad(format!(
+                "{file}: column `{}`: the pressure never moves (every row is {}): a sensor that reads nothing (leave it out with --pressure none)",
+                p.column, p.values[0]
+            )));
+        }
         if !p.unit.is_empty() && p.unit != "Pa" {
             return Err(bad(format!(
                 "{file}: column `{}`: a pressure must be in Pa, kPa, bar or MPa",
@@ -568,12 +613,23 @@ fn experiment(
         t0: rows.t[0],
         h,
         u,
-        y: channel(2),
+        y,
         reference,
         pressure,
         velocity,
         axis: c.axis,
     })
+}
+
+/// Whether a signal moves: its range is more than 10⁻¹² of its size (a
+/// constant logged as text, or rounding of one, does not).
+fn moves(v: &[f64]) -> bool {
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    hi - lo > 1e-12 * hi.abs().max(lo.abs()) && hi > lo
 }
 
 #[cfg(test)]
@@ -597,7 +653,13 @@ mod tests {
     fn units_come_from_the_suffixes() {
         let text = format!(
             "t_s,u_V,theta_deg,p_load_bar\n{}",
-            rows(5, |k| format!("{},{},180,2", k as f64 * 0.01, k % 2))
+            rows(5, |k| format!(
+                "{},{},{},{}",
+                k as f64 * 0.01,
+                k % 2,
+                180 + k,
+                2 + k
+            ))
         );
         let e = parse(&text, "x.csv", &ColumnMap::default(), opts()).unwrap();
         assert_eq!(e.axis, Axis::Rotary);
@@ -606,7 +668,7 @@ mod tests {
         assert!((e.h - 0.01).abs() < 1e-15);
         let text = format!(
             "t,u_V,y_mm\n{}",
-            rows(5, |k| format!("{},{},250", k, k % 2))
+            rows(5, |k| format!("{},{},{}", k, k % 2, 250 + k))
         );
         let e = parse(&text, "x.csv", &ColumnMap::default(), opts()).unwrap();
         assert_eq!(e.axis, Axis::Linear);
@@ -618,7 +680,11 @@ mod tests {
     fn a_trace_reads_its_measured_angle() {
         let text = format!(
             "t_s,theta_d_deg,theta_deg,e_deg,u_V,p_load_Pa,theta_meas_deg\n{}",
-            rows(5, |k| format!("{},0,1,0,{},0,2", k as f64 * 0.001, k))
+            rows(5, |k| format!(
+                "{},0,1,0,{k},{k},{}",
+                k as f64 * 0.001,
+                2 + k
+            ))
         );
         let e = parse(&text, "trace.csv", &ColumnMap::default(), opts()).unwrap();
         assert_eq!(e.y.column, "theta_meas_deg");
@@ -630,6 +696,23 @@ mod tests {
         };
         let e = parse(&text, "trace.csv", &none, opts()).unwrap();
         assert!(e.pressure.is_none() && e.reference.is_none());
+    }
+
+    /// A Unix time stamp (1.7·10⁹ s) at 1 kHz keeps ulp = 1.7e9·2.2e-16 =
+    /// 3.8·10⁻⁷ s, 3.8·10⁻⁴ of a period: accepted; 10¹² s keeps 2.2·10⁻⁴ s,
+    /// 0.22 of a period: refused; 10⁻²⁰⁰ s and a subnormal period too.
+    #[test]
+    fn periods_the_fits_can_use() {
+        assert!(check_period("f", "t_s", 1e-3, 1.7e9, 1.7e9 + 10.0).is_ok());
+        let e = |h: f64, t0: f64| {
+            check_period("f", "t_s", h, t0, t0 + 255.0 * h)
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(e(1e-3, 1e12).contains("resolved to"));
+        assert!(e(1e-200, 0.0).contains("outside"));
+        assert!(e(1e-310, 0.0).contains("not a normal"));
+        assert!(e(f64::INFINITY, 0.0).contains("not a normal"));
     }
 
     fn err(text: &str) -> String {
@@ -660,7 +743,9 @@ mod tests {
         ));
         assert!(e.contains("row 3") && e.contains("non-uniform"), "{e}");
         let e = err(&format!("{head}0,1,0\n0.1,1,0\n0.2,1,0\n0.3,1,0\n"));
-        assert!(e.contains("never moves"), "{e}");
+        assert!(e.contains("the command never moves"), "{e}");
+        let e = err(&format!("{head}0,1,2\n0.1,0,2\n0.2,1,2\n0.3,0,2\n"));
+        assert!(e.contains("the position never moves"), "{e}");
         let e = err(&format!("{head}0,1,0\n0.1,0,0\n"));
         assert!(e.contains("2 data rows"), "{e}");
         let e = err(&format!("{head}0,1,x\n"));
@@ -676,7 +761,7 @@ mod tests {
         let t = format!(
             "{head}{}",
             rows(2048, |k| format!(
-                "{:.4},{},0",
+                "{:.4},{},{k}",
                 3.0 * k as f64 / 2047.0,
                 k % 2
             ))

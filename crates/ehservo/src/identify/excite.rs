@@ -33,6 +33,11 @@
 //! continuous loop, kp_max = (a2·a3 − a1)/b (Routh–Hurwitz on
 //! s³ + a3s² + a2s + a1 + b·kp).
 //!
+//! On a linear axis (a cylinder prior) the same in its units: the
+//! closed loop's reference in m (`reference_m`, the scenario's table in
+//! mm), kp in V/m; the open loop's table holds the command in V as mm at
+//! `volts_per_mm` = 1 (the open loop's gain on a linear axis).
+//!
 //! The design is simulated on the prior's linear model before it is
 //! written: the predicted peak |θ| is reported and sets the scenario's
 //! `theta_limit` (at least the prior's, three times the peak).
@@ -41,6 +46,7 @@ use super::oe::rk4;
 use crate::error::InputError;
 use crate::output::Staging;
 use anyhow::{Context, Result};
+use ehservo_sim::axis::Axis;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use realfft::num_complex::Complex64;
@@ -444,8 +450,10 @@ pub fn predicted_peak(a: [f64; 3], b: f64, values: &[f64], h: f64, kp: Option<f6
 pub struct Written {
     /// The design.
     pub design: Design,
-    /// Predicted peak |θ| (rad).
+    /// Predicted peak |θ| (rad, or m on a linear axis: see `unit`).
     pub predicted_peak_rad: f64,
+    /// The position's SI unit (`rad` or `m`).
+    pub unit: &'static str,
     /// The gain of a closed-loop experiment (V/rad).
     pub kp: Option<f64>,
     /// The files.
@@ -473,9 +481,11 @@ pub fn excite_to_dir(
     let mut files = Vec::new();
     // The rig's signal.
     let mut csv = String::new();
-    let col = match spec.loop_kind {
-        Loop::Open => "u_V",
-        Loop::Closed => "reference_rad",
+    let axis = prior.axis();
+    let col = match (spec.loop_kind, axis) {
+        (Loop::Open, _) => "u_V",
+        (Loop::Closed, Axis::Rotary) => "reference_rad",
+        (Loop::Closed, Axis::Linear) => "reference_m",
     };
     let _ = writeln!(csv, "t_s,{col}");
     for (k, v) in d.values.iter().enumerate() {
@@ -484,9 +494,9 @@ pub fn excite_to_dir(
     std::fs::write(dir.join("excitation.csv"), &csv).context("writing excitation.csv")?;
     files.push(out.join("excitation.csv"));
     let reference = if spec.signal == Signal::Chirp {
-        chirp_reference(spec)
+        chirp_reference(spec, axis)
     } else {
-        let t = reference_csv(spec, &d.values, h)?;
+        let t = reference_csv(spec, axis, &d.values, h)?;
         std::fs::write(dir.join("reference.csv"), &t).context("writing reference.csv")?;
         files.push(out.join("reference.csv"));
         let mut reference = toml::Table::new();
@@ -498,13 +508,26 @@ pub fn excite_to_dir(
     };
     let table = scenario_table(&prior, spec, set, &plan, d.values.len(), reference)?;
     let text = toml::to_string_pretty(&table).context("the scenario as TOML")?;
-    // Checked as `run` will read it, its reference table from the stage.
-    crate::scenario::Loop::parse_in(&text, "scenario.toml", &[], Some(dir.clone()))?;
+    // Checked as `run` will read it, its reference table from the stage;
+    // a refusal names the file it would have been and the prior it came from.
+    crate::scenario::Loop::parse_in(&text, "scenario.toml", &[], Some(dir.clone())).with_context(
+        || {
+            format!(
+                "the scenario excite would write to {} from {} (nothing written)",
+                out.join("scenario.toml").display(),
+                prior_path.map_or("the paper's Fig. 2 case".into(), |p| format!(
+                    "--prior {}",
+                    p.display()
+                ))
+            )
+        },
+    )?;
     std::fs::write(dir.join("scenario.toml"), &text).context("writing scenario.toml")?;
     files.push(out.join("scenario.toml"));
     let w = Written {
         design: d,
         predicted_peak_rad: pk,
+        unit: axis.si_unit(),
         kp,
         files: files.clone(),
     };
@@ -513,6 +536,7 @@ pub fn excite_to_dir(
         "spec": spec,
         "design": w.design,
         "predicted_peak_rad": pk,
+        "position_unit": axis.si_unit(),
         "kp_V_per_rad": kp,
         "prior": prior_path.map(|p| p.display().to_string()),
         "set": set,
@@ -560,20 +584,25 @@ impl Plan {
     }
 }
 
-/// The scenario's reference value of a designed value, in degrees: the
-/// command at 1 V/° in open loop, the reference itself in closed loop.
-fn to_deg(spec: &Spec, v: f64) -> f64 {
+/// The scenario's reference value of a designed value, in the axis's
+/// display unit (degrees or mm): the command at 1 V a unit in open loop
+/// (1 V per ° or mm: `volts_per_deg` or `volts_per_mm` = 1), the reference itself in closed loop.
+fn to_display(spec: &Spec, axis: Axis, v: f64) -> f64 {
     match spec.loop_kind {
         Loop::Open => v,
-        Loop::Closed => v.to_degrees(),
+        Loop::Closed => axis.display(v),
     }
 }
 
 /// The scenario's `[reference]` of a chirp: the chirp itself.
-fn chirp_reference(spec: &Spec) -> toml::Table {
+fn chirp_reference(spec: &Spec, axis: Axis) -> toml::Table {
     let mut reference = toml::Table::new();
     reference.insert("kind".into(), "chirp".into());
-    reference.insert("amplitude_deg".into(), to_deg(spec, spec.amplitude).into());
+    let key = match axis {
+        Axis::Rotary => "amplitude_deg",
+        Axis::Linear => "amplitude_mm",
+    };
+    reference.insert(key.into(), to_display(spec, axis, spec.amplitude).into());
     reference.insert("f0_hz".into(), spec.f0.into());
     reference.insert("f1_hz".into(), spec.f1.into());
     reference.insert("duration".into(), spec.duration.into());
@@ -584,8 +613,11 @@ fn chirp_reference(spec: &Spec) -> toml::Table {
 /// knots at every sample (multisine), or at each level's first and last
 /// sample (piecewise constant), so that the table's linear interpolation is
 /// the zero-order hold at every sample instant. It must fit an input file.
-fn reference_csv(spec: &Spec, values: &[f64], h: f64) -> Result<String> {
-    let mut t = String::from("t,theta_deg\n");
+fn reference_csv(spec: &Spec, axis: Axis, values: &[f64], h: f64) -> Result<String> {
+    let mut t = match axis {
+        Axis::Rotary => String::from("t,theta_deg\n"),
+        Axis::Linear => String::from("t,y_mm\n"),
+    };
     let piecewise = spec.signal != Signal::Multisine;
     let n = values.len();
     for k in 0..n {
@@ -598,7 +630,7 @@ fn reference_csv(spec: &Spec, values: &[f64], h: f64) -> Result<String> {
             } else {
                 tk
             };
-            let _ = writeln!(t, "{},{}", tk, to_deg(spec, values[k]));
+            let _ = writeln!(t, "{},{}", tk, to_display(spec, axis, values[k]));
         }
     }
     if t.len() as u64 > crate::input::MAX_INPUT_BYTES {
@@ -635,10 +667,21 @@ fn scenario_table(
                 Loop::Closed => "closed",
             },
             spec.amplitude,
-            if spec.loop_kind == Loop::Open { "V" } else { "rad" }
+            if spec.loop_kind == Loop::Open {
+                "V"
+            } else {
+                prior.axis().si_unit()
+            }
         )
         .into(),
     );
+    let mut reference = reference;
+    if plan.kp.is_some() && prior.axis() == Axis::Linear {
+        // A cylinder's reference is a position in its stroke: the
+        // experiment about the rod's start.
+        let y0 = prior.scenario().simulation.x0[0];
+        reference.insert("offset_mm".into(), prior.axis().display(y0).into());
+    }
     table.insert("reference".into(), toml::Value::Table(reference));
     let mut ctrl = toml::Table::new();
     match plan.kp {
@@ -646,8 +689,8 @@ fn scenario_table(
             ctrl.insert("kind".into(), "open-loop".into());
             // 1 V per unit of the reference table (° or mm).
             let key = match prior.axis() {
-                crate::axis::Axis::Rotary => "volts_per_deg",
-                crate::axis::Axis::Linear => "volts_per_mm",
+                Axis::Rotary => "volts_per_deg",
+                Axis::Linear => "volts_per_mm",
             };
             ctrl.insert(key.into(), 1.0.into());
         }
@@ -674,16 +717,21 @@ fn scenario_table(
             .unwrap_or(1.0);
         sim.insert("theta_limit".into(), lim.max(3.0 * pk).into());
     }
-    // The plant as it is (no parameter variation) unless the prior's --set says otherwise.
+    // The plant as it is (no parameter variation) unless the prior's --set
+    // says otherwise: the paper's Δa_i/Δb form at zero on its family, an
+    // empty table (no [uncertainty.physical] variation) on the others (a
+    // cylinder refuses the paper's keys).
     if !set
         .iter()
         .any(|s| s.trim_start().starts_with("uncertainty"))
     {
-        table.insert(
-            "uncertainty".into(),
+        let none = if prior.scenario().plant.paper_uncertainty() {
             toml::Value::try_from(ehservo_sim::plant::UncertaintySpec::NONE)
-                .context("uncertainty table")?,
-        );
+                .context("uncertainty table")?
+        } else {
+            toml::Value::Table(toml::Table::new())
+        };
+        table.insert("uncertainty".into(), none);
     }
     Ok(table)
 }

@@ -190,6 +190,12 @@ pub struct FitReport {
     pub evaluations: usize,
     /// Why the last Levenberg–Marquardt run stopped.
     pub termination: String,
+    /// Whether the fit converged: its last Levenberg–Marquardt run stopped
+    /// on a convergence test (ftol, xtol, gtol, or zero residuals; not on
+    /// running out of evaluations, a numerical failure or a model that
+    /// diverged) and the Jacobian there gave the standard errors. A fit
+    /// that did not is not a result (`identify` exits 1).
+    pub converged: bool,
     /// Whether the model diverged at the start (nothing was fitted then).
     pub diverged: bool,
 }
@@ -334,7 +340,8 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             );
         }
         if free.is_empty() {
-            return report(
+            // Nothing to fit: nothing failed to converge.
+            let mut rep = report(
                 problem,
                 params,
                 &free,
@@ -343,9 +350,12 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
                 termination,
                 false,
             );
+            rep.converged = true;
+            return rep;
         }
         let min = minimise(problem, &params, &free, base, x0, &r0, opts);
-        evaluations += min.evaluations;
+        evaluations = evaluations.saturating_add(min.evaluations);
+        let success = min.success;
         termination = min.termination;
         if min.r.is_some() {
             for (i, &j) in free.iter().enumerate() {
@@ -363,7 +373,20 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
                 false,
             );
         };
-        let (s_hat, weak) = weakest(&jac, &r, free.len(), opts.ident_threshold);
+        let Some((s_hat, weak)) = weakest(&jac, &r, free.len(), opts.ident_threshold) else {
+            return report(
+                problem,
+                params,
+                &free,
+                None,
+                evaluations,
+                format!(
+                    "the SVD of the Jacobian did not converge in {} sweeps",
+                    super::oe::svd_sweeps(free.len())
+                ),
+                false,
+            );
+        };
         if let Some(k) = weak {
             let j = free[k];
             // Back to where the round started: along a direction the data
@@ -375,7 +398,7 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             params[j].value = params[j].prior;
             continue;
         }
-        return report(
+        let mut rep = report(
             problem,
             params,
             &free,
@@ -384,6 +407,8 @@ pub fn fit(problem: &dyn Problem, mut params: Vec<Param>, opts: &FitOptions) -> 
             termination,
             false,
         );
+        rep.converged = success && !rep.singular_values.is_empty();
+        return rep;
     }
     let free: Vec<usize> = (0..n_all)
         .filter(|&j| params[j].status == Status::Free)
@@ -411,6 +436,8 @@ struct Minimum {
     evaluations: usize,
     /// Why it stopped.
     termination: String,
+    /// Whether it stopped on a convergence test.
+    success: bool,
 }
 
 /// One round: Levenberg–Marquardt over the `free` parameters from `x0`
@@ -451,6 +478,13 @@ fn minimise(
         jac,
         evaluations: rep.number_of_evaluations,
         termination: format!("{:?}", rep.termination),
+        // NoImprovementPossible: the tolerances are below what the machine
+        // can tell apart there, i.e. converged to rounding.
+        success: rep.termination.was_successful()
+            || matches!(
+                rep.termination,
+                levenberg_marquardt::TerminationReason::NoImprovementPossible(_)
+            ),
     }
 }
 
@@ -458,11 +492,17 @@ fn minimise(
 /// and, when the Jacobian leaves a direction unfixed (its smallest
 /// singular value at most 10⁻⁹ of the largest, or ŝ over it above
 /// `threshold`), the free parameter (by index among the free ones) that
-/// weighs most in that direction.
-fn weakest(jac: &DMatrix<f64>, r: &[f64], n_free: usize, threshold: f64) -> (f64, Option<usize>) {
+/// weighs most in that direction; `None` when J's SVD does not converge
+/// within [`super::oe::svd_sweeps`].
+fn weakest(
+    jac: &DMatrix<f64>,
+    r: &[f64],
+    n_free: usize,
+    threshold: f64,
+) -> Option<(f64, Option<usize>)> {
     let dof = (r.len().saturating_sub(n_free)).max(1) as f64;
     let s_hat = (r.iter().map(|v| v * v).sum::<f64>() / dof).sqrt();
-    let svd = jac.clone().svd(false, true);
+    let svd = bounded_svd(jac)?;
     let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
     let (imin, smin) =
         sv.iter().enumerate().fold(
@@ -472,7 +512,7 @@ fn weakest(jac: &DMatrix<f64>, r: &[f64], n_free: usize, threshold: f64) -> (f64
     let smax = sv.iter().fold(0.0f64, |a, &s| a.max(s));
     let weak = smin <= 1e-9 * smax || s_hat / smin > threshold;
     if !weak {
-        return (s_hat, None);
+        return Some((s_hat, None));
     }
     let vt = svd.v_t.as_ref().expect("V asked for");
     let row = vt.row(imin);
@@ -487,7 +527,13 @@ fn weakest(jac: &DMatrix<f64>, r: &[f64], n_free: usize, threshold: f64) -> (f64
                 }
             },
         );
-    (s_hat, Some(k))
+    Some((s_hat, Some(k)))
+}
+
+/// J's SVD (V only), or `None` past [`super::oe::svd_sweeps`] sweeps.
+fn bounded_svd(j: &DMatrix<f64>) -> Option<nalgebra_lm::linalg::SVD<f64, Dyn, Dyn>> {
+    j.clone()
+        .try_svd(false, true, f64::EPSILON, super::oe::svd_sweeps(j.ncols()))
 }
 
 /// The report at the final values, with the covariance from `jac`.
@@ -513,8 +559,8 @@ fn report(
     let n = free.len();
     let mut cov_x = vec![vec![f64::NAN; n]; n];
     let mut sv = Vec::new();
-    if let Some((j, s)) = &jac {
-        let svd = j.clone().svd(false, true);
+    let jac = jac.and_then(|(j, s)| bounded_svd(&j).map(|svd| (svd, s)));
+    if let Some((svd, s)) = &jac {
         sv = svd.singular_values.iter().copied().collect();
         let vt = svd.v_t.as_ref().expect("V asked for");
         for a in 0..n {
@@ -607,6 +653,7 @@ fn report(
         free_keys: free.iter().map(|&j| params[j].key.clone()).collect(),
         evaluations,
         termination,
+        converged: false,
         diverged,
     }
 }

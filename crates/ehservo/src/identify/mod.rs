@@ -45,6 +45,7 @@ pub use bounds::Bounds;
 
 use crate::error::InputError;
 use crate::scenario::{Loop, Scenario};
+use anyhow::Context;
 use bounds::{spread, Fitted};
 use data::{Axis, ColumnMap, Experiment, ReadOptions};
 use derived::{greybox_derived, linear_derived};
@@ -242,19 +243,50 @@ fn read_all(opts: &Options) -> anyhow::Result<(Vec<Experiment>, Vec<Experiment>)
     Ok((exps, vals))
 }
 
-/// The prior scenario, built.
-fn prior(opts: &Options) -> anyhow::Result<Loop> {
-    Ok(match &opts.prior {
-        Some(p) => crate::formats::load(p, &opts.set)?,
+/// The prior scenario, built, and checked against the data before any
+/// fit: a `--prior`'s axis must be the data's, and on rotary data the scenario
+/// `identify` will write from it must be valid at the prior's own
+/// parameters (a refusal names `--prior` and its file).
+fn prior(opts: &Options, axis: Axis) -> anyhow::Result<Loop> {
+    let flag = || match &opts.prior {
+        Some(p) => format!("--prior {}", p.display()),
+        None => "the default prior (the paper's Fig. 2 case)".into(),
+    };
+    let prior = match &opts.prior {
+        Some(p) => crate::formats::load(p, &opts.set).with_context(flag)?,
         None => Loop::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", &opts.set)?,
-    })
+    };
+    let (pa, model) = (prior.axis(), prior.scenario().plant.model());
+    // The default prior is only the linear fit's start on linear data.
+    if opts.prior.is_some() && (pa == ehservo_sim::axis::Axis::Linear) != (axis == Axis::Linear) {
+        return Err(bad(format!(
+            "{}: a {} plant (plant.model = \"{model}\"), where the data measure a {} axis ({}): give a prior of the data's axis",
+            flag(),
+            pa.name(),
+            match axis {
+                Axis::Rotary => "rotary",
+                Axis::Linear => "linear",
+            },
+            axis.unit()
+        )));
+    }
+    if axis == Axis::Rotary && !opts.no_greybox {
+        let at_prior = greybox::to_vec(&prior.model().params, &prior.model().load);
+        identified_scenario(&prior, &at_prior, None, &opts.files).map_err(|e| {
+            bad(format!(
+                "{}: the identified scenario written from it would be refused: {e:#}",
+                flag()
+            ))
+        })?;
+    }
+    Ok(prior)
 }
 
 /// Runs the identification (no file written).
 pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let (exps, vals) = read_all(opts)?;
-    let prior = prior(opts)?;
     let axis = exps[0].axis;
+    let prior = prior(opts, axis)?;
     let mut notes = Vec::new();
     let seg = welch_segment(opts, &exps)?;
     // 1. Nonparametric estimates.
@@ -295,9 +327,9 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     let bounds = spread(opts, &exps, &fitted, &job.pl, opts.load_terms, k)?;
     // 5. The scenario.
     let scenario = match &greybox_result {
-        Some(g) if !g.fit.diverged => Some(identified_scenario(
+        Some(g) if g.fit.converged => Some(identified_scenario(
             &prior,
-            g,
+            &g.fit.values(),
             bounds.as_ref(),
             &opts.files,
         )?),
@@ -507,7 +539,7 @@ impl Job<'_> {
         if !load_terms {
             if let Some((c, uo, th)) = oe::grid_start(self.exps) {
                 candidates.push((
-                    "the grid of denominators s(s^2 + 2 zeta omega s + omega^2), b by least squares",
+                    "the grid of denominators (s + p)(s^2 + 2 zeta omega s + omega^2), b by least squares",
                     c,
                     Some((uo, th)),
                 ));
@@ -653,10 +685,22 @@ impl LinearStarts<'_> {
     fn params(&self, start: [f64; 4]) -> Vec<Param> {
         let (unit, u_unit, prior_d) = (self.unit, self.u_unit, self.prior_d);
         let [a1, a2, a3, b] = start;
+        // a1's scale: a2 times the slowest rate the records resolve,
+        // 2π/T (a real pole there: a1 = p·ω² ≈ p·a2). At 10⁻⁹·a2, as it
+        // was, a start at a1 = 0 made its Jacobian column vanish and a1
+        // was "unidentifiable" at every threshold.
+        let t = self
+            .exps
+            .iter()
+            .map(|e| e.h * e.len() as f64)
+            .fold(f64::INFINITY, f64::min);
+        let a1_scale = a1
+            .abs()
+            .max(a2.abs().max(1.0) * 2.0 * std::f64::consts::PI / t);
         let mut v = vec![
             Param {
                 prior: 0.0,
-                ..Param::signed("a1", "1/s^3", a1, a1.abs().max(1e-9 * a2.abs().max(1.0)))
+                ..Param::signed("a1", "1/s^3", a1, a1_scale)
             },
             Param::new("a2", "1/s^2", a2.max(1e-9), 1.0),
             Param::new("a3", "1/s", a3.max(1e-9), 1.0),

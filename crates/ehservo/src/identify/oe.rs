@@ -28,6 +28,16 @@ use super::frf::Frf;
 use super::model::{divergence_limit, spectral_radius, substeps, Model, SimOut};
 use realfft::num_complex::Complex64;
 
+/// The most implicit-shift QR sweeps a singular value decomposition of a
+/// matrix with `n` columns may take: LAPACK's bound of 6 per singular
+/// value on each of n (`dbdsqr`'s MAXITR = 6, times n²), and at least 100.
+/// nalgebra's `svd` has none and loops forever on some data (a log with a
+/// 10⁻²⁰⁰ s period): past the bound the decomposition is `None` and the
+/// start it served is not used.
+pub fn svd_sweeps(n: usize) -> usize {
+    n.saturating_mul(n).saturating_mul(6).max(100)
+}
+
 /// The linear model on a set of experiments.
 #[derive(Debug, Clone)]
 pub struct Linear {
@@ -167,7 +177,10 @@ pub fn frequency_fit(frf: &Frf, h: f64) -> Option<[f64; 4]> {
             let mut col = a.column_mut(c);
             col /= *nc;
         }
-        let x = a.svd(true, true).solve(&rhs, 1e-12).ok()?;
+        let x = a
+            .try_svd(true, true, f64::EPSILON, svd_sweeps(4))?
+            .solve(&rhs, 1e-12)
+            .ok()?;
         let p = [
             x[0] / norms[0],
             x[1] / norms[1],
@@ -190,13 +203,15 @@ pub fn frequency_fit(frf: &Frf, h: f64) -> Option<[f64; 4]> {
 }
 
 /// A start that needs neither the prior nor a coherent frequency
-/// response: over a grid of denominators s·(s² + 2ζω·s + ω²) (ω
-/// log-spaced from 2π·2/T, T the shortest record, to 0.4× the Nyquist
-/// frequency; ζ from 0.05 to 1), the output is linear in b, b·u_offset
-/// and each experiment's θ0, which are solved by linear least squares
-/// (variable projection); the denominator with the least squared output
-/// error wins. Returns `[a1, a2, a3, b]`, u_offset and the θ0s, or `None`
-/// when no candidate simulates.
+/// response: over a grid of denominators (s + p)·(s² + 2ζω·s + ω²) the
+/// output is linear in b, b·u_offset and each experiment's θ0, which are
+/// solved by linear least squares (variable projection); the denominator
+/// with the least squared output error wins. First p = 0 (a pure
+/// integrator, a1 = 0) with ω log-spaced from ω_lo = 2π·2/T (T the
+/// shortest record) to 0.4× the Nyquist frequency and ζ from 0.05 to 1;
+/// then, at the best (ω, ζ), a real pole p log-spaced from ω_lo/100 to ω
+/// (a load stiffness: a1 = p·ω² ≠ 0). Returns `[a1, a2, a3, b]`,
+/// u_offset and the θ0s, or `None` when no candidate simulates.
 pub fn grid_start(experiments: &[Experiment]) -> Option<([f64; 4], f64, Vec<f64>)> {
     use rayon::prelude::*;
     let h = experiments.iter().map(|e| e.h).fold(0.0f64, f64::max);
@@ -212,13 +227,42 @@ pub fn grid_start(experiments: &[Experiment]) -> Option<([f64; 4], f64, Vec<f64>
         return None;
     }
     const N_OMEGA: usize = 32;
+    const N_POLE: usize = 12;
     const ZETAS: [f64; 4] = [0.05, 0.2, 0.5, 1.0];
-    let cands: Vec<(f64, f64)> = (0..N_OMEGA)
+    let log_step = |a: f64, b: f64, i: usize, n: usize| a * (b / a).powf(i as f64 / (n - 1) as f64);
+    let cands: Vec<(f64, f64, f64)> = (0..N_OMEGA)
         .flat_map(|i| {
-            let w = lo * (hi / lo).powf(i as f64 / (N_OMEGA - 1) as f64);
-            ZETAS.iter().map(move |&z| (w, z))
+            let w = log_step(lo, hi, i, N_OMEGA);
+            ZETAS.iter().map(move |&z| (w, z, 0.0))
         })
         .collect();
+    let pick = |cands: &[(f64, f64, f64)]| {
+        cands
+            .par_iter()
+            .filter_map(|&(w, z, p)| {
+                let a = [p * w * w, w * w + 2.0 * z * w * p, 2.0 * z * w + p];
+                grid_candidate(experiments, a).map(|c| (c, (w, z)))
+            })
+            .min_by(|p, q| p.0 .0.total_cmp(&q.0 .0))
+    };
+    let (integrator, (w, z)) = pick(&cands)?;
+    let poles: Vec<(f64, f64, f64)> = (0..N_POLE)
+        .map(|i| (w, z, log_step(lo / 100.0, w, i, N_POLE)))
+        .collect();
+    let best = match pick(&poles) {
+        Some((stiff, _)) if stiff.0 < integrator.0 => stiff,
+        _ => integrator,
+    };
+    Some((best.1, best.2, best.3))
+}
+
+/// One denominator of [`grid_start`]: its least squared output error, the
+/// coefficients with b solved, u_offset and the θ0s.
+type GridFit = (f64, [f64; 4], f64, Vec<f64>);
+
+/// The output error of the denominator s³ + a[2]s² + a[1]s + a[0], with b,
+/// b·u_offset and the θ0s solved by linear least squares.
+fn grid_candidate(experiments: &[Experiment], a: [f64; 3]) -> Option<GridFit> {
     let ne = experiments.len();
     // The constant command's size: the commands' RMS (keeps the column's
     // scale that of the input's).
@@ -232,49 +276,46 @@ pub fn grid_start(experiments: &[Experiment]) -> Option<([f64; 4], f64, Vec<f64>
         (s2 / n.max(1) as f64).sqrt().max(f64::MIN_POSITIVE)
     };
     let m: usize = experiments.iter().map(Experiment::len).sum();
-    let best = cands
-        .par_iter()
-        .filter_map(|&(w, z)| {
-            let a = [0.0, w * w, 2.0 * z * w];
-            let model = Linear::new(experiments, false, 0.0, a);
-            // Columns: the response to u (b = 1), to a unit constant
-            // command, and each experiment's θ0.
-            let mut x = nalgebra::DMatrix::<f64>::zeros(m, 2 + ne);
-            let mut y = nalgebra::DVector::<f64>::zeros(m);
-            let mut row = 0;
-            let mut sim = SimOut::default();
-            for (i, e) in experiments.iter().enumerate() {
-                let mut p = vec![a[0], a[1], a[2], 1.0, 0.0];
-                p.extend(std::iter::repeat_n(0.0, ne));
-                if !model.simulate(&p, i, e, &mut sim) {
-                    return None;
-                }
-                let g1 = sim.y.clone();
-                p[4] = us;
-                if !model.simulate(&p, i, e, &mut sim) {
-                    return None;
-                }
-                for k in 0..e.len() {
-                    x[(row + k, 0)] = g1[k];
-                    x[(row + k, 1)] = sim.y[k] - g1[k];
-                    x[(row + k, 2 + i)] = 1.0;
-                    y[row + k] = e.y.values[k];
-                }
-                row += e.len();
-            }
-            let c = x.clone().svd(true, true).solve(&y, 1e-12).ok()?;
-            let cost = (&x * &c - &y).norm_squared();
-            (cost.is_finite() && c[0].is_finite() && c[0] != 0.0).then(|| {
-                (
-                    cost,
-                    [a[0], a[1], a[2], c[0]],
-                    c[1] * us / c[0],
-                    c.iter().skip(2).copied().collect::<Vec<f64>>(),
-                )
-            })
-        })
-        .min_by(|p, q| p.0.total_cmp(&q.0))?;
-    Some((best.1, best.2, best.3))
+    let model = Linear::new(experiments, false, 0.0, a);
+    // Columns: the response to u (b = 1), to a unit constant
+    // command, and each experiment's θ0.
+    let mut x = nalgebra::DMatrix::<f64>::zeros(m, 2 + ne);
+    let mut y = nalgebra::DVector::<f64>::zeros(m);
+    let mut row = 0;
+    let mut sim = SimOut::default();
+    for (i, e) in experiments.iter().enumerate() {
+        let mut p = vec![a[0], a[1], a[2], 1.0, 0.0];
+        p.extend(std::iter::repeat_n(0.0, ne));
+        if !model.simulate(&p, i, e, &mut sim) {
+            return None;
+        }
+        let g1 = sim.y.clone();
+        p[4] = us;
+        if !model.simulate(&p, i, e, &mut sim) {
+            return None;
+        }
+        for k in 0..e.len() {
+            x[(row + k, 0)] = g1[k];
+            x[(row + k, 1)] = sim.y[k] - g1[k];
+            x[(row + k, 2 + i)] = 1.0;
+            y[row + k] = e.y.values[k];
+        }
+        row += e.len();
+    }
+    let c = x
+        .clone()
+        .try_svd(true, true, f64::EPSILON, svd_sweeps(2 + ne))?
+        .solve(&y, 1e-12)
+        .ok()?;
+    let cost = (&x * &c - &y).norm_squared();
+    (cost.is_finite() && c[0].is_finite() && c[0] != 0.0).then(|| {
+        (
+            cost,
+            [a[0], a[1], a[2], c[0]],
+            c[1] * us / c[0],
+            c.iter().skip(2).copied().collect::<Vec<f64>>(),
+        )
+    })
 }
 
 /// The discrete (zero-order hold) frequency response of the linear model

@@ -448,11 +448,48 @@ pub fn write(o: &Outcome, opts: &super::Options, out: &Path, plots: bool) -> Res
     Ok(files)
 }
 
+/// Why a fit stopped, in words.
+pub fn stop_reason(f: &super::fit::FitReport) -> String {
+    match f.termination.as_str() {
+        _ if f.diverged => "the model diverged at its start".into(),
+        "LostPatience" => "out of evaluations (--max-evaluations)".into(),
+        t => format!("stopped: {t}"),
+    }
+}
+
+/// The models that did not converge, with why: empty when every fit did.
+pub fn not_converged(o: &Outcome) -> Vec<String> {
+    std::iter::once(&o.linear)
+        .chain(o.greybox.as_ref())
+        .filter(|r| !r.fit.converged)
+        .map(|r| {
+            format!(
+                "the {} fit did not converge ({}, after {} evaluations)",
+                r.model,
+                stop_reason(&r.fit),
+                r.fit.evaluations
+            )
+        })
+        .collect()
+}
+
 /// A few lines for the terminal.
 pub fn summary(o: &Outcome) -> String {
     let mut s = String::new();
     let unit = o.experiments[0].axis.unit();
     for r in std::iter::once(&o.linear).chain(o.greybox.as_ref()) {
+        if !r.fit.converged {
+            // Not a result: where it stopped is in identify.json.
+            let _ = writeln!(
+                s,
+                "{} model: DID NOT CONVERGE ({}, after {} evaluations, start: {}): no estimates (where it stopped: identify.json)",
+                r.model,
+                stop_reason(&r.fit),
+                r.fit.evaluations,
+                r.start
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
             "{} model ({} evaluations, start: {}):",

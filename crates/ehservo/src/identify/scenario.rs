@@ -4,6 +4,7 @@
 
 use super::fit::{self, FitOptions, Param, Problem, Status};
 use super::{greybox, Bounds, ModelResult};
+
 use crate::scenario::{Loop, Scenario};
 use ehservo_core::servo::{Load, ServoParams};
 use std::path::PathBuf;
@@ -88,12 +89,12 @@ pub(super) fn match_coefficients(
 /// the controller told the bounds.
 pub(super) fn identified_scenario(
     prior: &Loop,
-    g: &ModelResult,
+    values: &[f64],
     bounds: Option<&Bounds>,
     files: &[PathBuf],
 ) -> anyhow::Result<Scenario> {
     let nk = greybox::KEYS.len();
-    let (p, l): (ServoParams, Load) = greybox::from_vec(&g.fit.values()[..nk], &prior.model().load);
+    let (p, l): (ServoParams, Load) = greybox::from_vec(&values[..nk], &prior.model().load);
     let mut s = prior.scenario().clone();
     s.name = "identified".into();
     s.description = format!(

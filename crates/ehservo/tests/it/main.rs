@@ -22,6 +22,7 @@ mod guide_keys;
 mod hopsan;
 mod house;
 mod identify;
+mod identify_hostile;
 mod independent;
 mod k1_closed_form;
 mod league;
