@@ -344,6 +344,8 @@ fn a_measured_band_without_a_crossover_says_so() {
         .parse()
         .unwrap();
     assert!(f < 20.0, "{c}");
+}
+
 /// Issue 46, item 2: the measurement's counts are made in checked
 /// arithmetic. `--settle 1e300` once planned u64::MAX samples, the work
 /// sum wrapped round below the limit, and every cell came out empty with
