@@ -77,8 +77,12 @@ pub struct LoadCfg {
     pub incline_deg: f64,
     /// g (m/s²). Default 9.80665.
     pub gravity: f64,
-    /// `[plant.load.friction]`: Stribeck friction of the rod (N, m/s).
+    /// `[plant.load.friction]`: Stribeck friction of the rod (N, m/s),
+    /// run as stick–slip: at rest it holds any net force up to `stiction`,
+    /// sliding it cannot reverse the rod within a step (docs/cylinder.md);
+    /// `smoothing` shapes only the controller's nominal model.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(schema_with = "linear_friction_schema")]
     pub friction: Option<Friction>,
     /// `[plant.load.force]`: an external force F(t) (N) opposing extension.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -515,5 +519,40 @@ impl PlantConfig for CylinderCfg {
             ));
         }
         Ok(p)
+    }
+}
+
+/// The schema of the rod's friction: [`Friction`]'s own (one struct serves
+/// both axes, each in its SI units) with every unit a description names
+/// read on a linear axis (N·m → N, rad/s → m/s, N·m·s → N·s/m) and the
+/// rod for the motor shaft. The schema's unit column comes from these
+/// descriptions.
+fn linear_friction_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+    let mut v = <Friction as schemars::JsonSchema>::json_schema(g).to_value();
+    linear_units(&mut v);
+    schemars::Schema::try_from(v).unwrap_or_default()
+}
+
+/// Rotary units in every `description` of `v` read as their linear ones.
+fn linear_units(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(o) => {
+            for (k, x) in o.iter_mut() {
+                if k == "description" {
+                    if let serde_json::Value::String(d) = x {
+                        *d = d
+                            .replace("N·m·s", "N·s/m")
+                            .replace("N·m", "N")
+                            .replace("rad/s", "m/s")
+                            .replace("the plant's Bm", "`[plant.cylinder]`'s `viscous`")
+                            .replace("motor shaft", "rod");
+                    }
+                } else {
+                    linear_units(x);
+                }
+            }
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(linear_units),
+        _ => {}
     }
 }

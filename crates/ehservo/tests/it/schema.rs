@@ -408,3 +408,75 @@ fn the_pages_hold_every_key_with_its_unit() {
     let study = markdown(Format::Study);
     assert!(study.contains("`[[axis]]`") && study.contains("`[monte_carlo]`"));
 }
+
+/// Issue 46, item 7: the units of every load and friction key follow the
+/// plant's axis. The same friction parameters serve both: on the paper's
+/// rotary servo (`[load.friction]`) in N·m and rad/s, on a cylinder
+/// (`[plant.load.friction]`) in N and m/s; and no key of a cylinder's
+/// `[plant.load…]` is in a rotary unit.
+#[test]
+fn load_and_friction_units_follow_the_axis() {
+    let page = markdown(Format::Scenario);
+    // Each section's rows: (heading, [(key, unit)]).
+    let mut sections: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    for line in page.lines() {
+        if line.starts_with('#') {
+            sections.push((line.trim_start_matches('#').trim().to_string(), Vec::new()));
+        } else if let (Some(last), Some(row)) = (sections.last_mut(), line.strip_prefix("| `")) {
+            let cells: Vec<&str> = row.split(" | ").collect();
+            if cells.len() >= 3 {
+                let key = cells[0].trim_end_matches('`').to_string();
+                last.1.push((key, cells[2].trim().to_string()));
+            }
+        }
+    }
+    let rows = |heading: &str| -> Vec<(String, String)> {
+        sections
+            .iter()
+            .find(|(h, _)| h == heading)
+            .unwrap_or_else(|| panic!("no section {heading}"))
+            .1
+            .clone()
+    };
+    let expect = |heading: &str, want: &[(&str, &str)]| {
+        let got = rows(heading);
+        for (k, u) in want {
+            let g = got.iter().find(|(key, _)| key == k).map(|r| r.1.as_str());
+            assert_eq!(g, Some(*u), "{heading} {k}");
+        }
+    };
+    expect(
+        "`[load.friction]`",
+        &[
+            ("coulomb", "N·m"),
+            ("stiction", "N·m"),
+            ("stribeck_velocity", "rad/s"),
+            ("viscous", "N·m·s"),
+            ("smoothing", "rad/s"),
+        ],
+    );
+    expect(
+        "`[plant.load.friction]`",
+        &[
+            ("coulomb", "N"),
+            ("stiction", "N"),
+            ("stribeck_velocity", "m/s"),
+            ("viscous", "N·s/m"),
+            ("smoothing", "m/s"),
+        ],
+    );
+    let linear: Vec<&(String, Vec<(String, String)>)> = sections
+        .iter()
+        .filter(|(h, _)| h.starts_with("`[plant.load"))
+        .collect();
+    assert!(
+        linear.len() >= 2,
+        "{:?}",
+        linear.iter().map(|s| &s.0).collect::<Vec<_>>()
+    );
+    for (h, rows) in linear {
+        for (k, u) in rows {
+            assert!(!u.contains("rad") && !u.contains("N·m"), "{h} {k}: {u}");
+        }
+    }
+}
