@@ -77,26 +77,18 @@ impl Transport for Tcp {
                 return Ok(0);
             };
             self.stream.set_read_timeout(Some(t))?;
-            return match self.stream.read(buf) {
-                Ok(0) => Err(io::Error::new(
-                    io::ErrorKind::UnexpectedEof,
-                    "the board closed the connection",
-                )),
-                Ok(n) => Ok(n),
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {
-                    interrupted()?;
-                    continue;
+            match self.stream.read(buf) {
+                Ok(0) => {
+                    return Err(io::Error::new(
+                        io::ErrorKind::UnexpectedEof,
+                        "the board closed the connection",
+                    ))
                 }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    Ok(0)
-                }
-                Err(e) => Err(e),
-            };
+                r => match read_outcome(r) {
+                    Some(out) => return out,
+                    None => continue,
+                },
+            }
         }
     }
     fn describe(&self) -> String {
@@ -145,22 +137,9 @@ impl Transport for Serial {
             self.port
                 .set_timeout(t)
                 .map_err(|e| io::Error::other(e.to_string()))?;
-            return match self.port.read(buf) {
-                Ok(n) => Ok(n),
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {
-                    interrupted()?;
-                    continue;
-                }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock
-                    ) =>
-                {
-                    Ok(0)
-                }
-                Err(e) => Err(e),
-            };
+            if let Some(out) = read_outcome(self.port.read(buf)) {
+                return out;
+            }
         }
     }
     fn describe(&self) -> String {
@@ -459,5 +438,25 @@ impl Transport for Box<dyn Transport> {
     }
     fn at(&mut self, k: Option<u32>) {
         (**self).at(k)
+    }
+}
+
+/// A timed read's result as `recv` returns it: the bytes read, a timeout
+/// as 0 bytes, an error as it is; `None` to read on, when a signal
+/// interrupted the read and no SIGINT is pending (with one, the
+/// cancellation's error).
+fn read_outcome(r: io::Result<usize>) -> Option<io::Result<usize>> {
+    match r {
+        Ok(n) => Some(Ok(n)),
+        Err(e) if e.kind() == io::ErrorKind::Interrupted => interrupted().err().map(Err),
+        Err(e)
+            if matches!(
+                e.kind(),
+                io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+            ) =>
+        {
+            Some(Ok(0))
+        }
+        Err(e) => Some(Err(e)),
     }
 }
