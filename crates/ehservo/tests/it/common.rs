@@ -118,3 +118,14 @@ pub fn excited_trace(dir: &Path, excite: &[&str]) -> PathBuf {
     }
     data.join("trace.csv")
 }
+
+/// A command that must have succeeded: exit 0, or fail naming `what` and
+/// showing its stderr.
+pub fn succeeded(what: &str, o: &Output) {
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{what}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

@@ -162,23 +162,13 @@ fn excite_on_a_cylinder_writes_a_scenario_check_accepts() {
             .arg(&out)
             .output()
             .unwrap();
-        assert_eq!(
-            o.status.code(),
-            Some(0),
-            "{lp}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        crate::common::succeeded(lp, &o);
         let o = ehservo()
             .arg("check")
             .arg(out.join("scenario.toml"))
             .output()
             .unwrap();
-        assert_eq!(
-            o.status.code(),
-            Some(0),
-            "{lp}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        crate::common::succeeded(lp, &o);
         let text = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
         assert!(!text.contains("a_bias"), "{lp}: {text}");
     }
@@ -190,12 +180,7 @@ fn excite_on_a_cylinder_writes_a_scenario_check_accepts() {
         .arg(dir.path().join("run"))
         .output()
         .unwrap();
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    crate::common::succeeded("run of the open experiment", &o);
     let trace = std::fs::read_to_string(dir.path().join("run/trace.csv")).unwrap();
     let mut lines = trace.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -281,12 +266,7 @@ fn identify_json(dir: &Path, name: &str, extra: &[&str]) -> (Output, serde_json:
 fn a_load_stiffness_is_identified() {
     let dir = tempfile::tempdir().unwrap();
     let (o, j) = identify_json(dir.path(), "lin", &["--no-greybox"]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    crate::common::succeeded("identify", &o);
     let fit = &j["linear"]["fit"];
     assert_eq!(fit["converged"], true, "{fit}");
     let a1 = fit["estimates"]
