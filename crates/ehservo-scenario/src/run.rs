@@ -186,6 +186,7 @@ pub fn accumulator<P: Plant, C: Controller>(lp: &Loop, plant: &P, ctrl: &C) -> M
         limit,
         has_limit: limit.is_finite() || lp.stages().policy.limits.u.is_finite(),
         forcing: lp.forcing(),
+        tracking: !lp.is_open(),
         ..Checks::default()
     };
     let after = ((lp.horizon() - lp.settle()).max(0.0) / lp.sim().step) as u64 + 2;

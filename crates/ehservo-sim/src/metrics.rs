@@ -365,6 +365,11 @@ pub struct Checks {
     pub forcing: Forcing,
     /// The amplitude of a sustained oscillation (the axis's display unit).
     pub tolerance: f64,
+    /// The loop closes on the position. False for an open loop, whose
+    /// reference is a command (`volts_per_mm`·r), not a position: it has
+    /// no tracking error (`e_max`, `e_final`, `e_rms` are null) and its
+    /// response follows the command, so no oscillation is its own.
+    pub tracking: bool,
 }
 
 impl Default for Checks {
@@ -375,6 +380,7 @@ impl Default for Checks {
             has_limit: false,
             forcing: Forcing::None,
             tolerance: OSCILLATION_TOLERANCE,
+            tracking: true,
         }
     }
 }
@@ -501,12 +507,16 @@ impl MetricsAccumulator {
     /// The metrics, given how the run ended.
     pub fn finish(&self, diverged: Option<Divergence>) -> Metrics {
         let after = self.n_after > 0;
+        let tracked = after && self.checks.tracking;
         let some_if = |c: bool, v: f64| if c && v.is_finite() { Some(v) } else { None };
         let span = self.t_first_after.map(|t0| self.t_last - t0).unwrap_or(0.0);
         Metrics {
-            e_max: some_if(after, self.e_max),
-            e_final: some_if(self.saw_final && diverged.is_none(), self.e_final),
-            e_rms: some_if(after, (self.e_sq / self.n_after.max(1) as f64).sqrt()),
+            e_max: some_if(tracked, self.e_max),
+            e_final: some_if(
+                self.checks.tracking && self.saw_final && diverged.is_none(),
+                self.e_final,
+            ),
+            e_rms: some_if(tracked, (self.e_sq / self.n_after.max(1) as f64).sqrt()),
             u_max: some_if(self.n > 0, self.u_max),
             u_rms: some_if(after, (self.u_sq / self.n_after.max(1) as f64).sqrt()),
             chattering: some_if(after && self.u_sq > 0.0, (self.du_sq / self.u_sq).sqrt()),
@@ -545,7 +555,7 @@ impl MetricsAccumulator {
         let saturation_share = ((self.checks.has_limit || self.at_limit > 0) && self.n > 0)
             .then(|| self.at_limit as f64 / self.n as f64);
         let (kept, stride) = self.window.kept();
-        let oscillation = if diverged || h <= 0.0 {
+        let oscillation = if diverged || h <= 0.0 || !self.checks.tracking {
             None
         } else {
             let forcing = match &self.checks.forcing {

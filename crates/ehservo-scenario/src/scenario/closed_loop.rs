@@ -348,6 +348,12 @@ impl Loop {
         }
     }
 
+    /// Whether the loop is open (kind `open-loop`): its reference is a
+    /// command, not a position, so it has no tracking error.
+    pub fn is_open(&self) -> bool {
+        matches!(self.scenario.controller, ControllerCfg::OpenLoop(_))
+    }
+
     /// The period of the reference (s): the window of `e_final`.
     pub fn period(&self) -> f64 {
         self.period

@@ -467,6 +467,13 @@ fn print_summary(
     for line in behaviour_lines(&m.behaviour, &findings, unit) {
         out!(w, "  {line}");
     }
+    if lp.is_open() {
+        out!(
+            w,
+            "  open loop: the reference is a command (u = volts_per_{} · r), not a position: no tracking error, and no oscillation is the loop's own",
+            m.axis.unit()
+        );
+    }
     out!(
         w,
         "  e_max   (t ≥ {} s)  {}",
