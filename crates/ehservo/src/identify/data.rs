@@ -268,6 +268,33 @@ pub fn read(path: &Path, map: &ColumnMap, opts: ReadOptions) -> anyhow::Result<E
     parse(&text, &file, map, opts)
 }
 
+/// Most characters of the header that an error quotes: a log with
+/// hundreds of columns (or a binary file read as one) is named by its
+/// first columns and its count, on one short line.
+const HEADER_QUOTED: usize = 120;
+
+/// The header's names for an error: all of them when short, else the
+/// first ones that fit in [`HEADER_QUOTED`] characters (each cut to it),
+/// then how many there are.
+fn header_list(header: &[&str]) -> String {
+    let all = header.join(", ");
+    if all.chars().count() <= HEADER_QUOTED {
+        return all;
+    }
+    let mut out = String::new();
+    for h in header {
+        let h: String = h.chars().take(HEADER_QUOTED).collect();
+        if !out.is_empty() && out.chars().count() + h.chars().count() + 2 > HEADER_QUOTED {
+            break;
+        }
+        if !out.is_empty() {
+            out.push_str(", ");
+        }
+        out.push_str(&h);
+    }
+    format!("{out}, … ({} columns)", header.len())
+}
+
 /// Finds a column: the one asked for, or the first default present.
 fn pick(
     header: &[&str],
@@ -284,7 +311,7 @@ fn pick(
             Some(i) => Ok(Some(i)),
             None => Err(bad(format!(
                 "{file}: line 1: no column `{name}` ({flag}); the header has: {}",
-                header.join(", ")
+                header_list(header)
             ))),
         },
         None => {
@@ -295,7 +322,7 @@ fn pick(
                 return Err(bad(format!(
                     "{file}: line 1: no {what} column: expected one of {} (or name it with {flag}); the header has: {}",
                     defaults.join(", "),
-                    header.join(", ")
+                    header_list(header)
                 )));
             }
             Ok(found)
@@ -646,6 +673,23 @@ mod tests {
             min_rows: 4,
             window: None,
         }
+    }
+
+    /// A short header is quoted whole; 300 columns `c0 … c299` are quoted
+    /// by their first names within 120 characters and their count; one
+    /// name of 10 000 characters is cut.
+    #[test]
+    fn a_long_header_is_quoted_short() {
+        assert_eq!(header_list(&["t_s", "u_V", "y_mm"]), "t_s, u_V, y_mm");
+        let names: Vec<String> = (0..300).map(|k| format!("c{k}")).collect();
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let q = header_list(&names);
+        // "c0, " … "c9, " is 40 characters, "c10, " … "c25" 16·5 − 2 = 78:
+        // 118 in all; "c26" would make 123 > 120.
+        assert_eq!(q, format!("{}, … (300 columns)", names[..26].join(", ")));
+        let long = "x".repeat(10_000);
+        let q = header_list(&[long.as_str(), "y"]);
+        assert!(q.chars().count() < 150 && q.ends_with("(2 columns)"), "{q}");
     }
 
     /// Degrees and millimetres are converted: 180° is π rad; bar is 1e5 Pa.

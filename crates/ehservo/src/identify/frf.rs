@@ -176,12 +176,9 @@ pub fn bode(h: &[Complex64]) -> (Vec<f64>, Vec<f64>) {
     for z in h {
         let mut p = z.arg().to_degrees();
         if let Some(q) = prev.filter(|q| q.is_finite() && p.is_finite()) {
-            while p - q > 180.0 {
-                p -= 360.0;
-            }
-            while p - q < -180.0 {
-                p += 360.0;
-            }
+            // The turn that puts p within 180° of q, in one step (no loop
+            // whose count grows with the phase already accumulated).
+            p -= 360.0 * ((p - q) / 360.0).round();
         }
         prev = Some(p);
         phase.push(p);
