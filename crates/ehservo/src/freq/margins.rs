@@ -163,7 +163,20 @@ pub fn phase_margin_of(l: C64) -> f64 {
 /// The margins of `l` over `[lo, hi]` rad/s; `h` the loop's period (for
 /// delays in samples), None in continuous time.
 pub fn margins(l: &dyn Fn(f64) -> Option<C64>, lo: f64, hi: f64, h: Option<f64>) -> Margins {
-    let grid = log_grid(lo, hi, POINTS_PER_DECADE);
+    margins_on(l, lo, hi, h, POINTS_PER_DECADE)
+}
+
+/// [`margins`] on a grid of `per_decade` points per decade (crossings
+/// are refined by bisection whatever the grid; a coarser grid can only
+/// miss a pair of crossings closer than its cell).
+pub fn margins_on(
+    l: &dyn Fn(f64) -> Option<C64>,
+    lo: f64,
+    hi: f64,
+    h: Option<f64>,
+    per_decade: usize,
+) -> Margins {
+    let grid = log_grid(lo, hi, per_decade);
     let c = crossings(l, &grid);
     let hz = |w: f64| w / (2.0 * PI);
     let gain_crossovers: Vec<GainCrossover> = c

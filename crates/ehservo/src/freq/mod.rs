@@ -23,6 +23,7 @@ pub mod oppoint;
 pub mod report;
 pub mod response;
 pub mod ss;
+pub mod stability;
 
 use crate::scenario::{Loop, Reason, ScenarioError};
 use ehservo_core::math::DR;

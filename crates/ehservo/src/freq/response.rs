@@ -406,17 +406,30 @@ impl LoopModel {
         std::f64::consts::PI / self.h
     }
 
-    /// Every curve at ω (rad/s).
-    pub fn at(&self, w: f64) -> Responses {
-        let g = self.g.response(w);
+    /// The plant's path at ω (rad/s) — G_d after the computation's delay
+    /// in sampled mode, G in continuous time — and the sensor's delay.
+    fn plant_path(&self, w: f64) -> (Option<C64>, C64) {
         let zd = |n: usize| C64::from_polar(1.0, -(n as f64) * w * self.h);
-        let (plant_path, loop_delay) = match &self.g_d {
+        match &self.g_d {
             Some(gd) => (
                 gd.response(w).map(|v| v * zd(self.computation_delay)),
                 zd(self.sensor_delay),
             ),
-            None => (g, C64::new(1.0, 0.0)),
-        };
+            None => (self.g.response(w), C64::new(1.0, 0.0)),
+        }
+    }
+
+    /// L at ω (rad/s) alone, as [`at`](Self::at) gives it (None without a
+    /// linear controller): what the margins need, without the other curves.
+    pub fn loop_at(&self, w: f64) -> Option<C64> {
+        let (p, delay) = self.plant_path(w);
+        Some(self.feedback.as_ref()?.response(w)? * p? * delay)
+    }
+
+    /// Every curve at ω (rad/s).
+    pub fn at(&self, w: f64) -> Responses {
+        let g = self.g.response(w);
+        let (plant_path, loop_delay) = self.plant_path(w);
         let g_d = self.g_d.as_ref().and(plant_path.map(|p| p * loop_delay));
         let c = self.feedback.as_ref().and_then(|f| f.response(w));
         let l = match (c, plant_path) {

@@ -83,13 +83,35 @@ pub struct Reject {
     /// hits an end stop or its error oscillates after the transient
     /// without decaying (`ehservo run`'s verdict).
     pub saturation_share: f64,
+    /// The least gain margin (dB) a linear law's loop may have (default
+    /// 6, the textbook minimum: Åström & Murray, *Feedback Systems*, 2nd
+    /// ed. 2021, §10.3 — gain margins of 2 to 5 and phase margins of 30°
+    /// to 60° are typical requirements; 6 dB and 45° the usual picks).
+    /// Computed, as `ehservo freq` does, at the trim at the reference's
+    /// start ([`crate::freq::stability`]); a computed unstable closed
+    /// loop is rejected too. 0 turns it off. A nonlinear law (no linear
+    /// model) is judged by its runs alone.
+    #[serde(rename = "gain_margin_dB")]
+    pub gain_margin_db: f64,
+    /// The least phase margin (°) of a linear law's loop (default 45; 0
+    /// turns it off).
+    pub phase_margin_deg: f64,
 }
 
 impl Default for Reject {
     fn default() -> Self {
         Self {
             saturation_share: crate::behaviour::SATURATION_SHARE_LIMIT,
+            gain_margin_db: 6.0,
+            phase_margin_deg: 45.0,
         }
+    }
+}
+
+impl Reject {
+    /// Whether any margin is asked of a linear law.
+    pub fn asks_margins(&self) -> bool {
+        self.gain_margin_db > 0.0 || self.phase_margin_deg > 0.0
     }
 }
 
@@ -354,6 +376,20 @@ impl Keys<'_> {
             return Err(self.bad(
                 "reject.saturation_share",
                 format!("must be a share from 0 to 1 (got {r:?})"),
+            ));
+        }
+        let g = tf.reject.gain_margin_db;
+        if !(0.0..=60.0).contains(&g) {
+            return Err(self.bad(
+                "reject.gain_margin_dB",
+                format!("must be from 0 to 60 dB (got {g:?})"),
+            ));
+        }
+        let p = tf.reject.phase_margin_deg;
+        if !(0.0..=90.0).contains(&p) {
+            return Err(self.bad(
+                "reject.phase_margin_deg",
+                format!("must be from 0 to 90° (got {p:?})"),
             ));
         }
         let f = tf.verify.horizon_factor;

@@ -51,5 +51,6 @@ pub use file::{
 };
 pub(crate) use file::{default_budget, default_draws, default_particles, default_seed};
 pub(crate) use file::{not_a_result, numeric};
+pub use score::Evaluation;
 pub use search::{search, tune_to_dir, SwarmBest, TuneResult};
 pub use verify::{Verification, VerifiedRun};

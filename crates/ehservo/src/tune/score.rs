@@ -2,8 +2,20 @@
 //! scenario × draw, run, and scored (e_max plus the penalties).
 
 use super::{Objective, Scale, Tune};
+use crate::freq::stability::Stability;
 use crate::metrics::Metrics;
 use crate::scenario::Loop;
+
+/// One run of a candidate: its metrics and, for a linear law whose run was
+/// acceptable, its loop's computed stability.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// The run's metrics.
+    pub metrics: Metrics,
+    /// The loop's computed margins (None: a nonlinear law, margins not
+    /// asked, or a run already rejected).
+    pub stability: Option<Stability>,
+}
 
 impl Tune {
     /// The overrides of one evaluation of `values`: one list per
@@ -81,21 +93,41 @@ impl Tune {
             .collect()
     }
 
-    /// The metrics of every scenario × draw at `values` (None where the
+    /// The evaluation of every scenario × draw at `values` (None where the
     /// controller refused them).
-    pub fn evaluate(&self, values: &[f64]) -> Vec<Option<Metrics>> {
+    pub fn evaluate(&self, values: &[f64]) -> Vec<Option<Evaluation>> {
         self.evaluate_sets(&self.sets(values))
     }
 
-    fn evaluate_sets(&self, sets: &[Vec<(String, toml::Value)>]) -> Vec<Option<Metrics>> {
+    fn evaluate_sets(&self, sets: &[Vec<(String, toml::Value)>]) -> Vec<Option<Evaluation>> {
         sets.iter()
             .enumerate()
             .map(|(i, sets)| {
                 self.build_run(i, sets)
                     .ok()
-                    .map(|lp| crate::run::run_metrics(&lp, &mut |_| {}).1)
+                    .map(|lp| self.evaluate_loop(&lp))
             })
             .collect()
+    }
+
+    /// One run of `lp` and, when its run is acceptable and margins are
+    /// asked, its loop's computed stability ([`crate::freq::stability`];
+    /// None for a nonlinear law).
+    pub fn evaluate_loop(&self, lp: &Loop) -> Evaluation {
+        let metrics = crate::run::run_metrics(lp, &mut |_| {}).1;
+        let acceptable =
+            !metrics.diverged && metrics.e_max.is_some() && self.rejections(&metrics).is_empty();
+        let stability = (acceptable && self.file.reject.asks_margins())
+            .then(|| crate::freq::stability::computed(lp))
+            .flatten();
+        Evaluation { metrics, stability }
+    }
+
+    /// Why a loop's computed stability rejects it (`[reject]`'s margins),
+    /// or None.
+    pub fn margin_rejection(&self, s: Option<&Stability>) -> Option<String> {
+        let r = &self.file.reject;
+        s?.short_of(r.gain_margin_db, r.phase_margin_deg)
     }
 
     /// A run's findings that reject a candidate ([`super::Reject`]):
@@ -108,11 +140,15 @@ impl Tune {
 
     /// One run's score: e_max (in the axis's unit, ° or mm) plus the
     /// penalties; +∞ when unbounded, refused, undefined, or rejected
-    /// ([`Tune::rejections`]).
-    pub fn score(&self, m: Option<&Metrics>) -> f64 {
-        let Some(m) = m else {
+    /// ([`Tune::rejections`], [`Tune::margin_rejection`]).
+    pub fn score(&self, ev: Option<&Evaluation>) -> f64 {
+        let Some(ev) = ev else {
             return f64::INFINITY;
         };
+        if self.margin_rejection(ev.stability.as_ref()).is_some() {
+            return f64::INFINITY;
+        }
+        let m = &ev.metrics;
         let (Some(e), false) = (m.e_max, m.diverged) else {
             return f64::INFINITY;
         };

@@ -32,7 +32,11 @@ pub struct VerifiedRun {
     pub oscillation_amplitude: Option<f64>,
     /// Its period (s).
     pub oscillation_period_s: Option<f64>,
-    /// The run passed.
+    /// The loop's computed stability at the trim (a linear law's, when
+    /// margins are asked: `[reject]`).
+    pub stability: Option<crate::freq::stability::Stability>,
+    /// The run passed: no finding, and margins (when computed) at least
+    /// `[reject]`'s.
     pub passed: bool,
 }
 
@@ -81,12 +85,13 @@ impl Verification {
             .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
         if failed.is_empty() {
             format!(
-                "verification passed: {} of {} runs at {}× the horizon over {} draw(s) bounded, no end stop, no sustained oscillation, not saturated (worst e_max {}{unit})",
+                "verification passed: {} of {} runs at {}× the horizon over {} draw(s) bounded, no end stop, no sustained oscillation, not saturated (worst e_max {}{unit}){}",
                 self.runs.len(),
                 self.runs.len(),
                 self.horizon_factor,
                 self.draws,
-                opt(worst, 4)
+                opt(worst, 4),
+                self.least_margins()
             )
         } else {
             format!(
@@ -98,6 +103,27 @@ impl Verification {
                 failed.join("; ")
             )
         }
+    }
+}
+
+impl Verification {
+    /// `; least margins 8.1 dB, 52.3° (computed)` over the runs whose
+    /// loop has them, or nothing.
+    fn least_margins(&self) -> String {
+        let least = |f: fn(&crate::freq::stability::Stability) -> Option<f64>| {
+            self.runs
+                .iter()
+                .filter_map(|r| r.stability.as_ref().and_then(f))
+                .fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.min(x))))
+        };
+        if self.runs.iter().all(|r| r.stability.is_none()) {
+            return String::new();
+        }
+        format!(
+            "; least margins {} dB, {}° (computed at the trim; — : no crossover)",
+            opt(least(|s| s.gain_margin_db), 2),
+            opt(least(|s| s.phase_margin_deg), 1)
+        )
     }
 }
 
@@ -163,22 +189,29 @@ impl Tune {
             saturation_share: None,
             oscillation_amplitude: None,
             oscillation_period_s: None,
+            stability: None,
             passed: false,
         };
         match sc.with_values_on(self.tables[i].clone(), &sets) {
             Err(e) => run.verdict = format!("refused: `{}`: {}", e.key, e.reason),
             Ok(lp) => {
-                let m = crate::run::run_metrics(&lp, &mut |_| {}).1;
+                let ev = self.evaluate_loop(&lp);
+                let m = ev.metrics;
                 let findings = self.rejections(&m);
                 let b = &m.behaviour;
                 let osc = b.oscillation.filter(|o| o.cycles > 0);
-                run.verdict = verdict_cell(&findings);
+                let short = self.margin_rejection(ev.stability.as_ref());
+                run.verdict = match &short {
+                    Some(why) if findings.is_empty() => format!("margins: {why}"),
+                    _ => verdict_cell(&findings),
+                };
+                run.stability = ev.stability;
                 run.e_max = m.e_max;
                 run.end_stop_contacts = b.end_stops.map(|e| e.contacts);
                 run.saturation_share = b.saturation_share;
                 run.oscillation_amplitude = osc.map(|o| o.amplitude);
                 run.oscillation_period_s = osc.and_then(|o| o.period_s);
-                run.passed = findings.is_empty() && m.e_max.is_some();
+                run.passed = findings.is_empty() && m.e_max.is_some() && short.is_none();
             }
         }
         run
