@@ -123,6 +123,18 @@ impl Tune {
         Evaluation { metrics, stability }
     }
 
+    /// Whether the tuned kind is a linear law (its margins are computed):
+    /// a kind `ehservo freq` has a linear model of.
+    pub fn is_linear(&self) -> bool {
+        let (Some(cfg), Some(lp)) = (
+            crate::scenario::ControllerCfg::default_of(self.kind),
+            self.scenarios.first(),
+        ) else {
+            return false;
+        };
+        crate::freq::controllers::controller_model(&cfg, lp.design()).is_some()
+    }
+
     /// Why a loop's computed stability rejects it (`[reject]`'s margins),
     /// or None.
     pub fn margin_rejection(&self, s: Option<&Stability>) -> Option<String> {

@@ -99,10 +99,19 @@ impl TuneResult {
     /// None when it is.
     pub fn failure(&self, t: &Tune) -> Option<String> {
         if !self.objective.is_finite() {
+            let r = &t.file.reject;
+            let margins = if r.asks_margins() && t.is_linear() {
+                format!(
+                    ", or its loop was unstable or had less than {} dB or {}° of margin (`[reject]`)",
+                    r.gain_margin_db, r.phase_margin_deg
+                )
+            } else {
+                String::new()
+            };
             return Some(format!(
-                "no candidate passed: every one of {} evaluations (and the kind's defaults) diverged, was refused, hit an end stop, oscillated after the transient or saturated in more than {} % of the samples on some scenario × draw",
+                "no candidate passed: every one of {} evaluations (and the kind's defaults) diverged, was refused, hit an end stop, oscillated after the transient or saturated in more than {} % of the samples on some scenario × draw{margins}",
                 self.evaluations,
-                100.0 * t.file.reject.saturation_share
+                100.0 * r.saturation_share
             ));
         }
         match &self.verification {
