@@ -163,18 +163,20 @@ pub fn phase_margin_of(l: C64) -> f64 {
 /// The margins of `l` over `[lo, hi]` rad/s; `h` the loop's period (for
 /// delays in samples), None in continuous time.
 pub fn margins(l: &dyn Fn(f64) -> Option<C64>, lo: f64, hi: f64, h: Option<f64>) -> Margins {
-    margins_on(l, lo, hi, h, POINTS_PER_DECADE)
+    margins_on(l, lo, hi, h, POINTS_PER_DECADE, true)
 }
 
 /// [`margins`] on a grid of `per_decade` points per decade (crossings
 /// are refined by bisection whatever the grid; a coarser grid can only
-/// miss a pair of crossings closer than its cell).
+/// miss a pair of crossings closer than its cell), with the stability
+/// margin min |1 + L| searched or not (None).
 pub fn margins_on(
     l: &dyn Fn(f64) -> Option<C64>,
     lo: f64,
     hi: f64,
     h: Option<f64>,
     per_decade: usize,
+    with_stability_margin: bool,
 ) -> Margins {
     let grid = log_grid(lo, hi, per_decade);
     let c = crossings(l, &grid);
@@ -208,7 +210,9 @@ pub fn margins_on(
             })
         })
         .collect();
-    let stability_margin = stability_margin(l, &c.minima, &grid);
+    let stability_margin = with_stability_margin
+        .then(|| stability_margin(l, &c.minima, &grid))
+        .flatten();
     let gain_margin = phase_crossovers.iter().copied().min_by(|a, b| {
         a.gain_margin
             .ln()

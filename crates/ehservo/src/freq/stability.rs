@@ -13,11 +13,14 @@ use super::response::Discretisation;
 use crate::scenario::Loop;
 use serde::Serialize;
 
-/// Grid points per decade of the margins' search here: a quarter of
-/// `ehservo freq`'s [`margins::POINTS_PER_DECADE`] (the crossings are
-/// refined by bisection either way; a pair of crossings closer than 2.3 %
-/// in frequency could be missed).
-pub const GRID_PER_DECADE: usize = 100;
+/// Grid points per decade of the margins' search here: a sixteenth of
+/// `ehservo freq`'s [`margins::POINTS_PER_DECADE`], for the cost of a
+/// tune (the crossings are refined by bisection either way, to the same
+/// figures). A pair of crossings closer than 9.6 % in frequency can be
+/// missed: a lightly damped resonance whose peak pokes above |L| = 1 in a
+/// band of about 2ζ; its phase passes −180° there, and that phase
+/// crossover's gain margin (below 0 dB) still rejects the loop.
+pub const GRID_PER_DECADE: usize = 25;
 
 /// The computed stability of a loop with a linear law.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -82,15 +85,27 @@ pub fn computed(lp: &Loop) -> Option<Stability> {
         0.99 * m.nyquist()
     };
     let l = m.loop_l.as_ref()?.siso_response();
+    let stable = m.closed_loop_stable();
+    if stable == Some(false) {
+        // Rejected whatever its margins: not worth their search.
+        return Some(Stability {
+            closed_loop_stable: stable,
+            gain_margin_db: None,
+            gain_margin_f_hz: None,
+            phase_margin_deg: None,
+            phase_margin_f_hz: None,
+        });
+    }
     let mg = margins::margins_on(
         &|w| l.at_frequency(w),
         m.lowest(),
         hi,
         m.sampled().then_some(h),
         GRID_PER_DECADE,
+        false,
     );
     Some(Stability {
-        closed_loop_stable: m.closed_loop_stable(),
+        closed_loop_stable: stable,
         gain_margin_db: mg.gain_margin.map(|g| g.gain_margin_db),
         gain_margin_f_hz: mg.gain_margin.map(|g| g.f_hz),
         phase_margin_deg: mg.phase_margin.map(|p| p.phase_margin_deg),
