@@ -217,7 +217,7 @@ impl Adaptive {
         N: Fn(&S, &S, &S) -> f64,
         L: FnMut(&mut S),
     {
-        if !(t1 > t0) {
+        if t1 <= t0 || t1.is_nan() || t0.is_nan() {
             return Ok(());
         }
         let mut k = [S::zero(); MAX_STAGES];
@@ -311,12 +311,12 @@ fn trial<S: OdeState, F: FnMut(f64, &S, &mut S)>(
     }
     let mut y1 = *y;
     let mut e = S::zero();
-    for i in 0..s {
-        if tab.b[i] != 0.0 {
-            y1.axpy(h * tab.b[i], &k[i]);
+    for ((ki, b), ei) in k.iter().zip(tab.b).zip(tab.e) {
+        if *b != 0.0 {
+            y1.axpy(h * b, ki);
         }
-        if tab.e[i] != 0.0 {
-            e.axpy(h * tab.e[i], &k[i]);
+        if *ei != 0.0 {
+            e.axpy(h * ei, ki);
         }
     }
     (y1, e)
@@ -350,7 +350,7 @@ fn initial_step<S: OdeState, F: FnMut(f64, &S, &mut S), N: Fn(&S, &S, &S) -> f64
     df.axpy(-1.0, f0);
     let d2 = norm(y, y, &df) / h0;
     let dm = d1.max(d2);
-    let h1 = if !(dm > 1e-15) || !dm.is_finite() {
+    let h1 = if dm <= 1e-15 || !dm.is_finite() {
         (h0 * 1e-3).max(1e-6)
     } else {
         libm::pow(0.01 / dm, 1.0 / f64::from(tab.order))
