@@ -232,8 +232,10 @@ impl Adaptive {
         loop {
             let rest = t1 - t;
             let mut h = self.h.min(ctl.max_step);
-            // Land on t1; never leave a sliver of under 1% of a step.
-            let last = h * 1.01 >= rest;
+            // Land on t1; never leave a sliver of under 1% of a step (nor
+            // step beyond max_step to avoid one, but for the rounding of
+            // t1 − t: a sample's first step is max_step = step exactly).
+            let last = h * 1.01 >= rest && rest <= ctl.max_step * (1.0 + 1e-9);
             if last {
                 h = rest;
             }
