@@ -38,7 +38,7 @@ PY
 }
 
 "$BIN" run "$SCEN" --no-plot --quiet --out "$OUT/ref" --set simulation.substeps=1000 --set "simulation.horizon=$HORIZON"   # RK4 at step/1000: the reference
-echo "| solver | settings | CPU s per simulated s | max |y − y_ref| (m) | steps accepted / rejected |"
+echo "| solver | settings | CPU s per simulated s | max \|y − y_ref\| (m) | steps accepted / rejected |"
 echo "|---|---|---|---|---|"
 row() { # label, settings text, name, --set args...
     local label=$1 text=$2 name=$3; shift 3
