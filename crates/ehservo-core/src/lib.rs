@@ -75,6 +75,7 @@ pub mod reference;
 pub mod rk4;
 pub mod sampled;
 pub mod servo;
+pub mod solver;
 pub mod surface;
 
 /// The names most users need, in one import.

@@ -132,6 +132,16 @@ pub fn run_evaluations(s: &Scenario) -> f64 {
     }
 }
 
+/// The steps (accepted and rejected) an adaptive solver of `stages`
+/// evaluations a step may take in one run of `s`: what is left of
+/// [`MAX_RUN_WORK`] after the law's and the estimator's evaluations
+/// ([`run_evaluations`]), divided by `stages`. A run that needs more stops
+/// there with `solver-step-budget`, as a result.
+pub fn adaptive_step_budget(s: &Scenario, stages: usize) -> u64 {
+    let left = (MAX_RUN_WORK - run_evaluations(s)).max(0.0);
+    (left / stages.max(1) as f64).floor() as u64
+}
+
 /// The estimator's sub-steps per sample (0 without a sub-stepped estimator).
 fn estimator_substeps(s: &Scenario) -> f64 {
     match &s.estimator {

@@ -136,8 +136,9 @@ pub fn refinement(lambda: f64, h: f64) -> u32 {
 /// assert!((x[0] - 0.1).abs() < 1e-15 && (x[2] - 2.0).abs() < 1e-9);
 /// ```
 pub trait Plant {
-    /// The plant's state.
-    type State: OdeState;
+    /// The plant's state: its components in SI units, in a fixed order
+    /// (the order of a per-state `simulation.atol`).
+    type State: OdeState + AsRef<[f64]>;
     /// What one hold interval's variation is for this plant.
     type Variation: Copy + Debug;
     /// What [`Plant::prepare`] computes of a state before the command is
@@ -146,6 +147,10 @@ pub trait Plant {
     /// The physical states beyond x that a trace carries (a load pressure,
     /// chamber pressures), at most [`MAX_STATES`].
     const STATES: &'static [Signal] = &[];
+    /// The number of components of [`Plant::State`].
+    fn state_dim(&self) -> usize {
+        Self::State::zero().as_ref().len()
+    }
     /// The axis: the quantity of x and its display unit.
     fn axis(&self) -> Axis {
         Axis::Rotary

@@ -76,6 +76,12 @@ pub(super) fn build(s: &Scenario) -> Result<Parts, KeyError> {
     let sim = s.sim_config();
     let stages = stages(s, spec, &model)?;
     let settings = Settings::try_new(stages, sim).map_err(|e| KeyError::param("simulation", e))?;
+    let settings = match super::solver::adaptive(s, plant.state_dim())? {
+        Some(a) => settings
+            .with_adaptive(a)
+            .map_err(|e| KeyError::param("simulation", e))?,
+        None => settings,
+    };
     let design = Design {
         model,
         surface,

@@ -20,6 +20,7 @@ mod plants;
 mod reference;
 mod registry;
 mod sections;
+mod solver;
 pub(crate) mod tagged;
 
 pub use build::MAX_DRAWS;
@@ -33,8 +34,10 @@ pub use reference::{
 };
 pub use registry::{ControllerCfg, ControllerConfig, Visit, DEFAULT_KIND};
 pub use sections::{
-    EstimatorCfg, FaultCfg, OutputCfg, SafeCommandCfg, SimulationCfg, SurfaceCfg, UncertaintyCfg,
+    AtolCfg, EstimatorCfg, FaultCfg, OutputCfg, SafeCommandCfg, SimulationCfg, SurfaceCfg,
+    UncertaintyCfg,
 };
+pub use solver::{DEFAULT_ATOL, DEFAULT_RTOL};
 
 use ehservo_core::servo::Load;
 use ehservo_sim::actuator::ActuatorConfig;

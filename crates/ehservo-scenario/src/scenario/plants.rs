@@ -225,6 +225,13 @@ macro_rules! plants {
                 }
             }
 
+            /// The number of the plant's state components ([`Plant::state_dim`]).
+            pub fn state_dim(&self) -> usize {
+                match self {
+                    $(Self::$variant(p) => p.state_dim(),)*
+                }
+            }
+
             /// The plant, if it is of type `T`.
             pub fn get<T: 'static>(&self) -> Option<&T> {
                 match self {

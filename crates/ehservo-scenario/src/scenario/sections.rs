@@ -2,7 +2,7 @@
 //! paper's Fig. 2 value by default.
 
 use ehservo_sim::plant::{PhysicalSpec, UncertaintySpec};
-use ehservo_sim::simulation::Mode;
+use ehservo_sim::simulation::{Mode, SolverKind};
 use serde::{Deserialize, Serialize};
 
 /// `[simulation]`.
@@ -30,6 +30,38 @@ pub struct SimulationCfg {
     /// Default false.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub computation_delay: bool,
+    /// How the plant is integrated between samples: `"rk4"` (default,
+    /// fixed step with `substeps`), `"dopri5"` (Dormand–Prince 5(4)) or
+    /// `"bs32"` (Bogacki–Shampine 3(2)), both with error control, sampled
+    /// mode only (docs/solvers.md).
+    #[serde(skip_serializing_if = "is_rk4")]
+    pub solver: SolverKind,
+    /// Adaptive solvers: the relative tolerance, in (0, 1). Default 1e-6.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rtol: Option<f64>,
+    /// Adaptive solvers: the absolute tolerance, >= 0: one number for
+    /// every plant state, or one per plant state in the state's SI unit
+    /// (docs/solvers.md lists each plant's states). Default 1e-9.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atol: Option<AtolCfg>,
+    /// Adaptive solvers: the largest step (s), at most `step`. Default
+    /// `step` (the sample period).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_step: Option<f64>,
+}
+
+fn is_rk4(k: &SolverKind) -> bool {
+    *k == SolverKind::Rk4
+}
+
+/// `simulation.atol`: one number, or one per plant state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum AtolCfg {
+    /// The same for every state.
+    Scalar(f64),
+    /// One per plant state, in the state's order and SI unit.
+    PerState(Vec<f64>),
 }
 
 impl Default for SimulationCfg {
@@ -43,6 +75,10 @@ impl Default for SimulationCfg {
             theta_limit: 1.0,
             x0: [0.0; 3],
             computation_delay: false,
+            solver: SolverKind::Rk4,
+            rtol: None,
+            atol: None,
+            max_step: None,
         }
     }
 }

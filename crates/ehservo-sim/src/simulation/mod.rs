@@ -21,8 +21,12 @@
 //!   held over `[t_k, t_k + h)` (zero-order hold) while the plant and the
 //!   actuator are integrated by `substeps` RK4 steps of `h/substeps`.
 //!
+//! Under an adaptive solver (`simulation.solver`, [`SolverKind`]) the
+//! sampled mode integrates the plant and the actuator from each sample
+//! instant exactly to the next with error control instead ([`solver`]).
+//!
 //! The parameter variation is drawn at the start of each (sub)step and held
-//! over it. [`Simulation::step`] produces one sample and advances to the
+//! over it; under an adaptive solver, once per sample. [`Simulation::step`] produces one sample and advances to the
 //! next; [`Simulation::run_until`] and [`Simulation::run`] repeat it. A run
 //! stops at its horizon, or early — as a result, never as NaN — when the
 //! state stops being finite, |θ| exceeds `theta_limit`, a cylinder's rod
@@ -33,9 +37,11 @@
 mod continuous;
 mod sample;
 mod sampled;
+mod solver;
 
 pub use sample::{Divergence, DivergenceReason, Outcome, Sample, Stop, MAX_PARTS, MAX_STATES};
 use sampled::FirstStage;
+pub use solver::{AdaptiveConfig, Atol, SolverKind, MAX_ATOL};
 
 use crate::actuator::Actuator;
 use crate::estimator::AnyEstimator;
@@ -258,6 +264,8 @@ pub struct Simulation<P: Plant, C: Controller, R: Reference> {
     cfg: SimConfig,
     ctrl: SampledController<C>,
     y: Augmented<P::State, C::State>,
+    /// The adaptive solver's settings and memory, if it integrates the plant.
+    adaptive: Option<solver::AdaptiveRun>,
     per_hold: Option<u64>,
     /// Whether `y.xi` is finite in sampled mode, where it never changes
     /// (the sampled controller keeps its own state): the check after each
@@ -281,6 +289,7 @@ pub struct Settings {
     stages: Stages,
     cfg: SimConfig,
     sampling: Sampling,
+    adaptive: Option<AdaptiveConfig>,
 }
 
 impl Settings {
@@ -324,7 +333,36 @@ impl Settings {
             stages,
             cfg,
             sampling,
+            adaptive: None,
         })
+    }
+
+    /// The same loop with the plant integrated by an adaptive solver
+    /// between samples. Refused in continuous mode (the law inside an
+    /// adaptive solver's stages is not in this version) and with a
+    /// `max_step` above the sample period.
+    pub fn with_adaptive(mut self, a: AdaptiveConfig) -> Result<Self, ParamError> {
+        if self.cfg.mode == Mode::Continuous {
+            return Err(ParamError::new(
+                "solver",
+                "an adaptive solver needs the sampled mode (continuous mode runs rk4)",
+                f64::NAN,
+            ));
+        }
+        if a.max_step() > self.cfg.step {
+            return Err(ParamError::new(
+                "max_step",
+                "must be at most the sample period (simulation.step)",
+                a.max_step(),
+            ));
+        }
+        self.adaptive = Some(a);
+        Ok(self)
+    }
+
+    /// The adaptive solver, if the plant is integrated by one.
+    pub fn adaptive(&self) -> Option<&AdaptiveConfig> {
+        self.adaptive.as_ref()
     }
 
     /// The stages.
@@ -348,7 +386,12 @@ impl Settings {
     pub fn with_limits(self, limits: ehservo_core::sampled::Limits) -> Result<Self, ParamError> {
         let mut stages = self.stages;
         stages.policy.limits = limits;
-        Self::try_new(stages, self.cfg)
+        let adaptive = self.adaptive;
+        let s = Self::try_new(stages, self.cfg)?;
+        match adaptive {
+            Some(a) => s.with_adaptive(a),
+            None => Ok(s),
+        }
     }
 
     /// The same loop run for `steps` steps (the other checks do not depend
@@ -427,13 +470,19 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             stages,
             cfg,
             sampling,
+            adaptive,
         } = settings;
+        let adaptive = adaptive.map(|cfg| solver::AdaptiveRun {
+            cfg,
+            state: ehservo_core::solver::Adaptive::new(),
+        });
         let xi = ctrl.initial_state_at(&cfg.x0);
         let mut ctrl = SampledController::sampled(ctrl, sampling);
         ctrl.start_at(&cfg.x0);
         let mut unc = Varying::new(&plant, stages.uncertainty);
-        let per_hold = unc.signal().steps_per_hold(Self::hs(&cfg));
-        let var0 = unc.at_step(&plant, 0, Self::hs(&cfg), per_hold);
+        let hs = Self::hs(&cfg, adaptive.is_some());
+        let per_hold = unc.signal().steps_per_hold(hs);
+        let var0 = unc.at_step(&plant, 0, hs, per_hold);
         Self {
             y: Augmented {
                 pa: PlantAct {
@@ -449,6 +498,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             sensor: stages.sensor,
             cfg,
             ctrl,
+            adaptive,
             per_hold,
             xi_finite: xi.all_finite(),
             estimator: stages.estimator,
@@ -466,11 +516,12 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         self.log_states = on;
     }
 
-    /// The step of the variation's clock: the RK4 sub-step in sampled mode.
-    fn hs(cfg: &SimConfig) -> f64 {
+    /// The step of the variation's clock: the RK4 sub-step in sampled mode,
+    /// the sample period under an adaptive solver.
+    fn hs(cfg: &SimConfig, adaptive: bool) -> f64 {
         match cfg.mode {
-            Mode::Sampled => cfg.step / cfg.substeps.max(1) as f64,
-            Mode::Continuous => cfg.step,
+            Mode::Sampled if !adaptive => cfg.step / cfg.substeps.max(1) as f64,
+            _ => cfg.step,
         }
     }
 
@@ -576,8 +627,8 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         let t = k as f64 * h;
         let m = self.cfg.substeps.max(1) as u64;
         let (j0, hs) = match self.cfg.mode {
-            Mode::Sampled => (k * m, h / m as f64),
-            Mode::Continuous => (k, h),
+            Mode::Sampled if self.adaptive.is_none() => (k * m, h / m as f64),
+            _ => (k, h),
         };
         let var = self.unc.at_step(&self.plant, j0, hs, self.per_hold);
         let x = self.plant.measure(t, &self.y.pa.x, &var);
@@ -784,3 +835,5 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
 #[cfg(test)]
 #[allow(clippy::float_cmp)] // bit-for-bit equality is the point
 mod tests;
+#[cfg(test)]
+use tests as tests_support;

@@ -156,6 +156,10 @@ pub enum DivergenceReason {
     /// The law returned a non-finite u, or a non-finite part of its law
     /// (σ, ‖E‖, WᵀΦ, …) that would have been logged.
     NonFiniteControl,
+    /// An adaptive solver spent the run's step budget.
+    SolverStepBudget,
+    /// An adaptive solver's step fell below ten ulps of the time.
+    SolverStepTooSmall,
 }
 
 impl DivergenceReason {
@@ -169,6 +173,12 @@ impl DivergenceReason {
             }
             DivergenceReason::NonFiniteControl => {
                 "the control law returned a non-finite value (u or one of its parts)"
+            }
+            DivergenceReason::SolverStepBudget => {
+                "the adaptive solver spent the run's step budget (loosen rtol/atol)"
+            }
+            DivergenceReason::SolverStepTooSmall => {
+                "the adaptive solver's step fell below ten ulps of the time"
             }
         }
     }
@@ -210,4 +220,6 @@ pub struct Outcome {
     /// Samples at which the sampled loop refused a measurement and
     /// commanded its safe value.
     pub measurement_faults: u64,
+    /// The adaptive solver's steps so far (zero under RK4).
+    pub solver_steps: ehservo_core::solver::StepCounts,
 }

@@ -141,6 +141,15 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             self.stop = Some(Stop::Horizon);
             return ControlFlow::Break(true);
         }
+        if self.adaptive.is_some() {
+            // To the next sample instant exactly, under the held command
+            // and this sample's variation (solver.rs).
+            let t_next = (k + 1) as f64 * self.cfg.step;
+            return match self.advance_adaptive(t, t_next, u, &var) {
+                true => ControlFlow::Continue(()),
+                false => ControlFlow::Break(true),
+            };
+        }
         let (plant, act) = (&self.plant, &self.actuator);
         // A valve without spool dynamics gives the plant the same
         // input at every stage, and its state derivative is zero:

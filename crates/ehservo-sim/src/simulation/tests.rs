@@ -9,7 +9,7 @@ use ehservo_core::control::nnvsc::{NnVsc, NnVscParams};
 use ehservo_core::prelude::{Load, NominalModel, Rbf, ServoParams, Sine, SwitchingSurface};
 use ehservo_core::rk4::rk4_step;
 
-fn nn() -> NnVsc {
+pub(super) fn nn() -> NnVsc {
     NnVsc::try_new(
         NominalModel::new(ServoParams::paper(), Load::paper()),
         SwitchingSurface::paper(),
@@ -19,7 +19,7 @@ fn nn() -> NnVsc {
     .unwrap()
 }
 
-fn stages(actuator: Actuator) -> Stages {
+pub(super) fn stages(actuator: Actuator) -> Stages {
     Stages {
         uncertainty: UncertaintySpec {
             a_bias: 0.5,
@@ -36,7 +36,7 @@ fn stages(actuator: Actuator) -> Stages {
     }
 }
 
-fn cfg(mode: Mode) -> SimConfig {
+pub(super) fn cfg(mode: Mode) -> SimConfig {
     SimConfig {
         steps: 300,
         step: if mode == Mode::Sampled { 0.01 } else { 0.001 },

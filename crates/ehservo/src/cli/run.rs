@@ -440,8 +440,17 @@ fn print_summary(
         s.plant.model(),
         sim.mode.as_str(),
         sim.step,
-        if sim.mode == crate::simulation::Mode::Sampled {
+        if sim.mode == crate::simulation::Mode::Sampled
+            && sim.solver == crate::simulation::SolverKind::Rk4
+        {
             format!(", {} RK4 substep(s)", sim.substeps)
+        } else if sim.mode == crate::simulation::Mode::Sampled {
+            format!(
+                ", {}: {} steps accepted, {} rejected",
+                sim.solver.as_str(),
+                r.outcome.solver_steps.accepted,
+                r.outcome.solver_steps.rejected
+            )
         } else {
             String::new()
         },

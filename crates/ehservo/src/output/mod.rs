@@ -284,10 +284,60 @@ pub struct Summary<'a> {
     /// Condition 4) of Theorem 3 and the dead zone along this run (NNBVSC,
     /// when the trace was kept).
     pub diagnostics: Option<crate::analysis::RunDiagnostics>,
+    /// How the plant was integrated: the solver, and an adaptive one's
+    /// tolerances and step counts.
+    pub solver: SolverInfo,
     /// Where the controller ran when not in the simulator itself: the
     /// float type, the board, the link's faults ([`crate::pil`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub offboard: Option<serde_json::Value>,
+}
+
+/// `summary.json`'s `solver`: `{"kind": "rk4"}`, or an adaptive solver
+/// with its tolerances as run and its steps.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolverInfo {
+    /// `"rk4"`, `"dopri5"`, `"bs32"`.
+    pub kind: &'static str,
+    /// The relative tolerance (adaptive).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rtol: Option<f64>,
+    /// The absolute tolerance: one value, or one per plant state (adaptive).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atol: Option<Vec<f64>>,
+    /// The largest step (s) (adaptive).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_step: Option<f64>,
+    /// Steps accepted over the run (adaptive).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accepted_steps: Option<u64>,
+    /// Steps tried and rejected over the run (adaptive).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rejected_steps: Option<u64>,
+}
+
+impl SolverInfo {
+    /// The solver of `lp` and the steps of the run that ended in `outcome`.
+    pub fn of(lp: &Loop, outcome: &crate::simulation::Outcome) -> Self {
+        match lp.settings().adaptive() {
+            None => Self {
+                kind: lp.scenario().simulation.solver.as_str(),
+                rtol: None,
+                atol: None,
+                max_step: None,
+                accepted_steps: None,
+                rejected_steps: None,
+            },
+            Some(a) => Self {
+                kind: a.kind().as_str(),
+                rtol: Some(a.rtol()),
+                atol: Some(a.atol().values().to_vec()),
+                max_step: Some(a.max_step()),
+                accepted_steps: Some(outcome.solver_steps.accepted),
+                rejected_steps: Some(outcome.solver_steps.rejected),
+            },
+        }
+    }
 }
 
 /// A divergence, with a sentence.
@@ -381,6 +431,7 @@ pub fn summary_with<'a>(
         },
         analysis: crate::analysis::analyze(lp),
         diagnostics,
+        solver: SolverInfo::of(lp, &run.outcome),
         offboard: None,
     }
 }

@@ -40,6 +40,7 @@ mod reproduce_bad_input;
 mod reproduction;
 mod sampled_loop;
 mod schema;
+mod solvers;
 mod stages;
 mod stochastic;
 mod study;

@@ -1,0 +1,270 @@
+//! The pairs' tableaux against the order conditions, their orders measured
+//! on ẏ = y, and the controller's global error on linear ODEs with closed
+//! forms, held to the tolerance asked.
+
+use super::bs32::BS32;
+use super::dopri5::DOPRI5;
+use super::*;
+
+/// Σⱼ aᵢⱼ·vⱼ for row i.
+fn a_dot(tab: &Tableau, i: usize, v: &[f64]) -> f64 {
+    tab.a[i].iter().zip(v).map(|(a, x)| a * x).sum()
+}
+
+/// The Butcher order conditions up to order 4 for the weights `w`
+/// (Hairer, Nørsett & Wanner, Solving ODEs I, §II.2, Table 2.2): the
+/// elementary differentials' values 1, 1/2, 1/3, 1/6, 1/4, 1/8, 1/12, 1/24.
+fn conditions(tab: &Tableau, w: &[f64], order: u32) -> Vec<(f64, f64)> {
+    let s = tab.stages();
+    let c = tab.c;
+    let ac: Vec<f64> = (0..s).map(|i| a_dot(tab, i, c)).collect();
+    let c2: Vec<f64> = c.iter().map(|x| x * x).collect();
+    let ac2: Vec<f64> = (0..s).map(|i| a_dot(tab, i, &c2)).collect();
+    let aac: Vec<f64> = (0..s).map(|i| a_dot(tab, i, &ac)).collect();
+    let sum = |g: &dyn Fn(usize) -> f64| (0..s).map(|i| w[i] * g(i)).sum::<f64>();
+    let mut out = vec![(sum(&|_| 1.0), 1.0)];
+    if order >= 2 {
+        out.push((sum(&|i| c[i]), 0.5));
+    }
+    if order >= 3 {
+        out.push((sum(&|i| c2[i]), 1.0 / 3.0));
+        out.push((sum(&|i| ac[i]), 1.0 / 6.0));
+    }
+    if order >= 4 {
+        out.push((sum(&|i| c2[i] * c[i]), 0.25));
+        out.push((sum(&|i| c[i] * ac[i]), 0.125));
+        out.push((sum(&|i| ac2[i]), 1.0 / 12.0));
+        out.push((sum(&|i| aac[i]), 1.0 / 24.0));
+    }
+    out
+}
+
+/// Each row of A sums to its node (cᵢ = Σⱼ aᵢⱼ), b and b̂ = b − e meet the
+/// order conditions of their orders (up to 4), and e sums to 0.
+#[test]
+fn tableaux_meet_the_order_conditions() {
+    for tab in [&DOPRI5, &BS32] {
+        let s = tab.stages();
+        assert_eq!((tab.a.len(), tab.c.len(), tab.e.len()), (s, s, s));
+        for i in 0..s {
+            assert_eq!(tab.a[i].len(), i, "{} row {i}", tab.name);
+            let row: f64 = tab.a[i].iter().sum();
+            assert!((row - tab.c[i]).abs() < 1e-14, "{} row {i}", tab.name);
+        }
+        let b_hat: Vec<f64> = tab.b.iter().zip(tab.e).map(|(b, e)| b - e).collect();
+        for (w, p) in [(tab.b, tab.order), (&b_hat[..], tab.error_order)] {
+            for (got, want) in conditions(tab, w, p.min(4)) {
+                assert!((got - want).abs() < 1e-14, "{}: {got} vs {want}", tab.name);
+            }
+        }
+        assert!(tab.e.iter().sum::<f64>().abs() < 1e-15);
+    }
+}
+
+/// On ẏ = y one step's local error is O(h^(p+1)) for y₁ and the estimate
+/// ê is O(h^(p̂+1)): halving h divides them by 2^(p+1) and 2^(p̂+1)
+/// (64 and 32 for DOPRI5, 16 and 8 for BS32), within 15%.
+#[test]
+fn local_errors_have_the_stated_orders() {
+    for tab in [&DOPRI5, &BS32] {
+        let one = |h: f64| {
+            let mut k = [[0.0]; MAX_STAGES];
+            let mut f = |_t: f64, y: &[f64; 1], d: &mut [f64; 1]| d[0] = y[0];
+            k[0] = [1.0];
+            let (y1, e) = trial(tab, &mut f, 0.0, &[1.0], &mut k, h);
+            ((y1[0] - h.exp()).abs(), e[0].abs())
+        };
+        let (a, b) = (one(0.1), one(0.05));
+        let p = f64::from(2u32.pow(tab.order + 1));
+        let q = f64::from(2u32.pow(tab.error_order + 1));
+        assert!(
+            (a.0 / b.0 / p - 1.0).abs() < 0.15,
+            "{}: {}",
+            tab.name,
+            a.0 / b.0
+        );
+        assert!(
+            (a.1 / b.1 / q - 1.0).abs() < 0.15,
+            "{}: {}",
+            tab.name,
+            a.1 / b.1
+        );
+    }
+}
+
+/// A linear test problem with its closed form.
+struct Case {
+    name: &'static str,
+    f: fn(f64, &[f64; 2], &mut [f64; 2]),
+    exact: fn(f64) -> f64,
+}
+
+const W: f64 = 2.0 * core::f64::consts::PI * 5.0; // 5 Hz
+const ZETA: f64 = 0.2;
+
+fn cases() -> [Case; 3] {
+    [
+        // ẋ = −x + 1, x(0) = 0: x = 1 − e^{−t}.
+        Case {
+            name: "first-order step",
+            f: |_t, y, d| *d = [-y[0] + 1.0, 0.0],
+            exact: |t| 1.0 - (-t).exp(),
+        },
+        // ẋ = −x + sin 2t, x(0) = 0: x = (sin 2t − 2 cos 2t + 2e^{−t})/5
+        // (particular solution A sin + B cos with A − 2B = 1, 2A + B = 0).
+        Case {
+            name: "first-order sine",
+            f: |t, y, d| *d = [-y[0] + (2.0 * t).sin(), 0.0],
+            exact: |t| ((2.0 * t).sin() - 2.0 * (2.0 * t).cos() + 2.0 * (-t).exp()) / 5.0,
+        },
+        // ẍ + 2ζωẋ + ω²x = ω² (a unit step), at rest: x = 1 − e^{−ζωt}
+        // (cos ω_d t + ζ/√(1−ζ²) sin ω_d t), ω_d = ω√(1−ζ²).
+        Case {
+            name: "damped oscillator step",
+            f: |_t, y, d| *d = [y[1], W * W * (1.0 - y[0]) - 2.0 * ZETA * W * y[1]],
+            exact: |t| {
+                let r = (1.0 - ZETA * ZETA).sqrt();
+                let wd = W * r;
+                1.0 - (-ZETA * W * t).exp() * ((wd * t).cos() + ZETA / r * (wd * t).sin())
+            },
+        },
+    ]
+}
+
+/// The largest |x − x_exact| at the samples of a 1 s loop over 0–10 s,
+/// integrated sample to sample as the simulator does (restarting at each),
+/// with rtol = atol = `tol`; and the counts.
+fn run(tab: &Tableau, case: &Case, tol: f64) -> (f64, StepCounts) {
+    let period = 1.0;
+    let ctl = StepControl {
+        max_step: period,
+        max_steps: 10_000_000,
+    };
+    let norm = |y0: &[f64; 2], y1: &[f64; 2], e: &[f64; 2]| scaled_rms(&[(y0, y1, e)], tol, &[tol]);
+    let mut a = Adaptive::new();
+    let mut y = [0.0; 2];
+    let mut worst: f64 = 0.0;
+    for k in 0..10u32 {
+        let (t0, t1) = (f64::from(k) * period, f64::from(k + 1) * period);
+        a.integrate(tab, &ctl, case.f, norm, |_| {}, t0, t1, &mut y)
+            .expect("within the budget");
+        worst = worst.max((y[0] - (case.exact)(t1)).abs());
+    }
+    (worst, a.counts)
+}
+
+/// The global error stays within C·tol, C = 10, for tol = rtol = atol
+/// from 1e-3 to 1e-8 (the solutions are of size 1, so tol is the scale),
+/// and falls as tol falls (by at least 10× over the five decades, with
+/// more steps taken at each tighter tolerance).
+#[test]
+fn global_error_is_held_to_the_tolerance() {
+    const C: f64 = 10.0;
+    for tab in [&DOPRI5, &BS32] {
+        for case in cases() {
+            let mut prev: Option<(f64, u64)> = None;
+            let mut first = None;
+            for tol in [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
+                let (err, n) = run(tab, &case, tol);
+                std::println!(
+                    "{} {}: tol {tol:e} error {err:.3e} steps {n:?}",
+                    tab.name,
+                    case.name
+                );
+                assert!(
+                    err <= C * tol,
+                    "{} {}: error {err:e} at tol {tol:e}",
+                    tab.name,
+                    case.name
+                );
+                if let Some((_, steps)) = prev {
+                    assert!(
+                        n.accepted >= steps,
+                        "{} {}: fewer steps at {tol:e}",
+                        tab.name,
+                        case.name
+                    );
+                }
+                first.get_or_insert(err);
+                prev = Some((err, n.accepted));
+            }
+            let (last, _) = prev.expect("ran");
+            let first = first.expect("ran");
+            assert!(
+                last * 10.0 < first.max(1e-16),
+                "{} {}: {first:e} → {last:e}",
+                tab.name,
+                case.name
+            );
+        }
+    }
+}
+
+/// A stiff-ish problem (ẏ = −2000·(y − cos t), stiffness far beyond the
+/// accuracy's step at a loose tolerance) makes the controller reject
+/// steps; the counts record them, and the step budget stops the
+/// integration as a result, not a hang.
+#[test]
+fn rejections_are_counted_and_the_budget_holds() {
+    let f = |t: f64, y: &[f64; 1], d: &mut [f64; 1]| d[0] = -2000.0 * (y[0] - t.cos());
+    let norm =
+        |y0: &[f64; 1], y1: &[f64; 1], e: &[f64; 1]| scaled_rms(&[(y0, y1, e)], 1e-3, &[1e-6]);
+    let ctl = StepControl {
+        max_step: 1.0,
+        max_steps: 1_000_000,
+    };
+    let mut a = Adaptive::new();
+    let mut y = [0.0];
+    a.integrate(&DOPRI5, &ctl, f, norm, |_| {}, 0.0, 1.0, &mut y)
+        .expect("within the budget");
+    assert!(a.counts.rejected > 0, "{:?}", a.counts);
+    // The slow solution y ≈ cos t (error O(1/2000) from the lag sin t/2000).
+    assert!((y[0] - 1f64.cos()).abs() < 1e-3);
+    let small = StepControl {
+        max_step: 1.0,
+        max_steps: 10,
+    };
+    let mut b = Adaptive::new();
+    let mut y = [0.0];
+    let r = b.integrate(&DOPRI5, &small, f, norm, |_| {}, 0.0, 1.0, &mut y);
+    assert!(matches!(r, Err(Failure::StepBudget { .. })), "{r:?}");
+    assert_eq!(b.counts.total(), 10);
+}
+
+/// A right-hand side that is NaN beyond t = 0.5 cannot be integrated past
+/// it: every trial there is rejected until the step is under ten ulps,
+/// and the integration says so at t ≤ 0.5.
+#[test]
+fn a_non_finite_right_hand_side_stops_as_a_result() {
+    let f = |t: f64, _y: &[f64; 1], d: &mut [f64; 1]| d[0] = if t > 0.5 { f64::NAN } else { 1.0 };
+    let norm =
+        |y0: &[f64; 1], y1: &[f64; 1], e: &[f64; 1]| scaled_rms(&[(y0, y1, e)], 1e-6, &[1e-9]);
+    let ctl = StepControl {
+        max_step: 0.1,
+        max_steps: 100_000,
+    };
+    let mut a = Adaptive::new();
+    let mut y = [0.0];
+    match a.integrate(&DOPRI5, &ctl, f, norm, |_| {}, 0.0, 1.0, &mut y) {
+        Err(Failure::StepTooSmall { t, .. }) => assert!(t <= 0.5, "{t}"),
+        r => panic!("{r:?}"),
+    }
+    assert!(y[0].is_finite());
+}
+
+/// The scaled norm by hand: ê = (1e-6, 2e-6), y = (1, −3), rtol 1e-3,
+/// atol (1e-4, 1e-3): scales 1e-4 + 1e-3 = 1.1e-3 and 1e-3 + 3e-3 = 4e-3;
+/// ratios 9.0909e-4 and 5e-4; rms = √((8.2645e-7 + 2.5e-7)/2) = 7.3363e-4.
+#[test]
+fn scaled_rms_by_hand() {
+    let r = scaled_rms(
+        &[(&[1.0, -3.0], &[1.0, -3.0], &[1e-6, 2e-6])],
+        1e-3,
+        &[1e-4, 1e-3],
+    );
+    let want = ((1e-6f64 / 1.1e-3).powi(2) / 2.0 + (2e-6f64 / 4e-3).powi(2) / 2.0).sqrt();
+    assert!(
+        (r - want).abs() < 1e-15 && (r - 7.3363e-4).abs() < 1e-8,
+        "{r}"
+    );
+}
