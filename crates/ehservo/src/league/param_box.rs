@@ -60,10 +60,7 @@ impl BoxCfg {
         if self.keys.is_empty() || self.keys.len() > MAX_BOX_KEYS {
             return Err((
                 "keys".into(),
-                format!(
-                    "vary 1 to {MAX_BOX_KEYS} keys (got {})",
-                    self.keys.len()
-                ),
+                format!("vary 1 to {MAX_BOX_KEYS} keys (got {})", self.keys.len()),
             ));
         }
         for (k, [lo, hi]) in &self.keys {

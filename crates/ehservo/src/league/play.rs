@@ -30,7 +30,11 @@ pub(super) fn build_with(
             )
         })
         .into_iter()
-        .chain(point.iter().map(|(k, v)| (k.clone(), toml::Value::Float(*v))))
+        .chain(
+            point
+                .iter()
+                .map(|(k, v)| (k.clone(), toml::Value::Float(*v))),
+        )
         .collect();
     c.scenario.with_values_on(tab, &sets)
 }
@@ -170,7 +174,10 @@ pub fn play(
                         controller: ci,
                         scenario: si,
                         draw: d,
-                        seed: case.run(d).0.unwrap_or(case.scenario.scenario().uncertainty.seed),
+                        seed: case
+                            .run(d)
+                            .0
+                            .unwrap_or(case.scenario.scenario().uncertainty.seed),
                         metrics: None,
                         refused: Some(reason.to_string()),
                         energy: None,

@@ -185,7 +185,9 @@ pub fn runs_csv(l: &League, r: &LeagueResult) -> String {
             csv_text(case),
             c.draw,
             c.seed,
-            csv_text(&super::param_box::point_text(l.cases[c.scenario].run(c.draw).1)),
+            csv_text(&super::param_box::point_text(
+                l.cases[c.scenario].run(c.draw).1
+            )),
             name,
             case,
             csv_text(c.refused.as_deref().unwrap_or("")),

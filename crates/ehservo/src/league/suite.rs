@@ -458,8 +458,9 @@ impl Loader<'_> {
     fn box_points(&self, key: &str, b: &BoxCfg, case: &Case) -> Result<Vec<Point>, InputError> {
         b.check()
             .map_err(|(k, r)| self.bad(&format!("{key}.box.{k}"), r))?;
-        let runs = (case.seeds.len() as u64)
-            .saturating_mul(if b.corners { 1u64 << b.keys.len() } else { 0 }.saturating_add(b.draws));
+        let runs = (case.seeds.len() as u64).saturating_mul(
+            if b.corners { 1u64 << b.keys.len() } else { 0 }.saturating_add(b.draws),
+        );
         if runs > MAX_DRAWS {
             return Err(self.bad(
                 &format!("{key}.box"),
