@@ -50,7 +50,7 @@ fn settle(p: &Ifac9007Plant, u: f64, t: f64) -> [f64; 3] {
 /// b = 64.073227·10.75/0.1287 = 688.78719/0.1287 = 5351.882.
 #[test]
 fn nominal_model_is_the_source_matrices_in_the_papers_form() {
-    let m = nominal(0.0).nominal().clone();
+    let m = *nominal(0.0).nominal();
     let c = m.coeffs;
     assert_eq!(c.a1, 0.0);
     assert!((c.a2 - 57552.34).abs() < 0.01, "a2 = {}", c.a2);
