@@ -20,6 +20,8 @@
 //! draws from a ChaCha8 stream seeded by `seed`), so a league is the same
 //! on any thread count.
 
+use super::{build_with, Case, MAX_DRAWS};
+use crate::scenario::ControllerCfg;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -108,6 +110,43 @@ impl BoxCfg {
         }
         out
     }
+}
+
+impl Case {
+    /// Its runs: every seed at every point.
+    pub fn runs(&self) -> usize {
+        self.seeds.len() * self.points.len()
+    }
+
+    /// Run `d`'s seed and point (the points vary fastest).
+    pub fn run(&self, d: usize) -> (Option<u64>, &[(String, f64)]) {
+        let n = self.points.len();
+        (self.seeds[d / n], &self.points[d % n])
+    }
+}
+
+/// The points of `b` on the case `case`, each checked to build on its
+/// scenario (a key that is no scenario key, a value its plant refuses);
+/// the error is the key inside `box` and the reason.
+pub(super) fn checked_points(b: &BoxCfg, case: &Case) -> Result<Vec<Point>, (String, String)> {
+    b.check()?;
+    let corners = if b.corners { 1u64 << b.keys.len() } else { 0 };
+    let runs = (case.seeds.len() as u64).saturating_mul(corners.saturating_add(b.draws));
+    if runs > MAX_DRAWS {
+        return Err((
+            String::new(),
+            format!("{runs} runs (draws × (corners + box draws)) is more than {MAX_DRAWS}"),
+        ));
+    }
+    let points = b.points();
+    let table = ControllerCfg::default().to_table();
+    for p in &points {
+        let mut c = case.clone();
+        c.points = vec![p.clone()];
+        build_with(&c, &table, 0)
+            .map_err(|r| ("keys".to_string(), format!("at {}: {r}", point_text(p))))?;
+    }
+    Ok(points)
 }
 
 /// `key=value;…`: a point as `ehservo run --set` overrides (runs.csv).

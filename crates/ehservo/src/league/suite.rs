@@ -2,7 +2,7 @@
 //! `[tuning]`, `[margin]`), and [`League`], the file checked, its
 //! scenarios loaded and its tunes built, with the work it asks for.
 
-use super::param_box::{BoxCfg, Point};
+use super::param_box::{checked_points, BoxCfg, Point};
 use super::{build_with, Margin};
 use crate::error::InputError;
 use crate::scenario::{ControllerCfg, Loop};
@@ -200,19 +200,6 @@ pub struct Case {
     /// The box's points, each run under every seed (one empty point
     /// without a box: the scenario as written).
     pub points: Vec<Point>,
-}
-
-impl Case {
-    /// Its runs: every seed at every point.
-    pub fn runs(&self) -> usize {
-        self.seeds.len() * self.points.len()
-    }
-
-    /// Run `d`'s seed and point (the points vary fastest).
-    pub fn run(&self, d: usize) -> (Option<u64>, &[(String, f64)]) {
-        let n = self.points.len();
-        (self.seeds[d / n], &self.points[d % n])
-    }
 }
 
 /// A suite, checked.
@@ -446,40 +433,13 @@ impl Loader<'_> {
                 points: vec![Vec::new()],
             };
             if let Some(b) = &e.param_box {
-                case.points = self.box_points(&key, b, &case)?;
+                case.points = checked_points(b, &case).map_err(|(k, r)| {
+                    self.bad(format!("{key}.box.{k}").trim_end_matches('.'), r)
+                })?;
             }
             cases.push(case);
         }
         Ok(cases)
-    }
-
-    /// The points of a `[scenario.box]`, each checked to build on the
-    /// scenario (a key that is no scenario key, a value its plant refuses).
-    fn box_points(&self, key: &str, b: &BoxCfg, case: &Case) -> Result<Vec<Point>, InputError> {
-        b.check()
-            .map_err(|(k, r)| self.bad(&format!("{key}.box.{k}"), r))?;
-        let runs = (case.seeds.len() as u64).saturating_mul(
-            if b.corners { 1u64 << b.keys.len() } else { 0 }.saturating_add(b.draws),
-        );
-        if runs > MAX_DRAWS {
-            return Err(self.bad(
-                &format!("{key}.box"),
-                format!("{runs} runs (draws × (corners + box draws)) is more than {MAX_DRAWS}"),
-            ));
-        }
-        let points = b.points();
-        let table = ControllerCfg::default().to_table();
-        for p in &points {
-            let mut c = case.clone();
-            c.points = vec![p.clone()];
-            build_with(&c, &table, 0).map_err(|r| {
-                self.bad(
-                    &format!("{key}.box.keys"),
-                    format!("at {}: {r}", super::param_box::point_text(p)),
-                )
-            })?;
-        }
-        Ok(points)
     }
 
     /// The seed of each draw of a `[[scenario]]` (None: the scenario's own).
