@@ -78,6 +78,16 @@ pub enum Reason {
     /// Any other reason, as a sentence.
     #[error("{0}")]
     Other(String),
+    /// A value outside a published box (a benchmark's parameter range).
+    #[error("must lie in the published box [{low}, {high}] (got {value:?}); set widen_box = true to leave it")]
+    OutsideBox {
+        /// The value given.
+        value: f64,
+        /// The box's lower end.
+        low: f64,
+        /// The box's upper end.
+        high: f64,
+    },
 }
 
 /// A name that is none of the known ones.

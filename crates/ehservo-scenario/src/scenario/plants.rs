@@ -246,6 +246,7 @@ plants! {
     ThirdOrder "third-order" => ThirdOrderCfg,
     Physical "physical" => PhysicalCfg,
     Cylinder "cylinder" => ehservo_sim::cylinder::CylinderCfg,
+    Ifac9007 "ifac9007" => ehservo_sim::ifac9007::Ifac9007Cfg,
 }
 
 impl Default for PlantCfg {

@@ -26,6 +26,7 @@
 
 mod actuator_stage;
 mod cylinder;
+mod ifac9007;
 mod plants;
 
 pub use actuator_stage::ActuatorStage;

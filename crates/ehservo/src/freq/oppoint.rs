@@ -67,6 +67,8 @@ pub enum LinPlant {
     Physical(PhysicalPlant),
     /// `plant.model = "cylinder"`.
     Cylinder(Box<CylinderLin>),
+    /// `plant.model = "ifac9007"`.
+    Ifac9007(ehservo_sim::ifac9007::Ifac9007Plant),
 }
 
 impl LinPlant {
@@ -93,6 +95,8 @@ impl LinPlant {
                 *f,
                 0.0,
             )))),
+            // Linear: its factors vary its parameters.
+            scenario::AnyPlant::Ifac9007(p) => Ok(LinPlant::Ifac9007(p.with_factors(f))),
             // Any plant registered later (a new one need not be named here
             // to build: its computed responses are refused until it is).
             #[allow(unreachable_patterns)]
@@ -112,6 +116,7 @@ impl LinPlant {
             LinPlant::Third(p) => p,
             LinPlant::Physical(p) => p,
             LinPlant::Cylinder(p) => p.as_ref(),
+            LinPlant::Ifac9007(p) => p,
         }
     }
 
@@ -121,6 +126,7 @@ impl LinPlant {
             LinPlant::Third(p) => p.state_of(s),
             LinPlant::Physical(p) => p.state_of(s),
             LinPlant::Cylinder(p) => p.state_of(s),
+            LinPlant::Ifac9007(p) => p.state_of(s),
         }
     }
 

@@ -22,6 +22,9 @@
 //! set = ["simulation.horizon=5"]   # overrides, as `ehservo run --set`
 //! draws = 20                  # uncertainty draws (uncertainty.seed = first_seed, first_seed + 1, …)
 //! first_seed = 10             # default 0 (with one draw: the scenario's own seed)
+//! [scenario.box]              # optional: the worst case over a box of keys,
+//! keys = { "plant.m" = [0.05, 0.3] }   # its 2^k corners and `draws` points
+//! draws = 20                  # drawn inside (param_box), each run per seed
 //!
 //! [tuning]                    # the one budget every tuned controller gets:
 //! scenarios = ["../paper/fig2.toml"]   # the keys of an `ehservo tune` file
@@ -59,6 +62,7 @@
 //! the thread count.
 
 mod margin;
+pub mod param_box;
 mod play;
 pub mod report;
 mod suite;

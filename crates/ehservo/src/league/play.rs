@@ -17,10 +17,11 @@ use std::path::Path;
 pub(super) fn build_with(
     c: &Case,
     table: &toml::Table,
-    seed: Option<u64>,
+    run: usize,
 ) -> Result<Loop, crate::scenario::ScenarioError> {
     let mut tab = c.table.clone();
     tab.insert("controller".into(), toml::Value::Table(table.clone()));
+    let (seed, point) = c.run(run);
     let sets: Vec<(String, toml::Value)> = seed
         .map(|s| {
             (
@@ -29,6 +30,11 @@ pub(super) fn build_with(
             )
         })
         .into_iter()
+        .chain(
+            point
+                .iter()
+                .map(|(k, v)| (k.clone(), toml::Value::Float(*v))),
+        )
         .collect();
     c.scenario.with_values_on(tab, &sets)
 }
@@ -161,14 +167,17 @@ pub fn play(
             .par_iter()
             .map(|&(ci, si, d)| {
                 let case = &l.cases[si];
-                let r = build_with(case, &standings[ci].table, case.seeds[d]);
+                let r = build_with(case, &standings[ci].table, d);
                 progress.inc(1);
                 match r {
                     Err(reason) => Cell {
                         controller: ci,
                         scenario: si,
                         draw: d,
-                        seed: case.seeds[d].unwrap_or(case.scenario.scenario().uncertainty.seed),
+                        seed: case
+                            .run(d)
+                            .0
+                            .unwrap_or(case.scenario.scenario().uncertainty.seed),
                         metrics: None,
                         refused: Some(reason.to_string()),
                         energy: None,
@@ -215,7 +224,7 @@ pub fn play(
 /// The scenario file of controller `ci` on case `si` (its first draw).
 fn cell_scenario(l: &League, r: &LeagueResult, ci: usize, si: usize) -> Result<String> {
     let case = &l.cases[si];
-    let mut s = build_with(case, &r.standings[ci].table, case.seeds[0])
+    let mut s = build_with(case, &r.standings[ci].table, 0)
         .map_err(|e| anyhow::anyhow!("{e}"))?
         .scenario()
         .clone();

@@ -165,7 +165,7 @@ pub fn league_csv(l: &League, rows: &[Row]) -> String {
 /// runs.csv: a row per run, with every metric and the scenario file that
 /// reproduces it.
 pub fn runs_csv(l: &League, r: &LeagueResult) -> String {
-    let mut s = String::from("controller,scenario,draw,seed,file,refused,energy_V2s");
+    let mut s = String::from("controller,scenario,draw,seed,set,file,refused,energy_V2s");
     for n in crate::metrics::Metrics::csv_names(l.axis) {
         s.push(',');
         s.push_str(n);
@@ -180,11 +180,14 @@ pub fn runs_csv(l: &League, r: &LeagueResult) -> String {
         let case = &l.cases[c.scenario].name;
         let _ = write!(
             s,
-            "{},{},{},{},scenarios/{}/{}.toml,{},{}",
+            "{},{},{},{},{},scenarios/{}/{}.toml,{},{}",
             csv_text(name),
             csv_text(case),
             c.draw,
             c.seed,
+            csv_text(&super::param_box::point_text(
+                l.cases[c.scenario].run(c.draw).1
+            )),
             name,
             case,
             csv_text(c.refused.as_deref().unwrap_or("")),
@@ -320,6 +323,16 @@ fn setup_lines(l: &League) -> Vec<String> {
             (1, Some(s)) => format!("seed {s}"),
             (n, Some(s)) => format!("{n} draws, seeds {s}–{}", s + n as u64 - 1),
             (n, None) => format!("{n} draws"),
+        };
+        let points = c.points.len();
+        let draws = if points > 1 || !c.points[0].is_empty() {
+            let keys: Vec<&str> = c.points[0].iter().map(|(k, _)| k.as_str()).collect();
+            format!(
+                "{draws}, each at {points} points of the box of {} (its corners and draws inside; the worst counts)",
+                keys.join(", ")
+            )
+        } else {
+            draws
         };
         v.push(format!(
             "Scenario `{}`: {} — {}.",

@@ -2,6 +2,7 @@
 //! `[tuning]`, `[margin]`), and [`League`], the file checked, its
 //! scenarios loaded and its tunes built, with the work it asks for.
 
+use super::param_box::{checked_points, BoxCfg, Point};
 use super::{build_with, Margin};
 use crate::error::InputError;
 use crate::scenario::{ControllerCfg, Loop};
@@ -53,6 +54,10 @@ pub struct ScenarioEntry {
     /// with one draw, 0 with several).
     #[serde(default)]
     pub first_seed: Option<u64>,
+    /// A box of keys whose corners and inner points are each run, under
+    /// every draw (`[scenario.box]`, [`super::param_box`]).
+    #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
+    pub param_box: Option<BoxCfg>,
 }
 
 fn one() -> u64 {
@@ -192,6 +197,9 @@ pub struct Case {
     pub(super) table: toml::Table,
     /// The seed of each draw (None: the scenario's own).
     pub seeds: Vec<Option<u64>>,
+    /// The box's points, each run under every seed (one empty point
+    /// without a box: the scenario as written).
+    pub points: Vec<Point>,
 }
 
 /// A suite, checked.
@@ -295,13 +303,13 @@ impl League {
         for (i, c) in self.cases.iter().enumerate() {
             b.add(
                 &format!("scenario[{i}].draws"),
-                n * c.seeds.len() as f64,
+                n * c.runs() as f64,
                 run_evaluations(c.scenario.scenario()),
                 format!(
-                    "scenario `{}`: {} controllers × {} draws",
+                    "scenario `{}`: {} controllers × {} runs",
                     c.name,
                     self.contestants.len(),
-                    c.seeds.len()
+                    c.runs()
                 ),
             );
         }
@@ -326,7 +334,7 @@ impl League {
         let mut out = Vec::new();
         for ci in 0..self.contestants.len() {
             for (si, c) in self.cases.iter().enumerate() {
-                for d in 0..c.seeds.len() {
+                for d in 0..c.runs() {
                     out.push((ci, si, d));
                 }
             }
@@ -417,12 +425,19 @@ impl Loader<'_> {
             }
             let seeds = self.seeds(&key, e)?;
             let table = self.table_of(&key, &scenario)?;
-            cases.push(Case {
+            let mut case = Case {
                 name,
                 scenario,
                 table,
                 seeds,
-            });
+                points: vec![Vec::new()],
+            };
+            if let Some(b) = &e.param_box {
+                case.points = checked_points(b, &case).map_err(|(k, r)| {
+                    self.bad(format!("{key}.box.{k}").trim_end_matches('.'), r)
+                })?;
+            }
+            cases.push(case);
         }
         Ok(cases)
     }
@@ -534,7 +549,7 @@ impl Loader<'_> {
         }
         table.extend(e.params.clone());
         for c in cases {
-            build_with(c, &table, None).map_err(|r| {
+            build_with(c, &table, 0).map_err(|r| {
                 self.bad(
                     &format!("{key}.params"),
                     format!("on scenario `{}`: {r}", c.name),

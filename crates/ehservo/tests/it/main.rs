@@ -23,6 +23,7 @@ mod hopsan;
 mod house;
 mod identify;
 mod identify_hostile;
+mod ifac9007;
 mod independent;
 mod k1_closed_form;
 mod league;
