@@ -77,6 +77,13 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
             cfg.step,
             horizon
         ),
+        FmuKind::Plant => format!(
+            "The {} plant of scenario {:?} with its actuator (input u in V, held over each step of {} s; {} RK4 sub-steps a step)",
+            s.plant.model(),
+            s.name,
+            cfg.step,
+            cfg.substeps.max(1)
+        ),
     };
     let mut x = String::new();
     x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
@@ -103,6 +110,9 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
         "    <Unit name=\"m/s2\"><BaseUnit m=\"1\" s=\"-2\"/></Unit>\n",
         "    <Unit name=\"mm\"><BaseUnit m=\"1\" factor=\"0.001\"/></Unit>\n",
         "    <Unit name=\"V\"><BaseUnit kg=\"1\" m=\"2\" s=\"-3\" A=\"-1\"/></Unit>\n",
+        "    <Unit name=\"N\"><BaseUnit kg=\"1\" m=\"1\" s=\"-2\"/></Unit>\n",
+        "    <Unit name=\"N.m\"><BaseUnit kg=\"1\" m=\"2\" s=\"-2\"/></Unit>\n",
+        "    <Unit name=\"Pa\"><BaseUnit kg=\"1\" m=\"-1\" s=\"-2\"/><DisplayUnit name=\"bar\" factor=\"1e-05\"/></Unit>\n",
         "  </UnitDefinitions>\n",
         "  <LogCategories>\n",
         "    <Category name=\"logStatusError\" description=\"Errors: bad calls, bad values\"/>\n",
@@ -114,20 +124,31 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
         cfg.step
     ));
     x.push_str("  <ModelVariables>\n");
-    let vars = variables_on(kind, s.plant.axis());
+    let vars = match kind {
+        FmuKind::Plant => {
+            let p = crate::stepper::PlantStepper::new(lp);
+            plant_variables(p.axis(), p.states(), p.takes_external_load())
+        }
+        _ => variables_on(kind, s.plant.axis()),
+    };
     for v in &vars {
         let (causality, rest) = match v.causality {
             Causality::Independent => ("independent", String::new()),
             Causality::Input => ("input", " start=\"0\"".to_string()),
             Causality::Output => ("output", String::new()),
         };
-        let variability = if v.vr == vr::U {
+        let variability = if v.vr == vr::U && kind != FmuKind::Plant {
             "discrete"
         } else {
             "continuous"
         };
+        let display = if v.unit == "Pa" {
+            " displayUnit=\"bar\""
+        } else {
+            ""
+        };
         x.push_str(&format!(
-            "    <Float64 name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\" unit=\"{}\"{rest}/>\n",
+            "    <Float64 name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\" unit=\"{}\"{display}{rest}/>\n",
             v.name,
             v.vr,
             crate::output::escape::html(v.description),
@@ -135,26 +156,16 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
         ));
     }
     x.push_str("  </ModelVariables>\n  <ModelStructure>\n");
-    let inputs: Vec<String> = vars
-        .iter()
-        .filter(|v| v.causality == Causality::Input)
-        .map(|v| v.vr.to_string())
-        .collect();
     for tag in ["Output", "InitialUnknown"] {
         for v in vars.iter().filter(|v| v.causality == Causality::Output) {
-            // u depends on the inputs (the law at the current sample);
-            // everything else on none of them.
-            let deps = if v.vr == vr::U {
-                inputs.join(" ")
-            } else {
-                String::new()
-            };
-            let kinds = if deps.is_empty() {
+            let on = direct_inputs(kind, v.vr, &vars);
+            let deps = on.join(" ");
+            let kinds = if on.is_empty() {
                 String::new()
             } else {
                 format!(
                     " dependenciesKind=\"{}\"",
-                    vec!["dependent"; inputs.len()].join(" ")
+                    vec!["dependent"; on.len()].join(" ")
                 )
             };
             x.push_str(&format!(
@@ -165,6 +176,24 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
     }
     x.push_str("  </ModelStructure>\n</fmiModelDescription>\n");
     x
+}
+
+/// The inputs an output depends on directly (its value at a time changes
+/// when they are set): the controller's u on its measurements (the law at
+/// the current sample); the plant's u_plant on u (through the actuator)
+/// and its acceleration on the external load (the force balance); nothing
+/// else on any input.
+fn direct_inputs(kind: FmuKind, output: u32, vars: &[Variable]) -> Vec<String> {
+    let inputs = vars.iter().filter(|v| v.causality == Causality::Input);
+    let on: Vec<u32> = match (kind, output) {
+        (FmuKind::Controller, vr::U) => inputs.map(|v| v.vr).collect(),
+        (FmuKind::Plant, vr::U_PLANT) => vec![vr::U],
+        (FmuKind::Plant, vr::THETA_DDOT) => {
+            inputs.map(|v| v.vr).filter(|r| *r == vr::F_LOAD).collect()
+        }
+        _ => Vec::new(),
+    };
+    on.iter().map(u32::to_string).collect()
 }
 
 /// Where `ehservo fmu` looks for the FMU's binary when `--binary` is not

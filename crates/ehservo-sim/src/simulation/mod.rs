@@ -31,9 +31,11 @@
 //! does I/O.
 
 mod continuous;
+mod plant_alone;
 mod sample;
 mod sampled;
 
+pub use plant_alone::{PlantAlone, PlantOutput};
 pub use sample::{Divergence, DivergenceReason, Outcome, Sample, Stop, MAX_PARTS, MAX_STATES};
 use sampled::FirstStage;
 
