@@ -244,3 +244,5 @@ unsafe fn text(p: *const c_char) -> Option<String> {
     // SAFETY: non-null, NUL-terminated by FMI's contract.
     Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
 }
+#[cfg(test)]
+mod tests;
