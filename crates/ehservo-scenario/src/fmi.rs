@@ -8,7 +8,9 @@
 //! Angles are in rad (SI, as everywhere in the C ABI); `e_deg` and
 //! `e_max_deg` are in degrees as `summary.json` gives them. On a linear
 //! axis ([`variables_on`]) the position is `y` in m and the error's display
-//! `e_mm` and metric `e_max` are in mm, at the same value references.
+//! `e_mm` and metric `e_max` are in mm, at the same value references. The
+//! plant FMU's variables ([`plant_variables`]) depend on its plant: x in
+//! the same units, the pressures in Pa, and a load input on a cylinder.
 /// The FMU's `modelIdentifier` (and the binary's file stem).
 pub const MODEL_IDENTIFIER: &str = "ehservo";
 

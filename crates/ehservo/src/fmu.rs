@@ -1,5 +1,5 @@
-//! `ehservo fmu`: a scenario's controller (or its whole closed loop) as an
-//! FMI 3.0 co-simulation FMU.
+//! `ehservo fmu`: a scenario's controller (or its whole closed loop, or its
+//! plant with its actuator) as an FMI 3.0 co-simulation FMU.
 //!
 //! The FMU is a zip holding `modelDescription.xml` (written here),
 //! `binaries/x86_64-linux/ehservo.so` (the `ehservo-ffi` cdylib, whose

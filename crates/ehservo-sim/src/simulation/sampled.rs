@@ -211,7 +211,6 @@ impl Held {
             };
             // The same k1 = f(t, y) that rk4_step would compute.
             let k1 = k1.as_ref().filter(|_| j == 0);
-            let y = &mut *y;
             // A stiff plant (Plant::stiffness) splits this step so
             // that RK4 stays stable; never for the paper's plants,
             // whose step is then the one below, untouched.
