@@ -252,9 +252,34 @@ pub fn variables_on(kind: FmuKind, axis: crate::axis::Axis) -> Vec<Variable> {
 pub fn variables(kind: FmuKind) -> &'static [Variable] {
     match kind {
         FmuKind::Controller => CONTROLLER,
-        FmuKind::ClosedLoop | FmuKind::Plant => CLOSED_LOOP,
+        FmuKind::ClosedLoop => CLOSED_LOOP,
+        FmuKind::Plant => PLANT,
     }
 }
+
+/// The plant FMU's variables that every plant has (x as the closed loop's,
+/// u in, u_plant out); [`plant_variables`] adds a plant's load input and
+/// pressures.
+const PLANT: &[Variable] = &[
+    TIME,
+    CLOSED_LOOP[1],
+    CLOSED_LOOP[2],
+    CLOSED_LOOP[3],
+    Variable {
+        vr: vr::U,
+        name: "u",
+        causality: Causality::Input,
+        unit: "V",
+        description: "Command to the servo valve, held over each communication step",
+    },
+    Variable {
+        vr: vr::U_PLANT,
+        name: "u_plant",
+        causality: Causality::Output,
+        unit: "V",
+        description: "What the plant receives after the actuator",
+    },
+];
 
 /// The plant FMU's variables on `axis`: the input `u` (V) and, when the
 /// plant takes one (`external_load`), `f_load` (N on a linear axis, N.m
@@ -267,17 +292,7 @@ pub fn plant_variables(
     states: &'static [ehservo_core::control::Signal],
     external_load: bool,
 ) -> Vec<Variable> {
-    let x = variables_on(FmuKind::ClosedLoop, axis)
-        .into_iter()
-        .filter(|v| matches!(v.vr, vr::TIME | vr::THETA | vr::THETA_DOT | vr::THETA_DDOT));
-    let mut out: Vec<Variable> = x.collect();
-    out.push(Variable {
-        vr: vr::U,
-        name: "u",
-        causality: Causality::Input,
-        unit: "V",
-        description: "Command to the servo valve, held over each communication step",
-    });
+    let mut out = variables_on(FmuKind::Plant, axis);
     if external_load {
         let (unit, description) = match axis {
             crate::axis::Axis::Linear => (
@@ -297,13 +312,6 @@ pub fn plant_variables(
             description,
         });
     }
-    out.push(Variable {
-        vr: vr::U_PLANT,
-        name: "u_plant",
-        causality: Causality::Output,
-        unit: "V",
-        description: "What the plant receives after the actuator",
-    });
     for (i, s) in states.iter().enumerate() {
         if s.unit == "Pa" {
             out.push(Variable {

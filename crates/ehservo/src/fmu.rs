@@ -364,6 +364,48 @@ mod tests {
     }
 
     #[test]
+    fn a_plant_fmu_declares_its_inputs_outputs_and_units_by_plant() {
+        // The cylinder: u and the load force in, y in m, pressures in Pa
+        // shown in bar; the acceleration depends on the force directly.
+        let cyl = Loop::load(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../scenarios/cylinders/slide.toml"),
+            &[],
+        )
+        .unwrap();
+        let text = resource_toml(&cyl, FmuKind::Plant).unwrap();
+        let x = model_description(FmuKind::Plant, &cyl, &text);
+        for tag in [
+            "name=\"u\" valueReference=\"4\"",
+            "name=\"f_load\" valueReference=\"10\"",
+            "name=\"y\" valueReference=\"1\"",
+            "name=\"p_a\" valueReference=\"16\"",
+            "name=\"p_b\" valueReference=\"17\"",
+        ] {
+            assert_eq!(x.matches(tag).count(), 1, "{tag}");
+        }
+        assert!(x.contains("causality=\"input\" variability=\"continuous\" unit=\"N\""));
+        assert!(x.contains("unit=\"Pa\" displayUnit=\"bar\""));
+        assert!(x.contains("<DisplayUnit name=\"bar\" factor=\"1e-05\"/>"));
+        assert!(x.contains("<Output valueReference=\"3\" dependencies=\"10\""));
+        assert!(x.contains("<Output valueReference=\"9\" dependencies=\"4\""));
+        assert!(!x.contains("name=\"theta"), "no angle on a linear axis");
+        assert!(x.contains(&token(FmuKind::Plant, &text)));
+        assert_eq!(
+            check_token(&token(FmuKind::Plant, &text), &text),
+            Ok(FmuKind::Plant)
+        );
+        // The paper's servo: theta in rad, its load pressure, no load input.
+        let s = Loop::parse("name = \"fig2\"").unwrap();
+        let text = resource_toml(&s, FmuKind::Plant).unwrap();
+        let x = model_description(FmuKind::Plant, &s, &text);
+        assert!(x.contains("name=\"theta\" valueReference=\"1\""));
+        assert!(x.contains("name=\"p_load\" valueReference=\"16\""));
+        assert!(!x.contains("f_load"));
+        assert!(x.contains("<Output valueReference=\"3\" dependencies=\"\"/>"));
+    }
+
+    #[test]
     fn what_an_fmu_cannot_carry_is_refused() {
         let s = Loop::parse("[simulation]\nmode = \"continuous\"\n").unwrap();
         let e = resource_toml(&s, FmuKind::Controller).unwrap_err();
