@@ -144,7 +144,7 @@ enum Command {
     Freq(freq::FreqArgs),
     /// Export the scenario's controller (or, with --closed-loop, its whole loop; with --plant, its plant and actuator) as an FMI 3.0 co-simulation FMU.
     #[command(
-        after_help = "Examples:\n  ehservo fmu scenarios/paper/fig2.toml --closed-loop --out fig2-loop.fmu\n  ehservo fmu scenarios/cylinders/slide.toml --plant --out slide-plant.fmu"
+        after_help = "Example:\n  ehservo fmu scenarios/paper/fig2.toml --closed-loop --out fig2-loop.fmu\n  ehservo fmu scenarios/cylinders/slide.toml --plant --out slide-plant.fmu"
     )]
     Fmu(export::FmuArgs),
 }
