@@ -101,6 +101,10 @@ echo "== FMI 3.0 export checked by FMPy"
 cyl=(scenarios/cylinders/chrono-single-rod.toml --set simulation.horizon=3.0)
 "$bin/ehservo" run "${cyl[@]}" --out "$d/cyl" --no-plot -q
 "$bin/ehservo" fmu "${cyl[@]}" --closed-loop --out "$d/cyl-loop.fmu"
+# The plants alone, to be driven by the runs' commands: the cylinder (with
+# its spool) and the paper's servo.
+"$bin/ehservo" fmu "${cyl[@]}" --plant --out "$d/cyl-plant.fmu"
+"$bin/ehservo" fmu scenarios/paper/fig2.toml --plant --out "$d/fig2-plant.fmu"
 fmpy_skip=""
 if ! command -v python3 >/dev/null 2>&1; then
   fmpy_skip="python3 is not installed"
@@ -115,7 +119,8 @@ if [ -n "$fmpy_skip" ]; then
   echo "SKIPPED the FMPy checks: $fmpy_skip"
 else
   python3 ci/fmu_check.py "$d/controller.fmu" "$d/closed-loop.fmu" "$d/fig2/summary.json" \
-    --linear "$d/cyl-loop.fmu" "$d/cyl/summary.json"
+    --linear "$d/cyl-loop.fmu" "$d/cyl/summary.json" \
+    --plant "$d/cyl-plant.fmu" "$d/cyl/trace.csv" --plant "$d/fig2-plant.fmu" "$d/fig2/trace.csv"
 fi
 
 echo "-- the guide's C and FMU blocks (docs/guide/python-c-fmi.md), and FMPy's where it is installed"

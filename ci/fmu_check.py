@@ -2,7 +2,8 @@
 """Checks the FMUs of `ehservo fmu` with FMPy (ci/ffi.sh runs it).
 
   python3 ci/fmu_check.py CONTROLLER.fmu CLOSED_LOOP.fmu SUMMARY.json \
-      [--linear LINEAR_CLOSED_LOOP.fmu LINEAR_SUMMARY.json]
+      [--linear LINEAR_CLOSED_LOOP.fmu LINEAR_SUMMARY.json] \
+      [--plant PLANT.fmu TRACE.csv]...
 
 1. FMPy's model-description validation passes for both FMUs.
 2. The closed-loop FMU simulated by fmpy.simulate_fmu (its default
@@ -26,6 +27,14 @@
    fmpy.simulate_fmu over its default experiment its e_max output at the
    end and max |e_mm| over t >= settle (the FMU's resources/scenario.toml)
    are the run's summary.json metrics.e_max (unit "mm").
+
+7. With --plant (repeatable), a plant FMU (`ehservo fmu --plant`) passes
+   FMPy's validation, declares its position in m (linear) or rad (rotary)
+   and its pressures in Pa displayed in bar, and simulated by
+   fmpy.simulate_fmu with the input table u(t) = the run's u_V column of
+   TRACE.csv (the run of the same scenario) gives the run's position,
+   velocity and pressures in the trace's units (mm or deg, Pa), every
+   sample, to 1e-9 of each column's largest magnitude.
 
 Relative tolerance 1e-6 for the e_max comparisons; u in check 3 must be
 the same double. Exit 1 on any failure.
@@ -106,14 +115,69 @@ def check_linear(loop_path, summary_path, check):
           f"(rel. diff {rel_err(e_max_rec, expected):.2e})")
 
 
+def check_plant(plant_path, trace_path, check):
+    """7: a plant FMU under the run's commands gives the run's trace."""
+    import csv
+
+    import numpy as np
+
+    name = os.path.basename(plant_path)
+    problems = validate_fmu(plant_path)
+    check(not problems, f"{name}: FMPy validation "
+          + ("passes" if not problems else f"fails: {problems}"))
+    with open(trace_path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    cols = rows[0].keys()
+    linear = "y_mm" in cols
+    md = read_model_description(plant_path)
+    var = {v.name: v for v in md.modelVariables}
+    # FMU name -> (trace column, factor from the FMU's SI unit to the trace's)
+    if linear:
+        pos = {"y": ("y_mm", 1e3), "y_dot": ("y_dot_mm_s", 1e3)}
+        check(var["y"].unit == "m" and var["f_load"].unit == "N",
+              f"{name}: y in {var['y'].unit}, f_load in {var['f_load'].unit}")
+    else:
+        pos = {"theta": ("theta_deg", 180.0 / math.pi), "theta_dot": ("theta_dot_deg_s", 180.0 / math.pi)}
+        check(var["theta"].unit == "rad", f"{name}: theta in {var['theta'].unit}")
+    pressures = [n for n, v in var.items() if v.unit == "Pa"]
+    check(pressures and all(getattr(var[n], "displayUnit", "bar") == "bar" for n in pressures),
+          f"{name}: pressures {pressures} in Pa, displayed in bar")
+    compare = dict(pos)
+    compare.update({n: (f"{n}_Pa", 1.0) for n in pressures if f"{n}_Pa" in cols})
+    t = np.array([float(r["t_s"]) for r in rows])
+    # Every input in the table (f_load, on a cylinder, at 0 N as in the run).
+    inputs = ["u"] + (["f_load"] if "f_load" in var else [])
+    signals = np.array([(tt, float(r["u_V"])) + (0.0,) * (len(inputs) - 1) for tt, r in zip(t, rows)],
+                       dtype=[("time", np.float64)] + [(n, np.float64) for n in inputs])
+    h = float(md.defaultExperiment.stepSize)
+    res = simulate_fmu(plant_path, input=signals, output=list(compare), stop_time=float(t[-1]),
+                       output_interval=h)
+    check(len(res) == len(rows) and np.allclose(res["time"], t, rtol=0, atol=1e-9 * h),
+          f"{name}: {len(res)} samples to t = {res['time'][-1]} (the trace: {len(rows)})")
+    for n, (col, factor) in compare.items():
+        want = np.array([float(r[col]) for r in rows])
+        got = res[n][: len(want)] * factor
+        worst = float(np.max(np.abs(got - want)))
+        scale = float(np.max(np.abs(want))) or 1.0
+        check(worst <= 1e-9 * scale,
+              f"{name}: {n} under the run's u against the trace's {col}: "
+              f"worst difference {worst:.3g} (largest |{col}| {scale:.6g})")
+
+
 def main():
     ctl_path, loop_path, summary_path = sys.argv[1:4]
     linear = None
-    if len(sys.argv) > 4:
-        if sys.argv[4] != "--linear" or len(sys.argv) != 7:
+    plants = []
+    rest = sys.argv[4:]
+    while rest:
+        if rest[0] not in ("--linear", "--plant") or len(rest) < 3:
             print(__doc__)
             return 2
-        linear = sys.argv[5:7]
+        if rest[0] == "--linear":
+            linear = rest[1:3]
+        else:
+            plants.append(rest[1:3])
+        rest = rest[3:]
     with open(summary_path) as f:
         expected = json.load(f)["metrics"]["e_max_deg"]
     failures = []
@@ -226,6 +290,8 @@ def main():
 
     if linear:
         check_linear(*linear, check)
+    for plant in plants:
+        check_plant(*plant, check)
 
     if failures:
         print(f"{len(failures)} check(s) failed")

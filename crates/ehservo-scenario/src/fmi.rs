@@ -8,7 +8,9 @@
 //! Angles are in rad (SI, as everywhere in the C ABI); `e_deg` and
 //! `e_max_deg` are in degrees as `summary.json` gives them. On a linear
 //! axis ([`variables_on`]) the position is `y` in m and the error's display
-//! `e_mm` and metric `e_max` are in mm, at the same value references.
+//! `e_mm` and metric `e_max` are in mm, at the same value references. The
+//! plant FMU's variables ([`plant_variables`]) depend on its plant: x in
+//! the same units, the pressures in Pa, and a load input on a cylinder.
 /// The FMU's `modelIdentifier` (and the binary's file stem).
 pub const MODEL_IDENTIFIER: &str = "ehservo";
 
@@ -22,6 +24,10 @@ pub enum FmuKind {
     Controller,
     /// The whole loop (plant, actuator, sensors, controller): no inputs.
     ClosedLoop,
+    /// The plant with its actuator: inputs u and, when the plant takes
+    /// one, an external load; outputs x and the pressures
+    /// ([`plant_variables`]).
+    Plant,
 }
 
 impl FmuKind {
@@ -30,6 +36,7 @@ impl FmuKind {
         match self {
             FmuKind::Controller => "controller",
             FmuKind::ClosedLoop => "closed-loop",
+            FmuKind::Plant => "plant",
         }
     }
 }
@@ -83,6 +90,11 @@ pub mod vr {
     pub const E_MAX_DEG: u32 = 8;
     /// What the plant receives after the actuator (V).
     pub const U_PLANT: u32 = 9;
+    /// The plant FMU's external load input (N, or N·m on a rotary axis).
+    pub const F_LOAD: u32 = 10;
+    /// The plant FMU's first pressure output; the i-th pressure state of
+    /// the plant is `PRESSURE + i`.
+    pub const PRESSURE: u32 = 16;
 }
 
 const TIME: Variable = Variable {
@@ -235,12 +247,83 @@ pub fn variables_on(kind: FmuKind, axis: crate::axis::Axis) -> Vec<Variable> {
 }
 
 /// The variables of a kind of FMU (a rotary axis: [`variables_on`] gives
-/// a linear one's).
+/// a linear one's). The plant FMU's depend on its plant:
+/// [`plant_variables`].
 pub fn variables(kind: FmuKind) -> &'static [Variable] {
     match kind {
         FmuKind::Controller => CONTROLLER,
         FmuKind::ClosedLoop => CLOSED_LOOP,
+        FmuKind::Plant => PLANT,
     }
+}
+
+/// The plant FMU's variables that every plant has (x as the closed loop's,
+/// u in, u_plant out); [`plant_variables`] adds a plant's load input and
+/// pressures.
+const PLANT: &[Variable] = &[
+    TIME,
+    CLOSED_LOOP[1],
+    CLOSED_LOOP[2],
+    CLOSED_LOOP[3],
+    Variable {
+        vr: vr::U,
+        name: "u",
+        causality: Causality::Input,
+        unit: "V",
+        description: "Command to the servo valve, held over each communication step",
+    },
+    Variable {
+        vr: vr::U_PLANT,
+        name: "u_plant",
+        causality: Causality::Output,
+        unit: "V",
+        description: "What the plant receives after the actuator",
+    },
+];
+
+/// The plant FMU's variables on `axis`: the input `u` (V) and, when the
+/// plant takes one (`external_load`), `f_load` (N on a linear axis, N.m
+/// on a rotary one); the outputs x in the axis's SI unit as the closed
+/// loop's (`theta` … in rad, or `y` … in m), `u_plant` (V), and each of
+/// the plant's `states` in Pa, at `vr::PRESSURE + i` for its index `i`
+/// among `states`.
+pub fn plant_variables(
+    axis: crate::axis::Axis,
+    states: &'static [ehservo_core::control::Signal],
+    external_load: bool,
+) -> Vec<Variable> {
+    let mut out = variables_on(FmuKind::Plant, axis);
+    if external_load {
+        let (unit, description) = match axis {
+            crate::axis::Axis::Linear => (
+                "N",
+                "External force on the rod, opposing extension, added to the scenario's load",
+            ),
+            crate::axis::Axis::Rotary => (
+                "N.m",
+                "External torque, opposing positive rotation, added to the scenario's load",
+            ),
+        };
+        out.push(Variable {
+            vr: vr::F_LOAD,
+            name: "f_load",
+            causality: Causality::Input,
+            unit,
+            description,
+        });
+    }
+    for (i, s) in states.iter().enumerate() {
+        if s.unit == "Pa" {
+            out.push(Variable {
+                vr: vr::PRESSURE + i as u32,
+                name: s.key,
+                causality: Causality::Output,
+                unit: "Pa",
+                description: s.doc,
+            });
+        }
+    }
+    out
 }
 
 /// The instantiation token of an FMU of `kind` built from `scenario_toml`:
@@ -255,34 +338,36 @@ pub fn token(kind: FmuKind, scenario_toml: &str) -> String {
     )
 }
 
+/// Every kind of FMU.
+pub const KINDS: [FmuKind; 3] = [FmuKind::Controller, FmuKind::ClosedLoop, FmuKind::Plant];
+
 /// An instantiation token that is not this scenario's: the token given
 /// and the two it could have been.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "the instantiation token {given:?} is not {:?} or {:?}: resources/scenario.toml is not the file this FMU was exported with",
+    "the instantiation token {given:?} is not {:?}, {:?} or {:?}: resources/scenario.toml is not the file this FMU was exported with",
     expected[0],
-    expected[1]
+    expected[1],
+    expected[2]
 )]
 pub struct TokenError {
     /// The token the importer passed.
     pub given: String,
-    /// The controller FMU's and the closed loop's tokens of the scenario.
-    pub expected: [String; 2],
+    /// The controller FMU's, the closed loop's and the plant's tokens of
+    /// the scenario.
+    pub expected: [String; 3],
 }
 
 /// The kind a token names, if it is one of ours for exactly this scenario
 /// text; otherwise why not.
 pub fn check_token(token_text: &str, scenario_toml: &str) -> Result<FmuKind, TokenError> {
-    for kind in [FmuKind::Controller, FmuKind::ClosedLoop] {
+    for kind in KINDS {
         if token_text == token(kind, scenario_toml) {
             return Ok(kind);
         }
     }
     Err(TokenError {
         given: token_text.to_string(),
-        expected: [
-            token(FmuKind::Controller, scenario_toml),
-            token(FmuKind::ClosedLoop, scenario_toml),
-        ],
+        expected: KINDS.map(|k| token(k, scenario_toml)),
     })
 }

@@ -16,7 +16,7 @@ use crate::metrics::{Metrics, MetricsAccumulator};
 use crate::plant::Plant;
 use crate::scenario::{AnyReference, ControllerConfig, KeyError, Loop, ScenarioError};
 use crate::scenario::{LoopPlant, LoopVisit, Typed};
-use crate::simulation::{Mode, Sample, Simulation, Stop};
+use crate::simulation::{Divergence, Mode, PlantAlone, PlantOutput, Sample, Simulation, Stop};
 use ehservo_core::control::{Controller, Signal, Signals, Truth};
 use ehservo_core::reference::Reference;
 use ehservo_core::sampled::SampledController;
@@ -131,6 +131,130 @@ impl LoopStepper {
     /// The number of steps N to the horizon (N + 1 samples, t_N = N·h).
     pub fn steps(&self) -> u64 {
         self.steps
+    }
+}
+
+/// A plant alone of any kind, stepped by the caller.
+trait PlantStep {
+    fn output(&mut self, u: f64) -> PlantOutput;
+    fn hold(&mut self, u: f64) -> Result<(), Divergence>;
+    fn set_external_load(&mut self, load: f64);
+    fn time(&self) -> f64;
+    fn stopped(&self) -> Option<Divergence>;
+}
+
+impl<P: LoopPlant> PlantStep for PlantAlone<P> {
+    fn output(&mut self, u: f64) -> PlantOutput {
+        PlantAlone::output(self, u)
+    }
+    fn hold(&mut self, u: f64) -> Result<(), Divergence> {
+        PlantAlone::hold(self, u)
+    }
+    fn set_external_load(&mut self, load: f64) {
+        PlantAlone::set_external_load(self, load)
+    }
+    fn time(&self) -> f64 {
+        PlantAlone::time(self)
+    }
+    fn stopped(&self) -> Option<Divergence> {
+        PlantAlone::stopped(self)
+    }
+}
+
+/// Builds the loop's plant alone, and says what it takes and logs.
+struct BuildPlant;
+
+impl LoopVisit for BuildPlant {
+    type Out = (Box<dyn PlantStep>, &'static [Signal], bool);
+    fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
+        (
+            Box::new(PlantAlone::from_settings(t.plant, t.lp.settings())),
+            P::STATES,
+            P::EXTERNAL_LOAD,
+        )
+    }
+}
+
+/// A scenario's plant with its actuator, without the controller, sensors
+/// or estimator: the caller gives the command u (V), held over each sample
+/// period, and reads the plant's outputs ([`PlantAlone`]). What the plant
+/// FMU serves. Fed the commands of a run of the same scenario, it gives
+/// that run's x to the bit.
+pub struct PlantStepper {
+    inner: Box<dyn PlantStep>,
+    states: &'static [Signal],
+    external_load: bool,
+    step: f64,
+    axis: crate::axis::Axis,
+}
+
+impl std::fmt::Debug for PlantStepper {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PlantStepper")
+            .field("step", &self.step)
+            .field("time", &self.inner.time())
+            .finish()
+    }
+}
+
+impl PlantStepper {
+    /// The plant of a built scenario, at t = 0 and x(0) = the scenario's.
+    pub fn new(lp: &Loop) -> Self {
+        let (inner, states, external_load) = lp.simulate(BuildPlant);
+        Self {
+            inner,
+            states,
+            external_load,
+            step: lp.sim().step,
+            axis: lp.axis(),
+        }
+    }
+
+    /// The outputs at the current sample, `u` being the command now.
+    pub fn output(&mut self, u: f64) -> PlantOutput {
+        self.inner.output(u)
+    }
+
+    /// One sample period with `u` (V) held; the divergence that stopped the
+    /// plant, if it did.
+    pub fn hold(&mut self, u: f64) -> Result<(), Divergence> {
+        self.inner.hold(u)
+    }
+
+    /// The external load held from now on (N on a linear axis, N·m on a
+    /// rotary one), when the plant [`takes_external_load`](Self::takes_external_load).
+    pub fn set_external_load(&mut self, load: f64) {
+        self.inner.set_external_load(load)
+    }
+
+    /// Whether the plant takes an external load (the cylinder does).
+    pub fn takes_external_load(&self) -> bool {
+        self.external_load
+    }
+
+    /// The plant's physical states, in the order of [`PlantOutput::states`].
+    pub fn states(&self) -> &'static [Signal] {
+        self.states
+    }
+
+    /// The time of the current sample (s).
+    pub fn time(&self) -> f64 {
+        self.inner.time()
+    }
+
+    /// Why the plant stopped, once it has.
+    pub fn stopped(&self) -> Option<Divergence> {
+        self.inner.stopped()
+    }
+
+    /// The sample period h (s).
+    pub fn period(&self) -> f64 {
+        self.step
+    }
+
+    /// The plant's axis.
+    pub fn axis(&self) -> crate::axis::Axis {
+        self.axis
     }
 }
 

@@ -130,6 +130,11 @@ pub struct Cylinder {
     pub friction: Option<Friction>,
     /// The external force.
     pub force: Force,
+    /// A further external force on the rod, held (N, opposing extension;
+    /// 0 unless a plant FMU's importer sets it: [`Plant::set_external_load`]).
+    /// Not scaled by the load factor: it is the importer's, not the
+    /// scenario's.
+    pub external: f64,
     /// k_s, c_s of the end stops.
     pub stop: [f64; 2],
     /// The stops' stated penetration δ at factors 1 (m):
@@ -270,7 +275,7 @@ impl Cylinder {
         let (fe, fe_rate) = self.force.at(t);
         let spring = self.spring * (y - self.spring_origin);
         (
-            f.load * (spring + fe) + f.mass * self.gravity_force,
+            f.load * (spring + fe) + f.mass * self.gravity_force + self.external,
             f.load * (self.spring * v + fe_rate),
         )
     }
@@ -687,6 +692,17 @@ impl Plant for CylinderPlant {
     type Variation = CylinderVariation;
     type Prepared = ();
     const STATES: &'static [Signal] = &CYLINDER_STATES;
+    const EXTERNAL_LOAD: bool = true;
+
+    /// A force on the rod, or through a pinion of radius r a torque T on
+    /// it, the rod's force T/r (the pinion turns positive as the rod
+    /// extends, so a positive torque opposes it as a positive force does).
+    fn set_external_load(&mut self, load: f64) {
+        self.c.external = match self.c.radius {
+            None => load,
+            Some(r) => load / r,
+        };
+    }
 
     fn axis(&self) -> Axis {
         if self.c.radius.is_some() {

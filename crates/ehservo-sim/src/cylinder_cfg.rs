@@ -399,6 +399,7 @@ impl CylinderCfg {
             gravity_force,
             friction: l.friction,
             force,
+            external: 0.0,
             stop: [ks, cs],
             penetration: 0.0,
             stick_rate: (kh / mass).sqrt(),

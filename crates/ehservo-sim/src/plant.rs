@@ -195,6 +195,16 @@ pub trait Plant {
     /// The state derivative under input `u` (the valve command, V) and
     /// variation `v`.
     fn deriv(&self, t: f64, s: &Self::State, u: f64, v: &Self::Variation, ds: &mut Self::State);
+    /// Whether [`Plant::set_external_load`] acts on this plant (false, the
+    /// default: the paper's plants take their load from the scenario's
+    /// `[load]` alone).
+    const EXTERNAL_LOAD: bool = false;
+    /// An external load held from now on, in addition to the plant's own:
+    /// a force (N, opposing extension) on a linear axis, a torque (N·m,
+    /// opposing positive rotation) on a rotary one; what a plant FMU's
+    /// `f_load` input sets. Nothing (the default) for a plant without
+    /// [`Plant::EXTERNAL_LOAD`].
+    fn set_external_load(&mut self, _load: f64) {}
     /// Puts a state with hard limits back inside them after an RK4 step:
     /// a limited integrator (the relief valve's opening, held in
     /// [0, x_max] as Hopsan's filter holds its output) has its derivative

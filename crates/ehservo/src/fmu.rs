@@ -1,5 +1,5 @@
-//! `ehservo fmu`: a scenario's controller (or its whole closed loop) as an
-//! FMI 3.0 co-simulation FMU.
+//! `ehservo fmu`: a scenario's controller (or its whole closed loop, or its
+//! plant with its actuator) as an FMI 3.0 co-simulation FMU.
 //!
 //! The FMU is a zip holding `modelDescription.xml` (written here),
 //! `binaries/x86_64-linux/ehservo.so` (the `ehservo-ffi` cdylib, whose
@@ -77,6 +77,13 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
             cfg.step,
             horizon
         ),
+        FmuKind::Plant => format!(
+            "The {} plant of scenario {:?} with its actuator (input u in V, held over each step of {} s; {} RK4 sub-steps a step)",
+            s.plant.model(),
+            s.name,
+            cfg.step,
+            cfg.substeps.max(1)
+        ),
     };
     let mut x = String::new();
     x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
@@ -103,6 +110,9 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
         "    <Unit name=\"m/s2\"><BaseUnit m=\"1\" s=\"-2\"/></Unit>\n",
         "    <Unit name=\"mm\"><BaseUnit m=\"1\" factor=\"0.001\"/></Unit>\n",
         "    <Unit name=\"V\"><BaseUnit kg=\"1\" m=\"2\" s=\"-3\" A=\"-1\"/></Unit>\n",
+        "    <Unit name=\"N\"><BaseUnit kg=\"1\" m=\"1\" s=\"-2\"/></Unit>\n",
+        "    <Unit name=\"N.m\"><BaseUnit kg=\"1\" m=\"2\" s=\"-2\"/></Unit>\n",
+        "    <Unit name=\"Pa\"><BaseUnit kg=\"1\" m=\"-1\" s=\"-2\"/><DisplayUnit name=\"bar\" factor=\"1e-05\"/></Unit>\n",
         "  </UnitDefinitions>\n",
         "  <LogCategories>\n",
         "    <Category name=\"logStatusError\" description=\"Errors: bad calls, bad values\"/>\n",
@@ -114,20 +124,31 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
         cfg.step
     ));
     x.push_str("  <ModelVariables>\n");
-    let vars = variables_on(kind, s.plant.axis());
+    let vars = match kind {
+        FmuKind::Plant => {
+            let p = crate::stepper::PlantStepper::new(lp);
+            plant_variables(p.axis(), p.states(), p.takes_external_load())
+        }
+        _ => variables_on(kind, s.plant.axis()),
+    };
     for v in &vars {
         let (causality, rest) = match v.causality {
             Causality::Independent => ("independent", String::new()),
             Causality::Input => ("input", " start=\"0\"".to_string()),
             Causality::Output => ("output", String::new()),
         };
-        let variability = if v.vr == vr::U {
+        let variability = if v.vr == vr::U && kind != FmuKind::Plant {
             "discrete"
         } else {
             "continuous"
         };
+        let display = if v.unit == "Pa" {
+            " displayUnit=\"bar\""
+        } else {
+            ""
+        };
         x.push_str(&format!(
-            "    <Float64 name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\" unit=\"{}\"{rest}/>\n",
+            "    <Float64 name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{causality}\" variability=\"{variability}\" unit=\"{}\"{display}{rest}/>\n",
             v.name,
             v.vr,
             crate::output::escape::html(v.description),
@@ -135,26 +156,16 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
         ));
     }
     x.push_str("  </ModelVariables>\n  <ModelStructure>\n");
-    let inputs: Vec<String> = vars
-        .iter()
-        .filter(|v| v.causality == Causality::Input)
-        .map(|v| v.vr.to_string())
-        .collect();
     for tag in ["Output", "InitialUnknown"] {
         for v in vars.iter().filter(|v| v.causality == Causality::Output) {
-            // u depends on the inputs (the law at the current sample);
-            // everything else on none of them.
-            let deps = if v.vr == vr::U {
-                inputs.join(" ")
-            } else {
-                String::new()
-            };
-            let kinds = if deps.is_empty() {
+            let on = direct_inputs(kind, v.vr, &vars);
+            let deps = on.join(" ");
+            let kinds = if on.is_empty() {
                 String::new()
             } else {
                 format!(
                     " dependenciesKind=\"{}\"",
-                    vec!["dependent"; inputs.len()].join(" ")
+                    vec!["dependent"; on.len()].join(" ")
                 )
             };
             x.push_str(&format!(
@@ -165,6 +176,24 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
     }
     x.push_str("  </ModelStructure>\n</fmiModelDescription>\n");
     x
+}
+
+/// The inputs an output depends on directly (its value at a time changes
+/// when they are set): the controller's u on its measurements (the law at
+/// the current sample); the plant's u_plant on u (through the actuator)
+/// and its acceleration on the external load (the force balance); nothing
+/// else on any input.
+fn direct_inputs(kind: FmuKind, output: u32, vars: &[Variable]) -> Vec<String> {
+    let inputs = vars.iter().filter(|v| v.causality == Causality::Input);
+    let on: Vec<u32> = match (kind, output) {
+        (FmuKind::Controller, vr::U) => inputs.map(|v| v.vr).collect(),
+        (FmuKind::Plant, vr::U_PLANT) => vec![vr::U],
+        (FmuKind::Plant, vr::THETA_DDOT) => {
+            inputs.map(|v| v.vr).filter(|r| *r == vr::F_LOAD).collect()
+        }
+        _ => Vec::new(),
+    };
+    on.iter().map(u32::to_string).collect()
 }
 
 /// Where `ehservo fmu` looks for the FMU's binary when `--binary` is not
@@ -332,6 +361,48 @@ mod tests {
         assert!(x.contains("<Output valueReference=\"4\" dependencies=\"1 2 3\""));
         assert!(x.contains("stopTime=\"10.0\" stepSize=\"0.01\""));
         assert!(x.contains(&token(FmuKind::Controller, &toml_text)));
+    }
+
+    #[test]
+    fn a_plant_fmu_declares_its_inputs_outputs_and_units_by_plant() {
+        // The cylinder: u and the load force in, y in m, pressures in Pa
+        // shown in bar; the acceleration depends on the force directly.
+        let cyl = Loop::load(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../scenarios/cylinders/slide.toml"),
+            &[],
+        )
+        .unwrap();
+        let text = resource_toml(&cyl, FmuKind::Plant).unwrap();
+        let x = model_description(FmuKind::Plant, &cyl, &text);
+        for tag in [
+            "name=\"u\" valueReference=\"4\"",
+            "name=\"f_load\" valueReference=\"10\"",
+            "name=\"y\" valueReference=\"1\"",
+            "name=\"p_a\" valueReference=\"16\"",
+            "name=\"p_b\" valueReference=\"17\"",
+        ] {
+            assert_eq!(x.matches(tag).count(), 1, "{tag}");
+        }
+        assert!(x.contains("causality=\"input\" variability=\"continuous\" unit=\"N\""));
+        assert!(x.contains("unit=\"Pa\" displayUnit=\"bar\""));
+        assert!(x.contains("<DisplayUnit name=\"bar\" factor=\"1e-05\"/>"));
+        assert!(x.contains("<Output valueReference=\"3\" dependencies=\"10\""));
+        assert!(x.contains("<Output valueReference=\"9\" dependencies=\"4\""));
+        assert!(!x.contains("name=\"theta"), "no angle on a linear axis");
+        assert!(x.contains(&token(FmuKind::Plant, &text)));
+        assert_eq!(
+            check_token(&token(FmuKind::Plant, &text), &text),
+            Ok(FmuKind::Plant)
+        );
+        // The paper's servo: theta in rad, its load pressure, no load input.
+        let s = Loop::parse("name = \"fig2\"").unwrap();
+        let text = resource_toml(&s, FmuKind::Plant).unwrap();
+        let x = model_description(FmuKind::Plant, &s, &text);
+        assert!(x.contains("name=\"theta\" valueReference=\"1\""));
+        assert!(x.contains("name=\"p_load\" valueReference=\"16\""));
+        assert!(!x.contains("f_load"));
+        assert!(x.contains("<Output valueReference=\"3\" dependencies=\"\"/>"));
     }
 
     #[test]

@@ -132,6 +132,11 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
         if !start_time.is_finite() {
             return i.fail(&format!("startTime must be finite (got {start_time:?})"));
         }
+        if matches!(i.body, Body::Plant { .. }) && start_time.abs() > 0.0 {
+            return i.fail(&format!(
+                "startTime = {start_time:?}: the plant starts at t = 0 (its load and variation are functions of the scenario's time)"
+            ));
+        }
         if let Body::Loop { sim, .. } = &i.body {
             if start_time.abs() > 0.0 {
                 return i.fail(&format!(

@@ -14,6 +14,11 @@
 //! - **closed-loop**: no inputs; after `fmi3DoStep` to t_k the outputs are
 //!   the loop's sample at t_k, as `ehservo run` logs it; `e_max_deg` is its
 //!   `summary.json` metric over the samples so far.
+//! - **plant**: the plant with its actuator; inputs u (V) and, on a plant
+//!   that takes one, the external load `f_load`; outputs x and the
+//!   pressures at the current time. `fmi3DoStep` over n periods integrates
+//!   n sample periods, each by the scenario's RK4 sub-steps, with the
+//!   inputs held (`ehservo_scenario::stepper::PlantStepper`).
 //!
 //! A communication step must be a whole number of sample periods h (the
 //! model description's `fixedInternalStepSize`). Calls out of order, unknown
@@ -40,8 +45,9 @@ pub use variables::*;
 
 use ehservo_scenario::fmi::FmuKind;
 use ehservo_scenario::scenario::Loop;
+use ehservo_scenario::simulation::PlantOutput;
 use ehservo_scenario::simulation::Sample;
-use ehservo_scenario::stepper::{ControllerStepper, LawOutput, LoopStepper};
+use ehservo_scenario::stepper::{ControllerStepper, LawOutput, LoopStepper, PlantStepper};
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -77,6 +83,15 @@ enum Body {
         sim: LoopStepper,
         /// The sample at the current time.
         last: Sample,
+    },
+    Plant {
+        plant: PlantStepper,
+        /// The command u (V), held over a step.
+        u: f64,
+        /// The external load (N or N·m), when the plant takes one.
+        f_load: f64,
+        /// The outputs at the current time under `u`.
+        out: PlantOutput,
     },
 }
 
@@ -118,6 +133,20 @@ fn build(kind: FmuKind, s: &Loop) -> Result<(Body, f64), String> {
                 .ok_or_else(|| "the loop stopped before its first sample".to_string())?;
             Ok((Body::Loop { sim, last }, h))
         }
+        FmuKind::Plant => {
+            let mut plant = PlantStepper::new(s);
+            let h = plant.period();
+            let out = plant.output(0.0);
+            Ok((
+                Body::Plant {
+                    plant,
+                    u: 0.0,
+                    f_load: 0.0,
+                    out,
+                },
+                h,
+            ))
+        }
     }
 }
 
@@ -156,7 +185,7 @@ impl Instance {
                 }
                 *out
             }
-            Body::Loop { .. } => None,
+            Body::Loop { .. } | Body::Plant { .. } => None,
         }
     }
 }
@@ -215,3 +244,5 @@ unsafe fn text(p: *const c_char) -> Option<String> {
     // SAFETY: non-null, NUL-terminated by FMI's contract.
     Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
 }
+#[cfg(test)]
+mod tests;

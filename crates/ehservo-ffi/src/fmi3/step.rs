@@ -58,6 +58,9 @@ impl Instance {
             *last_ok = self.time();
             return OK;
         }
+        if self.kind == FmuKind::Plant {
+            return self.plant_step(n, terminate, last_ok);
+        }
         let Body::Loop { sim, last } = &mut self.body else {
             return FATAL;
         };
@@ -85,6 +88,39 @@ impl Instance {
                 _ => "the run stopped".into(),
             };
             self.log(WARNING, &why);
+            return WARNING;
+        }
+        OK
+    }
+}
+
+impl Instance {
+    /// The plant to sample `n` with the inputs held: each period by the
+    /// scenario's RK4 sub-steps; a divergence ends the simulation there.
+    fn plant_step(&mut self, n: u64, terminate: &mut bool, last_ok: &mut f64) -> Status {
+        let Body::Plant { plant, u, out, .. } = &mut self.body else {
+            return FATAL;
+        };
+        let mut diverged = None;
+        while self.k < n {
+            if let Err(d) = plant.hold(*u) {
+                diverged = Some(d);
+                break;
+            }
+            self.k += 1;
+        }
+        *out = plant.output(*u);
+        *last_ok = self.time();
+        if let Some(d) = diverged {
+            *terminate = true;
+            self.log(
+                WARNING,
+                &format!(
+                    "the plant diverged at t = {} s: {}",
+                    d.t,
+                    d.reason.describe()
+                ),
+            );
             return WARNING;
         }
         OK

@@ -27,6 +27,30 @@ impl Instance {
                     return Ok(self.law_output().map_or(f64::NAN, |o| o.u));
                 }
             }
+            FmuKind::Plant => {
+                if let Body::Plant {
+                    plant,
+                    u,
+                    f_load,
+                    out,
+                } = &self.body
+                {
+                    let states = plant.states();
+                    let pressure = |i: usize| states.get(i).filter(|s| s.unit == "Pa").is_some();
+                    return match r {
+                        vr::THETA | vr::THETA_DOT | vr::THETA_DDOT => {
+                            Ok(out.x[(r - vr::THETA) as usize])
+                        }
+                        vr::U => Ok(*u),
+                        vr::U_PLANT => Ok(out.u_plant),
+                        vr::F_LOAD if plant.takes_external_load() => Ok(*f_load),
+                        _ if r >= vr::PRESSURE && pressure((r - vr::PRESSURE) as usize) => {
+                            Ok(out.states[(r - vr::PRESSURE) as usize])
+                        }
+                        _ => Err(format!("no Float64 variable has value reference {r}")),
+                    };
+                }
+            }
             FmuKind::ClosedLoop => {
                 if let Body::Loop { sim, last } = &self.body {
                     return match r {
@@ -63,6 +87,27 @@ impl Instance {
                 }
                 x[(r - vr::THETA) as usize] = v;
                 *out = None;
+                Ok(())
+            }
+            Body::Plant {
+                plant,
+                u,
+                f_load,
+                out,
+            } if r == vr::U || (r == vr::F_LOAD && plant.takes_external_load()) => {
+                let name = if r == vr::U { "u" } else { "f_load" };
+                if !v.is_finite() {
+                    return Err(format!(
+                        "input `{name}` (value reference {r}) must be finite (got {v:?})"
+                    ));
+                }
+                if r == vr::U {
+                    *u = v;
+                } else {
+                    *f_load = v;
+                    plant.set_external_load(v);
+                }
+                *out = plant.output(*u);
                 Ok(())
             }
             _ => Err(format!(

@@ -35,10 +35,12 @@
 //! does I/O.
 
 mod continuous;
+mod plant_alone;
 mod sample;
 mod sampled;
 mod solver;
 
+pub use plant_alone::{PlantAlone, PlantOutput};
 pub use sample::{Divergence, DivergenceReason, Outcome, Sample, Stop, MAX_PARTS, MAX_STATES};
 use sampled::FirstStage;
 pub use solver::{AdaptiveConfig, Atol, SolverKind, MAX_ATOL};

@@ -6,6 +6,7 @@
 use super::{PlantAct, Sample, Simulation, Stop, TruthAt};
 use crate::actuator::Actuator;
 use crate::plant::{refinement, Plant};
+use crate::uncertainty::Varying;
 use ehservo_core::control::Controller;
 use ehservo_core::reference::Reference;
 use ehservo_core::rk4::{rk4_step, rk4_step_with_k1, OdeState};
@@ -150,7 +151,62 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
                 false => ControlFlow::Break(true),
             };
         }
-        let (plant, act) = (&self.plant, &self.actuator);
+        let held = Held {
+            t,
+            j0,
+            hs,
+            m,
+            per_hold: self.per_hold,
+        };
+        held.integrate(
+            &self.plant,
+            &self.actuator,
+            &mut self.unc,
+            &mut self.y.pa,
+            u,
+            var,
+            k1,
+        );
+        ControlFlow::Continue(())
+    }
+}
+
+/// One sample period's integration with the command held: `m` RK4
+/// sub-steps of `hs` from `t` (the variation's clock at sub-step `j0`),
+/// each split further for a stiff plant. What the closed loop
+/// ([`Simulation`]) and the plant alone ([`super::PlantAlone`]) both run,
+/// so the two give the same bits.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Held {
+    /// The sample's time t_k (s).
+    pub(super) t: f64,
+    /// The index of its first sub-step on the variation's clock.
+    pub(super) j0: u64,
+    /// The sub-step (s).
+    pub(super) hs: f64,
+    /// The sub-steps per sample.
+    pub(super) m: u64,
+    /// Sub-steps per hold of the variation, when whole.
+    pub(super) per_hold: Option<u64>,
+}
+
+impl Held {
+    /// Integrates `y` over the period under the command `u`, with the
+    /// variation `var` over the first sub-step and the first RK4 stage
+    /// `k1` when it is already known.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn integrate<P: Plant>(
+        self,
+        plant: &P,
+        act: &Actuator,
+        unc: &mut Varying<P::Variation>,
+        y: &mut PlantAct<P::State>,
+        u: f64,
+        var: P::Variation,
+        k1: Option<PlantAct<P::State>>,
+    ) {
+        let Held { t, j0, hs, m, .. } = self;
         // A valve without spool dynamics gives the plant the same
         // input at every stage, and its state derivative is zero:
         // computed once here instead of at each stage (the same bits).
@@ -160,11 +216,10 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             let v = if j == 0 {
                 var
             } else {
-                self.unc.at_step(&self.plant, j0 + j, hs, self.per_hold)
+                unc.at_step(plant, j0 + j, hs, self.per_hold)
             };
             // The same k1 = f(t, y) that rk4_step would compute.
             let k1 = k1.as_ref().filter(|_| j == 0);
-            let y = &mut self.y.pa;
             // A stiff plant (Plant::stiffness) splits this step so
             // that RK4 stays stable; never for the paper's plants,
             // whose step is then the one below, untouched.
@@ -219,6 +274,5 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             }
             plant.limit_state(&mut y.x);
         }
-        ControlFlow::Continue(())
     }
 }

@@ -18,6 +18,9 @@ pub(super) struct FmuArgs {
     /// Export the closed loop (plant, actuator, sensors and controller; no inputs) instead of the controller alone.
     #[arg(long)]
     closed_loop: bool,
+    /// Export the plant with its actuator (input u, and the load on a cylinder; outputs x and the pressures) instead of the controller.
+    #[arg(long, conflicts_with = "closed_loop")]
+    plant: bool,
     /// The FMU's binary (default: libehservo_ffi.so beside this ehservo; build it with cargo build -p ehservo-ffi).
     #[arg(long)]
     binary: Option<PathBuf>,
@@ -43,16 +46,17 @@ pub(super) fn fmu(a: FmuArgs) -> Result<()> {
         scenario,
         out,
         closed_loop,
+        plant,
         binary,
         set,
     } = a;
     use crate::fmu::{write_fmu, FmuKind};
     let lp = load(&scenario, &set)?;
     let s = lp.scenario();
-    let kind = if closed_loop {
-        FmuKind::ClosedLoop
-    } else {
-        FmuKind::Controller
+    let kind = match (closed_loop, plant) {
+        (true, _) => FmuKind::ClosedLoop,
+        (_, true) => FmuKind::Plant,
+        _ => FmuKind::Controller,
     };
     // The destination first (a directory, a missing folder), then
     // the binary: both before any work.

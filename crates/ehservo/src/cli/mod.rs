@@ -142,9 +142,9 @@ enum Command {
         after_help = "Example:\n  ehservo freq scenarios/frequency/pid-nominal.toml --out out/freq"
     )]
     Freq(freq::FreqArgs),
-    /// Export the scenario's controller (or, with --closed-loop, its whole loop) as an FMI 3.0 co-simulation FMU.
+    /// Export the scenario's controller (or, with --closed-loop, its whole loop; with --plant, its plant and actuator) as an FMI 3.0 co-simulation FMU.
     #[command(
-        after_help = "Example:\n  ehservo fmu scenarios/paper/fig2.toml --closed-loop --out fig2-loop.fmu"
+        after_help = "Example:\n  ehservo fmu scenarios/paper/fig2.toml --closed-loop --out fig2-loop.fmu\n  ehservo fmu scenarios/cylinders/slide.toml --plant --out slide-plant.fmu"
     )]
     Fmu(export::FmuArgs),
 }
