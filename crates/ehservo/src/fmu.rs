@@ -40,6 +40,12 @@ pub fn resource_toml(lp: &Loop, kind: FmuKind) -> Result<String> {
             "`simulation.mode` = \"continuous\": a controller FMU is the sampled controller; set simulation.mode = \"sampled\" (or export --closed-loop)"
         );
     }
+    if kind == FmuKind::Plant && s.simulation.solver != crate::simulation::SolverKind::Rk4 {
+        crate::bad_input!(
+            "`simulation.solver` = \"{}\": the plant FMU integrates each communication step with rk4 sub-steps; set simulation.solver = \"rk4\" (or export --closed-loop)",
+            s.simulation.solver.as_str()
+        );
+    }
     let text = s.to_toml();
     // The FMU rebuilds its controller from this text: check that it does,
     // to the same scenario, before shipping it.
