@@ -292,7 +292,8 @@ fn header_list(header: &[&str]) -> String {
         }
         out.push_str(&h);
     }
-    format!("{out}, … ({} columns)", header.len())
+    let n = header.len();
+    format!("{out}, … ({n} column{})", if n == 1 { "" } else { "s" })
 }
 
 /// Finds a column: the one asked for, or the first default present.
@@ -690,6 +691,8 @@ mod tests {
         let long = "x".repeat(10_000);
         let q = header_list(&[long.as_str(), "y"]);
         assert!(q.chars().count() < 150 && q.ends_with("(2 columns)"), "{q}");
+        let q = header_list(&[long.as_str()]);
+        assert!(q.ends_with("x, … (1 column)"), "{q}");
     }
 
     /// Degrees and millimetres are converted: 180° is π rad; bar is 1e5 Pa.
