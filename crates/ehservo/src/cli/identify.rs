@@ -112,7 +112,7 @@ pub(super) struct IdentifyArgs {
     /// Hold a parameter at a value (repeatable), e.g. --fix Vt=1.639e-4 or --fix a1=0.
     #[arg(long, value_name = "KEY=VALUE")]
     fix: Vec<String>,
-    /// The grey-box's free parameters, comma-separated (default beta_e,Kce,Jt,Bm,Kv,G).
+    /// The grey-box's free parameters, comma-separated (default beta_e,Kce,Jt,Bm,Kv,G on a rotary axis; bulk_modulus,viscous,rated_flow on a cylinder: docs/identification.md).
     #[arg(long, value_delimiter = ',')]
     free: Option<Vec<String>>,
     /// Fit the load terms d1, d2 of d = d1·sin(kθ) + d2·cos(kθ)·θ̇ in the linear model (k: the prior's load.wavenumber).

@@ -7,7 +7,11 @@ use super::{greybox, oe, stats, Derived};
 use ehservo_core::servo::Load;
 
 /// The delta-method standard errors of `f(values)` from the fit's covariance.
-fn delta(rep: &FitReport, keys: &[(&str, &str)], f: &dyn Fn(&[f64]) -> Vec<f64>) -> Vec<Derived> {
+pub(super) fn delta(
+    rep: &FitReport,
+    keys: &[(&str, &str)],
+    f: &dyn Fn(&[f64]) -> Vec<f64>,
+) -> Vec<Derived> {
     let v = rep.values();
     let base = f(&v);
     let free: Vec<usize> = rep

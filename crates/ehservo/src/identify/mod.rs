@@ -31,6 +31,7 @@ pub mod excite;
 pub mod fit;
 pub mod frf;
 pub mod greybox;
+pub mod greybox_axis;
 pub mod model;
 pub mod oe;
 pub mod report;
@@ -310,8 +311,17 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
     // 3. The grey-box model.
     let mut greybox_result = None;
     let mut gb_model = None;
-    if axis == Axis::Linear {
-        notes.push("linear-axis data: the grey-box fit is of the paper's rotary model (1)-(6) and is not made for a cylinder (the cylinder plant exists, a grey-box of it does not yet), so neither is the identified scenario; the linear model is fitted".into());
+    let mut axis_model = None;
+    if axis == Axis::Linear && !opts.no_greybox {
+        if !matches!(exps[0].u.unit, "" | "V") {
+            notes.push(format!("the input is in {}, not the command in V that the prior's actuator and valve take: no grey-box and no identified scenario; the linear model is fitted", exps[0].u.unit));
+        } else if opts.prior.is_some() {
+            let (model, result) = job.fit_axis_greybox(&prior, &linear_result, &mut notes)?;
+            greybox_result = Some(result);
+            axis_model = Some(model);
+        } else {
+            notes.push("linear-axis data without --prior: no grey-box and no identified scenario (give the axis's scenario, e.g. --prior scenarios/cylinders/slide.toml); the linear model is fitted".into());
+        }
     } else if !opts.no_greybox {
         let (model, result) = job.fit_greybox(&linear, &linear_result, &mut notes)?;
         greybox_result = Some(result);
@@ -322,12 +332,19 @@ pub fn identify(opts: &Options) -> anyhow::Result<Outcome> {
         linear: &linear,
         lin: &linear_result,
         gb: gb_model.as_ref(),
-        gbr: greybox_result.as_ref(),
+        // The spread of a linear axis is the linear model's.
+        gbr: greybox_result.as_ref().filter(|_| gb_model.is_some()),
     };
     let bounds = spread(opts, &exps, &fitted, &job.pl, opts.load_terms, k)?;
     // 5. The scenario.
-    let scenario = match &greybox_result {
-        Some(g) if g.fit.converged => Some(identified_scenario(
+    let scenario = match (&greybox_result, &axis_model) {
+        (Some(g), Some(m)) if g.fit.converged => Some(greybox_axis::identified_scenario(
+            m,
+            &g.fit,
+            bounds.as_ref(),
+            &opts.files,
+        )?),
+        (Some(g), None) if g.fit.converged => Some(identified_scenario(
             &prior,
             &g.fit.values(),
             bounds.as_ref(),
@@ -460,7 +477,11 @@ impl Job<'_> {
             .expect("at least the prior");
         let (start_name, mut lp) = (best.0, starts.start_params(best));
         let linear = starts.model_for(best.1);
-        let other_keys: Vec<&str> = greybox::KEYS.iter().map(|k| k.0).collect();
+        let other_keys: Vec<&str> = greybox::KEYS
+            .iter()
+            .map(|k| k.0)
+            .chain(greybox_axis::KEYS.iter().map(|k| k.name))
+            .collect();
         apply_fix(&mut lp, &opts.fix, &other_keys)?;
         let nl = linear.n_model();
         let (lrep, lw, _) = fit_weighted(&linear, exps, lp, &opts.fit);

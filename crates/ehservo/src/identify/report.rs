@@ -31,6 +31,14 @@ fn cell(v: f64) -> String {
     }
 }
 
+/// Whether the grey-box is the paper's rotary model, whose response
+/// frf.csv gives (a linear axis's grey-box, the prior's cylinder, is
+/// nonlinear and has no one response: `ehservo freq` on the identified
+/// scenario measures it).
+fn rotary_greybox(o: &Outcome) -> bool {
+    o.greybox.is_some() && o.experiments[0].axis == super::data::Axis::Rotary
+}
+
 /// The fitted models' responses at the estimate's frequencies (the
 /// zero-order-hold discrete response of the effective third order).
 fn model_responses(o: &Outcome, i: usize, f: &[f64]) -> Vec<(&'static str, Vec<Complex64>)> {
@@ -45,7 +53,7 @@ fn model_responses(o: &Outcome, i: usize, f: &[f64]) -> Vec<(&'static str, Vec<C
         "linear",
         oe::discrete_response([a[0], a[1], a[2]], a[3], h, f),
     ));
-    if let Some(g) = &o.greybox {
+    if let Some(g) = o.greybox.as_ref().filter(|_| rotary_greybox(o)) {
         let nk = super::greybox::KEYS.len();
         let (p, l) = super::greybox::from_vec(&g.fit.values()[..nk], &o.prior.model().load);
         let e = super::greybox::effective(&p, &l);
@@ -74,7 +82,7 @@ fn frf_csv(o: &Outcome) -> String {
         ]);
     }
     head.extend(["linear_gain_dB", "linear_phase_deg"]);
-    if o.greybox.is_some() {
+    if rotary_greybox(o) {
         head.extend(["greybox_gain_dB", "greybox_phase_deg"]);
     }
     let _ = writeln!(s, "{}", head.join(","));

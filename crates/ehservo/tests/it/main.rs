@@ -22,6 +22,7 @@ mod guide_keys;
 mod hopsan;
 mod house;
 mod identify;
+mod identify_axis;
 mod identify_hostile;
 mod ifac9007;
 mod independent;
