@@ -108,7 +108,7 @@ pub struct Cylinder {
     pub area: [f64; 2],
     /// Stroke (m).
     pub stroke: f64,
-    /// Dead volumes (m³).
+    /// Dead volumes (m³), with the hoses' equivalent volumes.
     pub v0: [f64; 2],
     /// C_l (m³/(s·Pa)).
     pub leakage: f64,
@@ -153,6 +153,9 @@ pub struct Cylinder {
     pub radius: Option<f64>,
     /// p_A(0), p_B(0) when given.
     pub initial: [Option<f64>; 2],
+    /// The longer hose's pressure drop at the valve's full flow (Pa; 0
+    /// without `[plant.hose]`): [`crate::hose::HoseCfg::drop`].
+    pub hose_drop: f64,
 }
 
 /// The cylinder plant.

@@ -227,6 +227,10 @@ pub struct CylinderCfg {
     /// `[plant.transmission]`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub transmission: Option<TransmissionCfg>,
+    /// `[plant.hose]`: the hoses to the ports (their volume and swelling
+    /// added to the chambers: [`crate::hose`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hose: Option<crate::hose::HoseCfg>,
     /// `[plant.nominal]`.
     #[serde(skip_serializing_if = "is_default")]
     pub nominal: NominalCfg,
@@ -319,6 +323,19 @@ impl CylinderCfg {
         let nu = positive("viscosity", self.fluid.viscosity).map_err(&fl)?;
         let valve = SpoolValve::try_new(&self.valve, rho, nu).map_err(at("valve"))?;
         let (supply, pt) = Supply::try_new(&self.supply, beta).map_err(at("supply"))?;
+        let (v0a, v0b, hose_drop) = match &self.hose {
+            None => (v0a, v0b, 0.0),
+            Some(h) => {
+                let [ha, hb] = h.equivalent_volumes(beta).map_err(at("hose"))?;
+                // The valve's full flow: full opening, half the supply
+                // across each land.
+                let pm = 0.5 * (supply.holding_pressure(pt) + pt);
+                let q = valve
+                    .flows(valve.x_max, supply.holding_pressure(pt), pt, pm, pm)
+                    .a;
+                (v0a + ha, v0b + hb, h.drop(q, rho, nu))
+            }
+        };
         let l = &self.load;
         let ld = at("load");
         let mass = positive("mass", l.mass).map_err(&ld)?;
@@ -408,6 +425,7 @@ impl CylinderCfg {
             pt,
             radius,
             initial,
+            hose_drop,
         };
         // The relief must be able to hold the static load: a supply that
         // cannot push the load off the bottom of the stroke is a mistake.

@@ -79,6 +79,7 @@ pub mod cylinder;
 pub mod error;
 pub mod estimator;
 pub mod force;
+pub mod hose;
 pub mod ifac9007;
 pub mod metrics;
 pub mod physical;

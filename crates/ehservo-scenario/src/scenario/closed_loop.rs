@@ -240,7 +240,9 @@ impl Loop {
     /// prints them on stderr): no `[actuator]` stage (the spool follows
     /// the command at once and without limit), and a sample step h with
     /// ω_h·h > 1, ω_h = √ā2 the hydraulic natural frequency of the nominal
-    /// model (a sampled law then acts slower than the oil column rings).
+    /// model (a sampled law then acts slower than the oil column rings),
+    /// and a hose whose drop at the valve's full flow is more than 5 % of
+    /// the supply (folded into its chamber as a volume without resistance).
     /// Empty for the other plants: the paper's own servo is sampled at
     /// ω_h·h ≈ 1.14 (ā2 = 13000 s⁻², h = 10 ms) by the paper's choice.
     pub fn warnings(&self) -> Vec<String> {
@@ -253,6 +255,17 @@ impl Loop {
                 "a cylinder without an [actuator] stage: the valve's spool follows the command at once and without limit (no saturation, no spool lag)"
                     .to_string(),
             );
+        }
+        if let Some(c) = self.plant().get::<ehservo_sim::cylinder::CylinderPlant>() {
+            let c = c.cylinder();
+            let dp = c.supply.holding_pressure(c.pt) - c.pt;
+            if c.hose_drop > 0.05 * dp {
+                v.push(format!(
+                    "[plant.hose]: the longer hose drops {:.4e} Pa at the valve's full flow, {:.1} % of the supply's {dp:.4e} Pa: the hose is folded into the chamber as a volume without resistance (docs/cylinder.md, \"Hoses\"), which a drop this large makes unfair",
+                    c.hose_drop,
+                    100.0 * c.hose_drop / dp
+                ));
+            }
         }
         let a2 = self.model.coeffs.a2;
         let h = self.sim().step;

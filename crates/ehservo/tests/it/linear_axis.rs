@@ -406,3 +406,63 @@ fn open_loop_on_a_linear_axis_takes_volts_per_mm() {
     // is inside the bound; u = 0.5 V/mm · 4 mm = 2 V.
     assert!((u - 2.0).abs() < 1e-5, "u {u}");
 }
+
+/// `[plant.hose]` on the slide: the hoses' equivalent volumes lower ω_h as
+/// the closed form says, and a long thin hose (4 mm, 10 m) whose drop at
+/// the valve's 100 L/min is more than 5 % of the supply is warned of.
+/// By hand: 2 m of 20 mm hose with β_w = 5e8 adds V_eq = π/4·4e-4·2·(1 +
+/// 1.4e9/5e8) = 2.388e-3 m³ to each side; the slide then has βe = 1.4e9
+/// (the oil alone) and dead volumes 1e-5 m³.
+#[test]
+fn hoses_lower_the_oil_column_and_a_thin_one_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let slide = crate::common::repo().join("scenarios/cylinders/slide.toml");
+    let check = |hose: &[&str]| {
+        let mut c = ehservo();
+        c.arg("check").arg(&slide);
+        for s in [
+            "plant.fluid.bulk_modulus=1.4e9",
+            "plant.cylinder.dead_volume_a=1e-5",
+            "plant.cylinder.dead_volume_b=1e-5",
+        ]
+        .iter()
+        .chain(hose)
+        {
+            c.args(["--set", s]);
+        }
+        let o = c.current_dir(dir.path()).output().unwrap();
+        crate::common::succeeded("check", &o);
+        String::from_utf8_lossy(&o.stderr).into_owned() + &String::from_utf8_lossy(&o.stdout)
+    };
+    let wh_of = |text: &str| -> f64 {
+        let at = text.find("ω_h = ").expect("ω_h printed") + "ω_h = ".len();
+        text[at..].split(' ').next().unwrap().parse().unwrap()
+    };
+    let base = [
+        "plant.hose.inner_diameter=0.02",
+        "plant.hose.length_a=2.0",
+        "plant.hose.length_b=2.0",
+        "plant.hose.wall_bulk_modulus=5e8",
+    ];
+    let out = check(&base);
+    assert!(!out.contains("the longer hose drops"), "no warning: {out}");
+    // ω_h at the nominal point (mid-stroke, 0.2 m):
+    let q = std::f64::consts::FRAC_PI_4;
+    let (aa, ab) = (
+        q * 0.063f64.powi(2),
+        q * (0.063f64.powi(2) - 0.045f64.powi(2)),
+    );
+    let veq = q * 4e-4 * 2.0 * 3.8;
+    let (va, vb) = (1e-5 + veq + aa * 0.2, 1e-5 + veq + ab * 0.2);
+    let wh = (1.4e9 * (aa * aa / va + ab * ab / vb) / 1200.0).sqrt();
+    let got = wh_of(&out);
+    assert!((got / wh - 1.0).abs() < 1e-3, "ω_h {got} vs {wh}: {out}");
+    let thin = [
+        "plant.hose.inner_diameter=0.004",
+        "plant.hose.length_a=10.0",
+        "plant.hose.length_b=10.0",
+        "plant.hose.wall_bulk_modulus=5e8",
+    ];
+    let out = check(&thin);
+    assert!(out.contains("[plant.hose]: the longer hose drops"), "{out}");
+}
