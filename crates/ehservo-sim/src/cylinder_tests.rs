@@ -623,3 +623,6 @@ fn bad_geometry_is_named() {
 
 #[path = "cylinder_friction_tests.rs"]
 mod friction;
+
+#[path = "cylinder_env_tests.rs"]
+mod env;
