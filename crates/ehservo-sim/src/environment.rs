@@ -222,21 +222,30 @@ impl Environment {
         }
     }
 
+    /// (∂F_env/∂y, ∂F_env/∂ẏ): (k, c) while the environment pushes (a
+    /// spring always, a specimen while its force is > 0), else (0, 0); a
+    /// linearisation's terms.
+    #[inline]
+    pub fn slopes(&self, t: f64, y: f64, v: f64) -> (f64, f64) {
+        let pushing = match self.contact {
+            Contact::Unilateral => self.force(t, y, v) > 0.0,
+            Contact::Attached => true,
+        };
+        if pushing {
+            (self.stiffness, self.damping)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
     /// dF_env/dt at the rod's acceleration `a`, the mount's acceleration
     /// left out (an approximation the lumped-uncertainty diagnostic
     /// states); 0 out of contact.
     #[inline]
     pub fn rate(&self, t: f64, y: f64, v: f64, a: f64) -> f64 {
         let (_, dd) = self.compression(t, y, v);
-        let pushing = match self.contact {
-            Contact::Unilateral => self.force(t, y, v) > 0.0,
-            Contact::Attached => true,
-        };
-        if pushing {
-            self.stiffness * dd + self.damping * a
-        } else {
-            0.0
-        }
+        let (ky, kv) = self.slopes(t, y, v);
+        ky * dd + kv * a
     }
 
     /// E(δ) at time `t` for the rod at `y` (J): the energy the spring holds.
