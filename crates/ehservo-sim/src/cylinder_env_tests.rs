@@ -125,8 +125,8 @@ fn steady_contact_force_is_load_pressure_times_area_minus_friction() {
 /// By hand: the initial state holds F₀ about p_m = 1e7 Pa:
 /// p_A = (F₀ + 2·A_B·p_m)/(A_A + A_B) = (3e4 + 41 988)/5.2166e-3 =
 /// 1.3800e7 Pa and p_B = 6.200e6 Pa. The leak Q_l = C_l·(p_A − p_B)
-/// alone (rod held) would drop the hydraulic force at r₀ = βe·Q_l·(A_A/V_A
-/// + A_B/V_B); with the rod on the spring k, the force balance
+/// alone (rod held) would drop the hydraulic force at
+/// r₀ = βe·Q_l·(A_A/V_A + A_B/V_B); with the rod on the spring k, the force balance
 /// −k_h·ẏ − r₀ = k·ẏ gives dF/dt = −r₀·k/(k + k_h), k_h = βe·(A_A²/V_A +
 /// A_B²/V_B). At y = 0.25 m, V_A = 2e-4 + 3.1172e-3·0.25 = 9.793e-4 m³,
 /// V_B = 2e-4 + 2.0994e-3·0.25 = 7.249e-4 m³; C_l = 1e-12 m³/(s·Pa):
