@@ -17,7 +17,7 @@
 //! p = max(p̃, 0)                                                    cavitation: a state below 0 is a cavity
 //! (V_A/βe)·dp̃_A/dt = Q_A − A_A·ẏ − C_l·(p_A − p_B)
 //! (V_B/βe)·dp̃_B/dt = Q_B + A_B·ẏ + C_l·(p_A − p_B)
-//! M·ÿ = F_d − F_f,   F_d = A_A·p_A − A_B·p_B − (B + B_v)·ẏ − K·(y − y_K) − M·g·sin α − F(t) + F_stop(y, ẏ)
+//! M·ÿ = F_d − F_f,   F_d = A_A·p_A − A_B·p_B − (B + B_v)·ẏ − K·(y − y_K) − M·g·sin α − F(t) + F_stop(y, ẏ) − F_env
 //! F_stop = max(k_s·(−y) − c_s·ẏ, 0)             for y < 0
 //!        = min(k_s·(stroke − y) − c_s·ẏ, 0)      for y > stroke
 //! ```
@@ -59,6 +59,10 @@
 //! where the stop has held the largest force that can press on it and
 //! absorbed that force's work over the whole stroke; a rod beyond it is a
 //! divergence ([`crate::simulation::DivergenceReason::BeyondEndStop`]).
+//!
+//! F_env is `[plant.environment]`'s force, when there is one: a specimen
+//! with contact and lift-off or a preloaded spring, on a fixed or moving
+//! mount ([`crate::environment`], docs/environments.md).
 //!
 //! With `[plant.transmission] radius = r` (a rack and pinion) the axis is
 //! rotary: θ = (y − stroke/2)/r, the pinion at 0 with the piston at
