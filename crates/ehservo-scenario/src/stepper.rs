@@ -167,9 +167,10 @@ struct BuildPlant;
 impl LoopVisit for BuildPlant {
     type Out = (Box<dyn PlantStep>, &'static [Signal], bool);
     fn visit<P: LoopPlant, K: ControllerConfig>(self, t: Typed<'_, P, K>) -> Self::Out {
+        let signals = t.plant.signals();
         (
             Box::new(PlantAlone::from_settings(t.plant, t.lp.settings())),
-            P::STATES,
+            signals,
             P::EXTERNAL_LOAD,
         )
     }

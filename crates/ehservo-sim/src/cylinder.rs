@@ -17,7 +17,7 @@
 //! p = max(p̃, 0)                                                    cavitation: a state below 0 is a cavity
 //! (V_A/βe)·dp̃_A/dt = Q_A − A_A·ẏ − C_l·(p_A − p_B)
 //! (V_B/βe)·dp̃_B/dt = Q_B + A_B·ẏ + C_l·(p_A − p_B)
-//! M·ÿ = F_d − F_f,   F_d = A_A·p_A − A_B·p_B − (B + B_v)·ẏ − K·(y − y_K) − M·g·sin α − F(t) + F_stop(y, ẏ)
+//! M·ÿ = F_d − F_f,   F_d = A_A·p_A − A_B·p_B − (B + B_v)·ẏ − K·(y − y_K) − M·g·sin α − F(t) + F_stop(y, ẏ) − F_env
 //! F_stop = max(k_s·(−y) − c_s·ẏ, 0)             for y < 0
 //!        = min(k_s·(stroke − y) − c_s·ẏ, 0)      for y > stroke
 //! ```
@@ -60,6 +60,10 @@
 //! absorbed that force's work over the whole stroke; a rod beyond it is a
 //! divergence ([`crate::simulation::DivergenceReason::BeyondEndStop`]).
 //!
+//! F_env is `[plant.environment]`'s force, when there is one: a specimen
+//! with contact and lift-off or a preloaded spring, on a fixed or moving
+//! mount ([`crate::environment`], docs/environments.md).
+//!
 //! With `[plant.transmission] radius = r` (a rack and pinion) the axis is
 //! rotary: θ = (y − stroke/2)/r, the pinion at 0 with the piston at
 //! mid-stroke.
@@ -78,6 +82,7 @@
 //! external force), each scaled by `1 + bias + random·r`.
 
 use crate::axis::Axis;
+use crate::environment::Environment;
 use crate::force::{Force, ForceCfg};
 use crate::plant::{Draw, Plant, PlantConfig, PlantContext, UncertaintySpec, MAX_STATES};
 use crate::supply::{Supply, SupplyCfg};
@@ -156,6 +161,8 @@ pub struct Cylinder {
     /// The longer hose's pressure drop at the valve's full flow (Pa; 0
     /// without `[plant.hose]`): [`crate::hose::HoseCfg::drop`].
     pub hose_drop: f64,
+    /// What the rod works against beyond its load (`[plant.environment]`).
+    pub environment: Option<Environment>,
 }
 
 /// The cylinder plant.
@@ -204,6 +211,24 @@ const CYLINDER_STATES: [Signal; 6] = [
         "load force on the rod: spring, gravity and F(t)",
     ),
     Signal::new("f_stop", "f_stop_N", "N", "end-stop contact force"),
+];
+
+/// The states of a cylinder with an environment: [`CYLINDER_STATES`] and
+/// the environment's force (a column only then, so that a cylinder
+/// without one keeps its trace).
+const ENVIRONMENT_STATES: [Signal; 7] = [
+    CYLINDER_STATES[0],
+    CYLINDER_STATES[1],
+    CYLINDER_STATES[2],
+    CYLINDER_STATES[3],
+    CYLINDER_STATES[4],
+    CYLINDER_STATES[5],
+    Signal::new(
+        "f_env",
+        "f_env_N",
+        "N",
+        "force of the environment on the rod, opposing extension (specimen or spring)",
+    ),
 ];
 
 /// Karnopp's velocity window as a share of the Stribeck velocity v_s:
@@ -386,7 +411,10 @@ impl Cylinder {
         let (pa, pb) = (pa.max(0.0), pb.max(0.0));
         let (fl, _) = self.load_force(t, y, v, f);
         let fs = self.stop_force(y, v);
-        let drive = self.area[0] * pa - self.area[1] * pb - self.viscous_coeff(f) * v - fl + fs;
+        let mut drive = self.area[0] * pa - self.area[1] * pb - self.viscous_coeff(f) * v - fl + fs;
+        if let Some(e) = &self.environment {
+            drive -= e.force(t, y, v);
+        }
         let dry = self.dry_friction(v, drive, self.mass * f.mass, f);
         (drive - dry.force, fl, fs, dry)
     }
@@ -440,6 +468,11 @@ impl Cylinder {
         if y < 0.0 || y > self.stroke {
             lam = lam.max((self.stop[0] / m).sqrt() + self.stop[1] / m);
         }
+        if let Some(e) = &self.environment {
+            // The environment's spring beside the oil column's, and its
+            // damper: a bound whether or not it touches.
+            lam = lam.max(((kh + e.stiffness) / m).sqrt() + e.damping / m);
+        }
         // Friction: the viscous terms, and the dry force's slope when it
         // slides or the rate 1/τ at which it holds the rod.
         lam = lam.max(self.viscous_coeff(f) / m);
@@ -472,7 +505,10 @@ impl Cylinder {
                 // p_A + p_B = 2·p_m, p_A = (F + 2·A_B·p_m)/(A_A + A_B).
                 let ps = self.supply.holding_pressure(self.pt) * f.supply_pressure;
                 let pm = 0.5 * (ps + self.pt);
-                let (fl, _) = self.load_force(0.0, y0, v0, f);
+                let (mut fl, _) = self.load_force(0.0, y0, v0, f);
+                if let Some(e) = &self.environment {
+                    fl += e.force(0.0, y0, v0);
+                }
                 // Moving: the sliding friction; at rest none is needed.
                 let ff = self.viscous_coeff(f) * v0 + self.slip(v0, f).0;
                 let force = self.mass * f.mass * a0 + fl + ff - self.stop_force(y0, v0);
@@ -624,8 +660,9 @@ impl CylinderPlant {
     /// The storage of docs/cylinder.md §"Energy": kinetic, spring, gravity,
     /// stop and the chambers' compression energy `V·g(p)`,
     /// g(p) = βe·(e^{p/βe} − 1) − p (J). Without F(t), whose work is
-    /// counted as a port.
-    pub fn storage(&self, s: &[f64; 6]) -> f64 {
+    /// counted as a port; with the environment's E(δ) at time `t`
+    /// ([`Environment::stored`]).
+    pub fn storage(&self, t: f64, s: &[f64; 6]) -> f64 {
         let c = &self.c;
         let [y, v, pa, pb, _, _] = *s;
         let [va, vb] = c.volumes(y);
@@ -643,6 +680,7 @@ impl CylinderPlant {
             + 0.5 * c.stop[0] * pen * pen
             + va * g(pa)
             + vb * g(pb)
+            + c.environment.as_ref().map_or(0.0, |e| e.stored(t, y))
     }
 
     /// The hydraulic potential π(p) = βe·(e^{p/βe} − 1) of fluid at p in
@@ -654,7 +692,8 @@ impl CylinderPlant {
     /// The power balance's terms at a state (no cavitation, fixed supply):
     /// `(port power π_s·Q_P − π_t·Q_T − F(t)·ẏ, dissipation)` (W), with the
     /// valve's, the leakage's, the viscous, the friction's and the stop's
-    /// losses.
+    /// losses; with an environment, its mount's power in the port and its
+    /// damping in the losses ([`Environment::power`]).
     pub fn power(&self, t: f64, s: &[f64; 6], u: f64) -> (f64, f64) {
         let c = &self.c;
         let f = Factors::ONE;
@@ -685,8 +724,12 @@ impl CylinderPlant {
             0.0
         };
         let (fe, _) = c.force.at(t);
-        let port = pi(ps) * q.p - pi(c.pt) * q.t - fe * v;
-        (port, valve_loss + leak + ff * v + stop)
+        let (env_port, env_loss) = c
+            .environment
+            .as_ref()
+            .map_or((0.0, 0.0), |e| e.power(t, y, v));
+        let port = pi(ps) * q.p - pi(c.pt) * q.t - fe * v + env_port;
+        (port, valve_loss + leak + ff * v + stop + env_loss)
     }
 }
 
@@ -736,14 +779,25 @@ impl Plant for CylinderPlant {
     fn states(&self, t: f64, s: &[f64; 6], _x: &[f64; 3], out: &mut [f64; MAX_STATES]) {
         let f = Factors::ONE;
         let (_, fl, fs, _) = self.c.forces(t, s, &f);
-        *out = [
+        out[..6].copy_from_slice(&[
             s[2].max(0.0),
             s[3].max(0.0),
             self.c.supply_pressure(s[4], &f),
             s[5],
             fl,
             fs,
-        ];
+        ]);
+        if let Some(e) = &self.c.environment {
+            out[6] = e.force(t, s[0], s[1]);
+        }
+    }
+
+    /// [`CYLINDER_STATES`], and the environment's force when there is one.
+    fn signals(&self) -> &'static [Signal] {
+        match self.c.environment {
+            None => &CYLINDER_STATES,
+            Some(_) => &ENVIRONMENT_STATES,
+        }
     }
 
     fn initial_state(&self, x0: [f64; 3], v: &CylinderVariation) -> [f64; 6] {
@@ -811,9 +865,12 @@ impl Plant for CylinderPlant {
         let [y, yd, pa, pb, _, _] = *s;
         let dpa = if pa > 0.0 { ds[2] } else { 0.0 };
         let dpb = if pb > 0.0 { ds[3] } else { 0.0 };
-        let (_, fl_rate) = c.load_force(0.0, y, yd, f);
+        let (_, mut fl_rate) = c.load_force(0.0, y, yd, f);
         let (_, _, _, dry) = c.forces(0.0, s, f);
         let ydd = ds[1];
+        if let Some(e) = &c.environment {
+            fl_rate += e.rate(0.0, y, yd, ydd);
+        }
         let stop_rate = if y < 0.0 || y > c.stroke {
             -c.stop[0] * yd - c.stop[1] * ydd
         } else {

@@ -4,6 +4,7 @@
 //! `cylinder.rs`, whose physics reads only the validated constants.
 
 use super::*;
+use crate::environment::EnvironmentCfg;
 use crate::error::{finite, non_negative, positive, KeyError};
 
 /// `[plant.cylinder]`: the geometry, by areas or by diameters.
@@ -234,6 +235,11 @@ pub struct CylinderCfg {
     /// `[plant.nominal]`.
     #[serde(skip_serializing_if = "is_default")]
     pub nominal: NominalCfg,
+    /// `[plant.environment]`: a specimen or a preloaded spring the rod
+    /// works against, its contact point fixed or moving
+    /// (docs/environments.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub environment: Option<EnvironmentCfg>,
 }
 
 fn is_default<T: Default + PartialEq>(v: &T) -> bool {
@@ -426,6 +432,13 @@ impl CylinderCfg {
             radius,
             initial,
             hose_drop,
+            environment: match &self.environment {
+                None => None,
+                Some(e) => Some(
+                    Environment::try_new(e, stroke, ctx.base_dir.as_deref())
+                        .map_err(at("environment"))?,
+                ),
+            },
         };
         // The relief must be able to hold the static load: a supply that
         // cannot push the load off the bottom of the stroke is a mistake.
@@ -435,7 +448,8 @@ impl CylinderCfg {
             let f = c.area[0] * ps
                 + c.gravity_force.abs()
                 + c.force.peak()
-                + spring * spring_origin.abs().max((stroke - spring_origin).abs());
+                + spring * spring_origin.abs().max((stroke - spring_origin).abs())
+                + c.environment.as_ref().map_or(0.0, |e| e.peak(stroke));
             (f + (f * f + 2.0 * ks * f * stroke).sqrt()) / ks
         };
         let hold = c.area[0] * (ps - pt) - (c.area[0] - c.area[1]) * pt;
@@ -502,6 +516,14 @@ impl PlantConfig for CylinderCfg {
             Axis::Rotary
         } else {
             Axis::Linear
+        }
+    }
+
+    /// With an environment, its force as a seventh column.
+    fn states(&self) -> &'static [Signal] {
+        match self.environment {
+            None => &CYLINDER_STATES,
+            Some(_) => &ENVIRONMENT_STATES,
         }
     }
 

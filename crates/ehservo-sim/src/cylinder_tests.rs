@@ -218,7 +218,7 @@ fn storage_rate(p: &CylinderPlant, s: &[f64; 6], ds: &[f64; 6]) -> f64 {
     let e = 1e-7;
     let plus: [f64; 6] = core::array::from_fn(|i| s[i] + e * ds[i]);
     let minus: [f64; 6] = core::array::from_fn(|i| s[i] - e * ds[i]);
-    (p.storage(&plus) - p.storage(&minus)) / (2.0 * e)
+    (p.storage(0.0, &plus) - p.storage(0.0, &minus)) / (2.0 * e)
 }
 
 /// Energy, pointwise: dH/dt = π_s·Q_P − π_t·Q_T − F(t)·ẏ − losses, the
@@ -289,7 +289,7 @@ fn energy_balance_over_a_run() {
     cfg.fluid.viscosity = 46e-6;
     let p = build(&cfg);
     let mut s = p.initial_state([0.2, 0.0, 0.0], &ONE);
-    let h0 = p.storage(&s);
+    let h0 = p.storage(0.0, &s);
     let h = 1e-5;
     let u = |t: f64| 6.0 * (2.0 * core::f64::consts::PI * 2.0 * t).sin();
     let (mut work, mut prev) = (0.0, {
@@ -312,7 +312,7 @@ fn energy_balance_over_a_run() {
         prev = now;
         assert!(s[2] > 0.0 && s[3] > 0.0, "no cavitation in this run");
     }
-    let dh = p.storage(&s) - h0;
+    let dh = p.storage(0.0, &s) - h0;
     assert!(gross > 1e3, "the run does work ({gross} J)");
     assert!(
         (dh - work).abs() <= 1e-5 * gross,
@@ -623,3 +623,6 @@ fn bad_geometry_is_named() {
 
 #[path = "cylinder_friction_tests.rs"]
 mod friction;
+
+#[path = "cylinder_env_tests.rs"]
+mod env;

@@ -244,17 +244,28 @@ impl Force {
 /// std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
+    read_columns(path, "force", "force_N")
+}
+
+/// The rows of a two-column table `t_s,<value>` of the signal `what`
+/// (`"force"`, `"motion"`), strictly increasing in time: [`read_table`]
+/// for any value column. The error is the key `file`.
+pub fn read_columns(path: &Path, what: &str, value: &str) -> Result<Vec<(f64, f64)>, KeyError> {
     let file = |r: String| KeyError::new("file", r);
     let name = path.display();
-    let meta = std::fs::metadata(path).map_err(|e| file(format!("the force file {name}: {e}")))?;
+    let meta = std::fs::metadata(path).map_err(|e| file(format!("the {what} file {name}: {e}")))?;
     if !meta.is_file() {
-        return Err(file(format!("the force file {name} is not a regular file")));
+        return Err(file(format!(
+            "the {what} file {name} is not a regular file"
+        )));
     }
     if meta.len() > 16 << 20 {
-        return Err(file(format!("the force file {name} is larger than 16 MiB")));
+        return Err(file(format!(
+            "the {what} file {name} is larger than 16 MiB"
+        )));
     }
     let text =
-        std::fs::read_to_string(path).map_err(|e| file(format!("the force file {name}: {e}")))?;
+        std::fs::read_to_string(path).map_err(|e| file(format!("the {what} file {name}: {e}")))?;
     let mut lines = text
         .lines()
         .enumerate()
@@ -262,13 +273,13 @@ pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
         .filter(|(_, l)| !l.is_empty());
     let Some((hl, header)) = lines.next() else {
         return Err(file(format!(
-            "{name}: is empty: expected the header `t_s,force_N` and rows"
+            "{name}: is empty: expected the header `t_s,{value}` and rows"
         )));
     };
     let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-    if cols != ["t_s", "force_N"] {
+    if cols != ["t_s", value] {
         return Err(file(format!(
-            "{name}: line {hl}: expected the header `t_s,force_N`, got {}",
+            "{name}: line {hl}: expected the header `t_s,{value}`, got {}",
             crate::error::quote_start(header)
         )));
     }
@@ -282,12 +293,12 @@ pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         if f.len() != 2 {
             return Err(file(format!(
-                "{name}: line {line}: expected 2 columns (t_s, force_N), got {}",
+                "{name}: line {line}: expected 2 columns (t_s, {value}), got {}",
                 f.len()
             )));
         }
         let mut v = [0.0; 2];
-        for (j, col) in ["t_s", "force_N"].iter().enumerate() {
+        for (j, col) in ["t_s", value].iter().enumerate() {
             let x: f64 = f[j].parse().map_err(|_| {
                 file(format!(
                     "{name}: line {line}, column {col}: cannot read {} as a number",
@@ -311,7 +322,7 @@ pub fn read_table(path: &Path) -> Result<Vec<(f64, f64)>, KeyError> {
             let dt = v[0] - prev.0;
             if !(dt.is_finite() && (v[1] / dt - prev.1 / dt).is_finite()) {
                 return Err(file(format!(
-                    "{name}: line {line}: the force changes by more than a double can hold per second from the row before"
+                    "{name}: line {line}: the {what} changes by more than a double can hold per second from the row before"
                 )));
             }
         }

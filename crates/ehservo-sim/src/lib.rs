@@ -76,6 +76,7 @@ pub mod actuator;
 pub mod axis;
 pub mod behaviour;
 pub mod cylinder;
+pub mod environment;
 pub mod error;
 pub mod estimator;
 pub mod force;

@@ -71,7 +71,7 @@ impl Variation {
 }
 
 /// Most physical states a plant may log per sample ([`Plant::STATES`]).
-pub const MAX_STATES: usize = 6;
+pub const MAX_STATES: usize = 7;
 
 /// Most RK4 steps one (sub)step is split into for a stiff plant
 /// ([`Plant::stiffness`]).
@@ -148,6 +148,12 @@ pub trait Plant {
     /// The physical states beyond x that a trace carries (a load pressure,
     /// chamber pressures), at most [`MAX_STATES`].
     const STATES: &'static [Signal] = &[];
+    /// The physical states this plant's trace carries: [`Plant::STATES`],
+    /// or a longer list a plant's configuration asks for (a cylinder's
+    /// environment force), at most [`MAX_STATES`].
+    fn signals(&self) -> &'static [Signal] {
+        Self::STATES
+    }
     /// The number of components of [`Plant::State`].
     fn state_dim(&self) -> usize {
         Self::State::zero().as_ref().len()
@@ -173,7 +179,7 @@ pub trait Plant {
     fn beyond_stops(&self, _s: &Self::State, _v: &Self::Variation) -> bool {
         false
     }
-    /// The values of [`Plant::STATES`] at time `t` and state `s`, whose
+    /// The values of [`Plant::signals`] at time `t` and state `s`, whose
     /// output is `x`.
     fn states(&self, _t: f64, _s: &Self::State, _x: &[f64; 3], _out: &mut [f64; MAX_STATES]) {}
     /// The plant state that corresponds to x(0) under the variation `v`.

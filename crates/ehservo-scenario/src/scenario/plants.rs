@@ -187,6 +187,10 @@ macro_rules! plants {
                     $(Self::$variant(c) => toml::Table::try_from(c),)*
                 }
             }
+
+            fn check_keys(name: &str, table: &toml::Table) -> Result<(), KeyError> {
+                environment_on_a_piston(name, table)
+            }
         }
 
         impl AnyPlant {
@@ -221,7 +225,7 @@ macro_rules! plants {
             /// The physical states a trace carries.
             pub fn states(&self) -> &'static [Signal] {
                 match self {
-                    $(Self::$variant(_) => <<$ty as PlantConfig>::Plant as Plant>::STATES,)*
+                    $(Self::$variant(p) => p.signals(),)*
                 }
             }
 
@@ -247,6 +251,19 @@ plants! {
     Physical "physical" => PhysicalCfg,
     Cylinder "cylinder" => ehservo_sim::cylinder::CylinderCfg,
     Ifac9007 "ifac9007" => ehservo_sim::ifac9007::Ifac9007Cfg,
+}
+
+/// `[plant.environment]` acts on a cylinder's rod: a model without a
+/// piston (the paper's third-order servo, its physical form, IFAC 9007)
+/// refuses it by name rather than as an unknown key.
+fn environment_on_a_piston(model: &str, table: &toml::Table) -> Result<(), KeyError> {
+    if model == "cylinder" || !table.contains_key("environment") {
+        return Ok(());
+    }
+    Err(KeyError::new(
+        "environment",
+        format!("an environment (specimen or spring) acts on a cylinder's rod; model = \"{model}\" has no piston: use model = \"cylinder\""),
+    ))
 }
 
 impl Default for PlantCfg {

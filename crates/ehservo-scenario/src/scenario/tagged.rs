@@ -33,9 +33,16 @@ pub trait Tagged: Sized {
     /// The variant's keys as a table (without the tag).
     fn params_table(&self) -> Result<toml::Table, toml::ser::Error>;
 
+    /// A key that variant `name` refuses with a reason of its own, before
+    /// serde's "unknown field" (nothing, the default).
+    fn check_keys(_name: &str, _table: &toml::Table) -> Result<(), KeyError> {
+        Ok(())
+    }
+
     /// Variant `name` with the keys of `table`. The error's key is the key
     /// inside the section.
     fn from_table(name: &str, table: toml::Table) -> Result<Self, KeyError> {
+        Self::check_keys(name, &table)?;
         match Self::from_named(name, toml::Value::Table(table)) {
             Some(r) => r.map_err(|e| {
                 let key = clean_path(&e.path().to_string());

@@ -13,6 +13,7 @@ mod breaking_scan;
 mod cli;
 mod cluster;
 mod controllers;
+mod environment;
 mod faults;
 mod freq;
 mod freq_cylinder;

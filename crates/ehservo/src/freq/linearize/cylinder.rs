@@ -235,7 +235,14 @@ impl CylinderLin {
         let [ks, cs] = c.stop;
         let pressing = (y < 0.0 && -ks * y - cs * v > 0.0)
             || (y > c.stroke && ks * (c.stroke - y) - cs * v < 0.0);
-        let (stop_y, stop_v) = if pressing { (-ks, -cs) } else { (0.0, 0.0) };
+        let (mut stop_y, mut stop_v) = if pressing { (-ks, -cs) } else { (0.0, 0.0) };
+        if let Some(e) = &c.environment {
+            // The environment's spring and damper while it pushes, beside
+            // the stop's (docs/environments.md).
+            let (ky, kv) = e.slopes(self.t, y, v);
+            stop_y -= ky;
+            stop_v -= kv;
+        }
         let mut a = [[0.0; 6]; 6];
         let mut b = [0.0; 6];
         a[0][1] = 1.0;

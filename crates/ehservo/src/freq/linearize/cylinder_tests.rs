@@ -167,6 +167,36 @@ fn jacobian_matches_central_differences_in_both_directions() {
     }
 }
 
+/// With an environment the rod's row gains its spring and damper while it
+/// pushes (−k/M, −c/M): the Jacobian against central differences at the
+/// trims of [`SINGLE_ROD`] against a preloaded spring (pulling at the
+/// stroke's start, pushing at its end) and against a specimen it is
+/// pressing into (touched at y = 0.05 m, before every trim).
+#[test]
+fn jacobian_with_an_environment_matches_central_differences() {
+    for (env, what) in [
+        (
+            "[environment]\nkind = \"spring\"\nstiffness = 1e5\ndamping = 500.0\npreload = 1e3\nposition = 0.14\n",
+            "spring",
+        ),
+        (
+            "[environment]\nkind = \"specimen\"\nstiffness = 1e5\ndamping = 500.0\nposition = 0.05\n",
+            "specimen",
+        ),
+    ] {
+        let lin = build(&format!("{SINGLE_ROD}{env}"));
+        let stroke = lin.c().stroke;
+        for frac in [0.2, 0.5, 0.8] {
+            for v0 in [0.02, -0.02] {
+                let (x, u, _) = lin
+                    .trim(frac * stroke, v0, Side::Plus)
+                    .unwrap_or_else(|e| panic!("{what} at {frac}, v = {v0}: {e}"));
+                check(&lin, &x, u, &format!("{what} at {frac} of the stroke, v = {v0}"));
+            }
+        }
+    }
+}
+
 /// Merritt's closed form, derived by hand from this model's equations for
 /// a symmetric (double-rod) cylinder at mid-stroke, a critically centred
 /// valve, no leakage, Pt = 0: the trim holds p_A = p_B = Ps/2 (no load);
