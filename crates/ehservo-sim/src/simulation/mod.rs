@@ -648,7 +648,9 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             Mode::Sampled => self.y.pa.all_finite() && self.xi_finite,
             Mode::Continuous => self.y.all_finite(),
         };
-        if !finite {
+        if self.plant.failed() {
+            self.diverge(t_next, DivergenceReason::PlantFailed);
+        } else if !finite {
             self.diverge(t_next, DivergenceReason::NonFiniteState);
         } else if self.plant.measure(t_next, &self.y.pa.x, &var)[0].abs() > self.cfg.theta_limit {
             self.diverge(t_next, DivergenceReason::ThetaLimit);
