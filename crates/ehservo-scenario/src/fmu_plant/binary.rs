@@ -3,9 +3,9 @@
 //! and 4.2) that a plant needs, called through `libloading`.
 //!
 //! Every status the FMU returns is checked: `OK` and `Warning` go on,
-//! anything else (`Discard`, `Error`, `Fatal`) is an [`FmuError`] with the
-//! FMU's last logged message. The FMU's log goes to stderr as it comes
-//! (warnings and worse), prefixed with the instance's name.
+//! anything else (`Discard`, `Error`, `Fatal`), and a step that asks to
+//! terminate the simulation, is an [`FmuError`] with the FMU's last logged
+//! message.
 #![allow(unsafe_code)]
 
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
@@ -113,11 +113,10 @@ impl Binary {
     }
 }
 
-/// The FMU's last message and its instance's name, where the log
-/// callback writes (the instance environment).
+/// The FMU's last message, where the log callback writes (the instance
+/// environment).
 #[derive(Debug)]
 struct Log {
-    name: String,
     last: Mutex<String>,
 }
 
@@ -133,13 +132,15 @@ unsafe extern "C" fn log_message(
     // SAFETY: `env` is the `Log` this instance was created with (alive
     // while the instance is); `message` is NUL-terminated by FMI's contract.
     let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(message)) };
-    let text = text.to_string_lossy();
-    if status >= WARNING {
-        eprintln!("{}: {}: {text}", log.name, status_name(status));
-    }
+    // Kept, not printed: a refusal is one line, and a failure during a run
+    // is reported once with it (FmuError).
     if let Ok(mut last) = log.last.lock() {
         last.clear();
-        last.push_str(&text);
+        last.push_str(&format!(
+            "[{}] {}",
+            status_name(status),
+            text.to_string_lossy()
+        ));
     }
 }
 
@@ -179,7 +180,6 @@ impl Instance {
         };
         let (cname, ctoken, cres) = (c(name)?, c(token)?, c(resources)?);
         let log = Box::new(Log {
-            name: name.to_string(),
             last: Mutex::new(String::new()),
         });
         let env = &*log as *const Log as *mut c_void;

@@ -184,7 +184,7 @@ impl DivergenceReason {
                 "the adaptive solver's step fell below ten ulps of the time"
             }
             DivergenceReason::PlantFailed => {
-                "the plant's FMU returned an error status or panicked (its message is on stderr)"
+                "the plant's FMU failed: an error status, or it asked to terminate (its message is on stderr)"
             }
         }
     }

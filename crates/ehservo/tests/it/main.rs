@@ -14,6 +14,7 @@ mod cli;
 mod cluster;
 mod controllers;
 mod faults;
+mod fmu_import;
 mod freq;
 mod freq_cylinder;
 mod golden;
