@@ -159,6 +159,10 @@ fn an_imported_plant_sweeps_to_the_same_bits_on_one_and_two_threads() {
     assert_eq!(results[0], results[2], "imported and native");
 }
 
+/// What [`rezip`] does to an entry (its name and bytes): new bytes, or
+/// `None` to drop it.
+type Edit = dyn Fn(&str, Vec<u8>) -> Option<Vec<u8>>;
+
 /// A copy of the FMU `src` as `dst`, each entry through `edit` (which may
 /// change its bytes, or drop it with `None`).
 fn rezip(src: &Path, dst: &Path, edit: impl Fn(&str, Vec<u8>) -> Option<Vec<u8>>) {
@@ -225,7 +229,7 @@ fn a_bad_fmu_or_mapping_is_refused_with_the_file_the_key_and_the_reason() {
     let Some(fmu) = export(d, NATIVE) else {
         return;
     };
-    let variant = |name: &str, edit: &dyn Fn(&str, Vec<u8>) -> Option<Vec<u8>>| {
+    let variant = |name: &str, edit: &Edit| {
         rezip(&fmu, &d.join(name), edit);
         imported("").replace("plant.fmu", name)
     };
