@@ -11,6 +11,7 @@
 //! | `physical` | [`physical`](crate::physical) | rotary | (θ, θ̇, Pl), eqs. (1)–(6) |
 //! | `cylinder` | [`cylinder`](crate::cylinder) | linear (rotary through a rack and pinion) | (y, ẏ, P1, P2, Ps, relief) |
 //! | `ifac9007` | [`ifac9007`](crate::ifac9007) | linear (the benchmark's length unit) | (y, ẏ, p), IFAC benchmark 9007 |
+//! | `fmu` | `ehservo_scenario::fmu_plant` (it reads files) | from the FMU's position unit | x itself, stepped by the FMU ([`Plant::STEPS_ITSELF`]) |
 //!
 //! Each has its own configuration type (its `[plant]` keys, serde, a
 //! [`PlantConfig`]), its own variation type ([`Plant::Variation`], made from
