@@ -8,6 +8,7 @@
 //! message.
 #![allow(unsafe_code)]
 
+use super::FmuInstance;
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
@@ -58,7 +59,8 @@ pub(crate) struct FmuError {
     pub message: String,
 }
 
-fn status_name(s: Status) -> &'static str {
+/// FMI's name of a status (the same numbers in 2.0 and 3.0).
+pub(crate) fn status_name(s: Status) -> &'static str {
     match s {
         0 => "OK",
         1 => "Warning",
@@ -234,9 +236,10 @@ impl Instance {
             message: self.log.last.lock().map(|m| m.clone()).unwrap_or_default(),
         })
     }
+}
 
-    /// Sets Float64 variables.
-    pub fn set(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), FmuError> {
+impl FmuInstance for Instance {
+    fn set(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), FmuError> {
         debug_assert_eq!(vrs.len(), values.len());
         // SAFETY: a live instance; the slices are as long as their lengths.
         let s = unsafe {
@@ -251,8 +254,7 @@ impl Instance {
         self.check("fmi3SetFloat64", s)
     }
 
-    /// Gets Float64 variables into `out`.
-    pub fn get(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), FmuError> {
+    fn get(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), FmuError> {
         debug_assert_eq!(vrs.len(), out.len());
         // SAFETY: a live instance; the slices are as long as their lengths.
         let s = unsafe {
@@ -267,8 +269,7 @@ impl Instance {
         self.check("fmi3GetFloat64", s)
     }
 
-    /// One communication step from `t` over `h`.
-    pub fn step(&mut self, t: f64, h: f64) -> Result<(), FmuError> {
+    fn step(&mut self, t: f64, h: f64) -> Result<(), FmuError> {
         let (mut event, mut terminate, mut early, mut last) = (false, false, false, t);
         // SAFETY: a live instance in step mode; the outputs are writable.
         let s = unsafe {

@@ -70,6 +70,8 @@ pub(crate) fn parse(xml: &str) -> Result<Description, String> {
     let mut attrs: HashMap<String, String> = HashMap::new();
     let mut pending: Option<String> = None;
     let mut root_seen = false;
+    // FMI 2.0's `<SimpleType name=…>`, whose `<Real unit=…/>` follows.
+    let mut simple_type = String::new();
     for token in xmlparser::Tokenizer::from(xml) {
         let token = token.map_err(|e| format!("modelDescription.xml is not XML: {e}"))?;
         match token {
@@ -84,7 +86,10 @@ pub(crate) fn parse(xml: &str) -> Result<Description, String> {
                 if let Some(name) = pending.take() {
                     let parent = stack.last().map(String::as_str).unwrap_or("");
                     root_seen |= name == "fmiModelDescription";
-                    element(&mut d, &mut types, parent, &name, &attrs)?;
+                    if name == "SimpleType" {
+                        simple_type = attrs.get("name").cloned().unwrap_or_default();
+                    }
+                    element(&mut d, &mut types, (parent, &simple_type), &name, &attrs)?;
                     if matches!(end, xmlparser::ElementEnd::Open) {
                         stack.push(name);
                     }
@@ -105,12 +110,31 @@ pub(crate) fn parse(xml: &str) -> Result<Description, String> {
 fn element(
     d: &mut Description,
     types: &mut HashMap<String, String>,
-    parent: &str,
+    (parent, simple_type): (&str, &str),
     name: &str,
     a: &HashMap<String, String>,
 ) -> Result<(), String> {
     let get = |k: &str| a.get(k).cloned();
     match (parent, name) {
+        // FMI 2.0: `<SimpleType name="T"><Real unit="m"/></SimpleType>`.
+        ("SimpleType", "Real") => {
+            if let Some(u) = get("unit") {
+                types.insert(simple_type.to_string(), u);
+            }
+        }
+        // FMI 2.0: `<ScalarVariable …><Real unit=… declaredType=…/>`, the
+        // type and unit of the variable just read.
+        ("ScalarVariable", ty) => {
+            if let Some(v) = d.variables.last_mut() {
+                v.ty = if ty == "Real" {
+                    "Float64".into()
+                } else {
+                    ty.into()
+                };
+                v.unit = get("unit")
+                    .or_else(|| get("declaredType").and_then(|t| types.get(&t).cloned()));
+            }
+        }
         (_, "fmiModelDescription") => {
             d.fmi_version = get("fmiVersion").unwrap_or_default();
             d.token = get("instantiationToken")
@@ -163,14 +187,21 @@ impl Unpacked {
         s
     }
 
-    /// The binary of `model_identifier` for this platform
-    /// (`binaries/<arch>-<os>/<id>.<so|dylib|dll>`), if the FMU has it.
+    /// The binary of `model_identifier` for this platform, if the FMU has
+    /// it: `binaries/<arch>-<os>/<id>.<so|dylib|dll>` in FMI 3.0,
+    /// `binaries/<os><32|64>/…` in FMI 2.0.
     pub fn binary(&self, model_identifier: &str) -> Result<PathBuf, String> {
         let os = match std::env::consts::OS {
             "macos" => "darwin",
+            "windows" => "win",
             o => o,
         };
-        let platform = format!("{}-{os}", std::env::consts::ARCH);
+        let platform = if self.description.fmi_version.starts_with("2.") {
+            format!("{os}{}", usize::BITS)
+        } else {
+            let os = if os == "win" { "windows" } else { os };
+            format!("{}-{os}", std::env::consts::ARCH)
+        };
         let file = format!("{model_identifier}.{}", std::env::consts::DLL_EXTENSION);
         let p = self.dir.path().join("binaries").join(&platform).join(&file);
         if p.is_file() {
@@ -265,6 +296,30 @@ mod tests {
             ("Int32", "parameter")
         );
         assert_eq!(d.find("time").unwrap().unit, None);
+    }
+
+    #[test]
+    fn reads_an_fmi2_description_with_its_simple_types() {
+        let xml = r#"<fmiModelDescription fmiVersion="2.0" modelName="m" guid="{g}">
+  <CoSimulation modelIdentifier="servo"/>
+  <TypeDefinitions><SimpleType name="Length"><Real unit="m"/></SimpleType></TypeDefinitions>
+  <ModelVariables>
+    <ScalarVariable name="u" valueReference="0" causality="input"><Real start="0"/></ScalarVariable>
+    <ScalarVariable name="x" valueReference="1" causality="output"><Real declaredType="Length"/></ScalarVariable>
+    <ScalarVariable name="v" valueReference="2" causality="output"><Real unit="m/s"/></ScalarVariable>
+    <ScalarVariable name="n" valueReference="3" causality="parameter"><Integer start="1"/></ScalarVariable>
+  </ModelVariables>
+</fmiModelDescription>"#;
+        let d = parse(xml).unwrap();
+        assert_eq!((d.fmi_version.as_str(), d.token.as_str()), ("2.0", "{g}"));
+        let x = d.find("x").unwrap();
+        assert_eq!(
+            (x.ty.as_str(), x.unit.as_deref(), x.value_reference),
+            ("Float64", Some("m"), 1)
+        );
+        assert_eq!(d.find("v").unwrap().unit.as_deref(), Some("m/s"));
+        assert_eq!(d.find("u").unwrap().unit, None);
+        assert_eq!(d.find("n").unwrap().ty, "Integer");
     }
 
     #[test]

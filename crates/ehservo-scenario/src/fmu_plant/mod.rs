@@ -28,9 +28,11 @@
 //! message on stderr.
 
 mod binary;
+mod binary2;
 mod describe;
 
-use binary::{Binary, Instance};
+use binary::{Binary, FmuError, Instance};
+use binary2::{Binary2, Instance2};
 use describe::{Description, Variable};
 use ehservo_core::control::Signal;
 use ehservo_core::servo::{Load, NominalModel, ServoParams};
@@ -41,6 +43,23 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
+
+/// An initialised co-simulation instance of either FMI version.
+trait FmuInstance: Send + std::fmt::Debug {
+    /// Sets Float64 (FMI 2.0: Real) variables.
+    fn set(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), FmuError>;
+    /// Gets Float64 (Real) variables into `out`.
+    fn get(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), FmuError>;
+    /// One communication step from `t` over `h`.
+    fn step(&mut self, t: f64, h: f64) -> Result<(), FmuError>;
+}
+
+/// A loaded co-simulation binary of either FMI version.
+#[derive(Debug)]
+enum AnyBinary {
+    V3(Arc<Binary>),
+    V2(Arc<Binary2>),
+}
 
 /// Which of the FMU's interfaces the plant uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -170,11 +189,11 @@ impl FmuCfg {
 
     /// The mapping of the keys onto the FMU's variables, checked.
     fn map(&self, d: &Description) -> Result<Mapping, KeyError> {
-        if !d.fmi_version.starts_with("3.") {
+        if !d.fmi_version.starts_with("3.") && !d.fmi_version.starts_with("2.") {
             return Err(refuse(
                 "path",
                 format!(
-                    "the FMU is FMI {:?}: only FMI 3.0 is read yet",
+                    "the FMU is FMI {:?}: ehservo reads FMI 2.0 and 3.0",
                     d.fmi_version
                 ),
             ));
@@ -267,28 +286,26 @@ struct Mapping {
 #[derive(Debug)]
 struct Shared {
     unpacked: describe::Unpacked,
-    binary: Arc<Binary>,
+    binary: AnyBinary,
     map: Mapping,
     name: String,
 }
 
 impl Shared {
-    fn instance(&self) -> Result<Instance, binary::FmuError> {
-        let d = &self.unpacked.description;
-        Instance::new(
-            &self.binary,
-            &self.name,
-            &d.token,
-            &self.unpacked.resources(),
-            &self.map.starts,
-        )
+    fn instance(&self) -> Result<Box<dyn FmuInstance>, FmuError> {
+        let (token, res) = (&self.unpacked.description.token, self.unpacked.resources());
+        let starts = &self.map.starts;
+        Ok(match &self.binary {
+            AnyBinary::V3(b) => Box::new(Instance::new(b, &self.name, token, &res, starts)?),
+            AnyBinary::V2(b) => Box::new(Instance2::new(b, &self.name, token, &res, starts)?),
+        })
     }
 }
 
 /// One clone's instance and whether it failed.
 #[derive(Debug, Default)]
 struct Slot {
-    instance: Option<Instance>,
+    instance: Option<Box<dyn FmuInstance>>,
     failed: bool,
 }
 
@@ -315,7 +332,7 @@ impl Clone for FmuPlant {
 
 impl FmuPlant {
     /// x in SI from the instance's outputs.
-    fn read(&self, inst: &mut Instance) -> Result<[f64; 3], binary::FmuError> {
+    fn read(&self, inst: &mut dyn FmuInstance) -> Result<[f64; 3], FmuError> {
         let mut x = [0.0; 3];
         for (i, &(vr, scale)) in self.shared.map.outputs.iter().enumerate() {
             if vr != u32::MAX {
@@ -332,15 +349,15 @@ impl FmuPlant {
     fn with<T>(
         &self,
         t: f64,
-        f: impl FnOnce(&mut Instance) -> Result<T, binary::FmuError>,
+        f: impl FnOnce(&mut dyn FmuInstance) -> Result<T, FmuError>,
     ) -> Option<T> {
         let mut slot = self.slot.lock().unwrap_or_else(|p| p.into_inner());
         if slot.failed {
             return None;
         }
-        let r = match slot.instance.as_mut() {
+        let r = match slot.instance.as_deref_mut() {
             Some(inst) => f(inst),
-            None => Err(binary::FmuError {
+            None => Err(FmuError {
                 call: "the plant",
                 status: "no instance",
                 message: "the run did not initialise it".into(),
@@ -463,7 +480,11 @@ impl PlantConfig for FmuCfg {
         let unpacked = describe::unpack(&file).map_err(at)?;
         let map = self.map(&unpacked.description)?;
         let binary = unpacked.binary(&map.model_identifier).map_err(at)?;
-        let binary = Binary::load(&binary).map_err(at)?;
+        let binary = if unpacked.description.fmi_version.starts_with("2.") {
+            AnyBinary::V2(Binary2::load(&binary).map_err(at)?)
+        } else {
+            AnyBinary::V3(Binary::load(&binary).map_err(at)?)
+        };
         let shared = Shared {
             unpacked,
             binary,
