@@ -1,5 +1,5 @@
-//! `[plant] model = "fmu"`: a plant from another tool, an FMI 3.0
-//! co-simulation FMU (docs/plant-fmu.md).
+//! `[plant] model = "fmu"`: a plant from another tool, an FMI 2.0 or 3.0
+//! co-simulation FMU (docs/guide/plant-fmu.md).
 //!
 //! The scenario names the FMU (`path`, relative to the scenario file) and
 //! the mapping: the input that takes the command (`command`, V), the
@@ -13,7 +13,7 @@
 //! **How a co-simulation FMU steps** ([`Plant::STEPS_ITSELF`]): the
 //! simulator's held-command integration (`Held`) hands the plant the whole
 //! sample period h with the actuator's output held, and the plant calls
-//! `fmi3DoStep(t_k, h)` once; the FMU integrates the period with its own
+//! `fmi3DoStep(t_k, h)` (FMI 2.0: `fmi2DoStep`) once; the FMU integrates the period with its own
 //! solver and sub-steps. [`Plant::deriv`] is then never used, so the
 //! adaptive solvers and the continuous mode, which need it, are refused.
 //!
@@ -309,7 +309,7 @@ struct Slot {
     failed: bool,
 }
 
-/// A plant that is an FMI 3.0 co-simulation FMU.
+/// A plant that is an FMI 2.0 or 3.0 co-simulation FMU.
 #[derive(Debug)]
 pub struct FmuPlant {
     shared: Arc<Shared>,
@@ -456,7 +456,7 @@ impl Plant for FmuPlant {
 
 impl PlantConfig for FmuCfg {
     const MODEL: &'static str = "fmu";
-    const DOC: &'static str = "a plant from another tool: an FMI 3.0 co-simulation FMU";
+    const DOC: &'static str = "a plant from another tool: an FMI 2.0 or 3.0 co-simulation FMU";
     const PAPER_UNCERTAINTY: bool = false;
     const USES_LOAD: bool = true;
     type Plant = FmuPlant;
