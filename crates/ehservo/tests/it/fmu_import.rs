@@ -276,6 +276,18 @@ fn a_bad_fmu_or_mapping_is_refused_with_the_file_the_key_and_the_reason() {
         "plant.parameters.theta",
         "causality \"output\"",
     );
+    // An FMU plant cannot be exported in turn (the FMU's binary has no
+    // FMU import).
+    std::fs::write(d.join("again.toml"), imported("")).unwrap();
+    let o = ehservo()
+        .args(["fmu", "--plant"])
+        .arg(d.join("again.toml"))
+        .arg("--out")
+        .arg(d.join("again.fmu"))
+        .output()
+        .unwrap();
+    rejected("fmu of an fmu plant", &o, "cannot load another FMU");
+    assert!(!d.join("again.fmu").exists());
     // What a co-simulation FMU cannot do.
     refused(
         d,
