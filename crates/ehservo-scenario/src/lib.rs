@@ -22,6 +22,8 @@
 pub mod cancel;
 pub mod error;
 pub mod fmi;
+#[cfg(feature = "fmu-import")]
+pub mod fmu_plant;
 pub mod input;
 pub mod limits;
 pub mod observer_design;

@@ -11,6 +11,7 @@
 //! | `physical` | [`physical`](crate::physical) | rotary | (θ, θ̇, Pl), eqs. (1)–(6) |
 //! | `cylinder` | [`cylinder`](crate::cylinder) | linear (rotary through a rack and pinion) | (y, ẏ, P1, P2, Ps, relief) |
 //! | `ifac9007` | [`ifac9007`](crate::ifac9007) | linear (the benchmark's length unit) | (y, ẏ, p), IFAC benchmark 9007 |
+//! | `fmu` | `ehservo_scenario::fmu_plant` (it reads files) | from the FMU's position unit | x itself, stepped by the FMU ([`Plant::STEPS_ITSELF`]) |
 //!
 //! Each has its own configuration type (its `[plant]` keys, serde, a
 //! [`PlantConfig`]), its own variation type ([`Plant::Variation`], made from
@@ -201,6 +202,22 @@ pub trait Plant {
     /// The state derivative under input `u` (the valve command, V) and
     /// variation `v`.
     fn deriv(&self, t: f64, s: &Self::State, u: f64, v: &Self::Variation, ds: &mut Self::State);
+    /// Whether the plant advances itself over a sample period with its
+    /// input held ([`Plant::step_held`]) instead of being integrated from
+    /// [`Plant::deriv`]: a co-simulation FMU, whose `doStep` is its only
+    /// way forward. False (the default) for every plant ehservo writes.
+    const STEPS_ITSELF: bool = false;
+    /// Advances `s` from `t` over one sample period `h` with the plant's
+    /// input `u` held, when [`Plant::STEPS_ITSELF`]; a failure is reported
+    /// by [`Plant::failed`] afterwards. Nothing (the default) otherwise.
+    fn step_held(&self, _t: f64, _h: f64, _u: f64, _s: &mut Self::State) {}
+    /// Whether the plant has failed (an FMU returned an error status or
+    /// panicked): the simulator then ends the run as a result
+    /// ([`crate::simulation::DivergenceReason::PlantFailed`]). False (the
+    /// default) for a plant that cannot fail.
+    fn failed(&self) -> bool {
+        false
+    }
     /// Whether [`Plant::set_external_load`] acts on this plant (false, the
     /// default: the paper's plants take their load from the scenario's
     /// `[load]` alone).

@@ -40,6 +40,12 @@ pub fn resource_toml(lp: &Loop, kind: FmuKind) -> Result<String> {
             "`simulation.mode` = \"continuous\": a controller FMU is the sampled controller; set simulation.mode = \"sampled\" (or export --closed-loop)"
         );
     }
+    if s.plant.steps_itself() {
+        crate::bad_input!(
+            "`plant.model` = \"{}\": the FMU's binary cannot load another FMU as its plant; export a scenario with one of ehservo's own plants",
+            s.plant.model()
+        );
+    }
     if kind == FmuKind::Plant && s.simulation.solver != crate::simulation::SolverKind::Rk4 {
         crate::bad_input!(
             "`simulation.solver` = \"{}\": the plant FMU integrates each communication step with rk4 sub-steps; set simulation.solver = \"rk4\" (or export --closed-loop)",

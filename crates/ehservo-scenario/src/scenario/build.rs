@@ -17,7 +17,7 @@ use ehservo_sim::error::{non_negative, positive, KeyError, Reason};
 use ehservo_sim::estimator::AnyEstimator;
 use ehservo_sim::plant::{PlantContext, UncertaintySpec};
 use ehservo_sim::sensor::Sensor;
-use ehservo_sim::simulation::{Mode, Settings, SimConfig, Stages};
+use ehservo_sim::simulation::{Mode, Settings, SimConfig, SolverKind, Stages};
 
 /// Most draws of the random variation one run may ask for (horizon/hold).
 pub const MAX_DRAWS: f64 = 1.0e8;
@@ -72,6 +72,22 @@ pub(super) fn build(s: &Scenario) -> Result<Parts, KeyError> {
     }
     if s.output.decimate == 0 {
         return bad("output.decimate", "must be >= 1");
+    }
+    if s.plant.steps_itself() {
+        // A co-simulation FMU is advanced by its doStep over each sample
+        // period: it has no derivative for these to integrate.
+        if s.simulation.mode != Mode::Sampled {
+            return bad(
+                "simulation.mode",
+                "a co-simulation FMU plant steps itself each sample period: use mode = \"sampled\"",
+            );
+        }
+        if s.simulation.solver != SolverKind::Rk4 {
+            return bad(
+                "simulation.solver",
+                "a co-simulation FMU plant steps itself each sample period with its own solver: use solver = \"rk4\"",
+            );
+        }
     }
     let sim = s.sim_config();
     let stages = stages(s, spec, &model)?;

@@ -219,6 +219,18 @@ impl Scenario {
             Self::overridden(text, file, overrides)?
         };
         scenario.base_dir = base_dir;
+        #[cfg(feature = "fmu-import")]
+        if let PlantCfg::Fmu(c) = &mut scenario.plant {
+            // The axis is the FMU's (its position's unit): read it now, so
+            // that every reader of the scenario knows it.
+            c.resolve(scenario.base_dir.as_deref())
+                .map_err(|e| ScenarioError {
+                    file: file.to_string(),
+                    line_col: locate(text, &e.key),
+                    key: e.key,
+                    reason: e.reason,
+                })?;
+        }
         Ok(scenario)
     }
 

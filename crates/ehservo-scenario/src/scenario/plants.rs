@@ -107,6 +107,14 @@ macro_rules! plants {
                 }
             }
 
+            /// Whether the plant steps itself over a sample period (a
+            /// co-simulation FMU: [`Plant::STEPS_ITSELF`]).
+            pub fn steps_itself(&self) -> bool {
+                match self {
+                    $(Self::$variant(_) => <<$ty as PlantConfig>::Plant as Plant>::STEPS_ITSELF,)*
+                }
+            }
+
             /// Whether the scenario's `[load]` (a torque) loads this plant.
             pub fn uses_load(&self) -> bool {
                 match self {
@@ -246,12 +254,25 @@ macro_rules! plants {
     };
 }
 
-plants! {
-    ThirdOrder "third-order" => ThirdOrderCfg,
-    Physical "physical" => PhysicalCfg,
-    Cylinder "cylinder" => ehservo_sim::cylinder::CylinderCfg,
-    Ifac9007 "ifac9007" => ehservo_sim::ifac9007::Ifac9007Cfg,
+/// The registry's lines, with `$extra` after them.
+macro_rules! registered {
+    ($($extra:tt)*) => {
+        plants! {
+            ThirdOrder "third-order" => ThirdOrderCfg,
+            Physical "physical" => PhysicalCfg,
+            Cylinder "cylinder" => ehservo_sim::cylinder::CylinderCfg,
+            Ifac9007 "ifac9007" => ehservo_sim::ifac9007::Ifac9007Cfg,
+            $($extra)*
+        }
+    };
 }
+
+// A plant from an FMU needs the archive and dynamic loading (feature
+// `fmu-import`: the lab has it; the C ABI and the browser do not).
+#[cfg(feature = "fmu-import")]
+registered!(Fmu "fmu" => crate::fmu_plant::FmuCfg);
+#[cfg(not(feature = "fmu-import"))]
+registered!();
 
 /// `[plant.environment]` acts on a cylinder's rod: a model without a
 /// piston (the paper's third-order servo, its physical form, IFAC 9007)

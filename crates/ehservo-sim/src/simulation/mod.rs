@@ -173,7 +173,8 @@ struct TruthAt<'a, P: Plant> {
 
 impl<P: Plant> Truth for TruthAt<'_, P> {
     fn lumped_uncertainty(&self, u: f64, u_eq: f64, b_bar: f64) -> f64 {
-        let Some(st) = &self.stage else {
+        // A plant that steps itself has no derivative for a first stage.
+        let Some(st) = self.stage.as_ref().filter(|_| !P::STEPS_ITSELF) else {
             return self
                 .plant
                 .lumped_uncertainty(self.s, &self.x, u, u_eq, b_bar, &self.var);
@@ -648,7 +649,9 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             Mode::Sampled => self.y.pa.all_finite() && self.xi_finite,
             Mode::Continuous => self.y.all_finite(),
         };
-        if !finite {
+        if self.plant.failed() {
+            self.diverge(t_next, DivergenceReason::PlantFailed);
+        } else if !finite {
             self.diverge(t_next, DivergenceReason::NonFiniteState);
         } else if self.plant.measure(t_next, &self.y.pa.x, &var)[0].abs() > self.cfg.theta_limit {
             self.diverge(t_next, DivergenceReason::ThetaLimit);
@@ -839,3 +842,6 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
 mod tests;
 #[cfg(test)]
 use tests as tests_support;
+#[cfg(test)]
+#[allow(clippy::float_cmp)] // u is held: the very bits given
+mod steps_itself_tests;

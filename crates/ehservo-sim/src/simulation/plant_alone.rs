@@ -172,6 +172,7 @@ impl<P: Plant> PlantAlone<P> {
         let (hs, var) = self.variation(j0);
         let held = Held {
             t,
+            h: self.step,
             j0,
             hs,
             m: self.substeps,
@@ -189,7 +190,9 @@ impl<P: Plant> PlantAlone<P> {
         self.k = self.k.saturating_add(1);
         let t_next = self.time();
         // The closed loop's checks, in its order (Simulation::advance).
-        let reason = if !self.y.all_finite() {
+        let reason = if self.plant.failed() {
+            Some(DivergenceReason::PlantFailed)
+        } else if !self.y.all_finite() {
             Some(DivergenceReason::NonFiniteState)
         } else if self.plant.measure(t_next, &self.y.x, &var)[0].abs() > self.theta_limit {
             Some(DivergenceReason::ThetaLimit)

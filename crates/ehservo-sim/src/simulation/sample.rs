@@ -160,6 +160,9 @@ pub enum DivergenceReason {
     SolverStepBudget,
     /// An adaptive solver's step fell below ten ulps of the time.
     SolverStepTooSmall,
+    /// The plant failed: an FMU returned an error status or panicked
+    /// ([`crate::plant::Plant::failed`]; its message is on stderr).
+    PlantFailed,
 }
 
 impl DivergenceReason {
@@ -179,6 +182,9 @@ impl DivergenceReason {
             }
             DivergenceReason::SolverStepTooSmall => {
                 "the adaptive solver's step fell below ten ulps of the time"
+            }
+            DivergenceReason::PlantFailed => {
+                "the plant's FMU failed: an error status, or it asked to terminate (its message is on stderr)"
             }
         }
     }

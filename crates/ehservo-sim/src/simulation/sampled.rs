@@ -153,6 +153,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         }
         let held = Held {
             t,
+            h: self.cfg.step,
             j0,
             hs,
             m,
@@ -180,6 +181,9 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
 pub(super) struct Held {
     /// The sample's time t_k (s).
     pub(super) t: f64,
+    /// The sample period h (s): what a plant that steps itself
+    /// ([`Plant::STEPS_ITSELF`]) is advanced over, in one call.
+    pub(super) h: f64,
     /// The index of its first sub-step on the variation's clock.
     pub(super) j0: u64,
     /// The sub-step (s).
@@ -207,6 +211,19 @@ impl Held {
         k1: Option<PlantAct<P::State>>,
     ) {
         let Held { t, j0, hs, m, .. } = self;
+        if P::STEPS_ITSELF {
+            // A co-simulation FMU: one call over the period under the
+            // actuator's output as the period begins; the actuator's own
+            // state, if it has one, by its RK4 sub-steps beside it.
+            plant.step_held(t, self.h, act.output(&y.a, u), &mut y.x);
+            if act.held_output(u).is_none() {
+                for j in 0..m {
+                    let ts = t + j as f64 * hs;
+                    rk4_step(|_, a, da| act.deriv(a, u, da), ts, &mut y.a, hs);
+                }
+            }
+            return;
+        }
         // A valve without spool dynamics gives the plant the same
         // input at every stage, and its state derivative is zero:
         // computed once here instead of at each stage (the same bits).

@@ -15,6 +15,8 @@ mod cluster;
 mod controllers;
 mod environment;
 mod faults;
+mod fmu_import;
+mod fmu_import_fmi2;
 mod freq;
 mod freq_cylinder;
 mod golden;
