@@ -158,6 +158,10 @@ pub struct SurfaceAnalysis {
 /// Everything [`analyze`] computes.
 #[derive(Debug, Clone, Serialize)]
 pub struct Analysis {
+    /// The axis, `"rotary"` or `"linear"`: b̄ is in rad or m per V·s³, and
+    /// d's load is a torque Tl (N·m, Jt the inertia) or a force F (N, Jt
+    /// the moving mass M: the cylinder's nominal model, docs/cylinder.md §2).
+    pub axis: &'static str,
     /// ā1, ā2, ā3 (s⁻³, s⁻², s⁻¹).
     pub a_nominal: [f64; 3],
     /// b̄ at Pl = 0 (s⁻³V⁻¹).
@@ -302,6 +306,7 @@ pub fn analyze(lp: &Loop) -> Analysis {
         None => cubic_roots(surface[0], surface[1], surface[2]),
     };
     Analysis {
+        axis: lp.axis().name(),
         a_nominal: a,
         b_at_rest: model.b_at_rest(),
         d_coefficients: [servo.d_per_torque(), 1.0 / servo.jt],

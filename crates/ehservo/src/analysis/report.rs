@@ -125,19 +125,28 @@ impl Analysis {
                 sig(self.a_nominal[2], 8)
             ),
         );
+        let linear = self.axis == "linear";
         row(
             t,
             "b̄ at Pl = 0",
-            &format!("{} s⁻³V⁻¹", sig(self.b_at_rest, 8)),
+            &format!(
+                "{} {}s⁻³V⁻¹",
+                sig(self.b_at_rest, 8),
+                if linear { "m·" } else { "" }
+            ),
+        );
+        let (d0, d1) = (
+            sig(self.d_coefficients[0], 7),
+            sig(self.d_coefficients[1], 7),
         );
         row(
             t,
             "d(t)",
-            &format!(
-                "{}·Tl + {}·Ṫl   (4βe·Kce/(Vt·Jt), 1/Jt)",
-                sig(self.d_coefficients[0], 7),
-                sig(self.d_coefficients[1], 7)
-            ),
+            &if linear {
+                format!("{d0}·F + {d1}·Ḟ   (4βe·Kce/(Vt·M), 1/M; F the load force, N)")
+            } else {
+                format!("{d0}·Tl + {d1}·Ṫl   (4βe·Kce/(Vt·Jt), 1/Jt)")
+            },
         );
         pole_table(t, "open-loop poles", &self.open_loop_poles);
     }

@@ -539,3 +539,31 @@ fn run_to_dir_diagnostics_are_those_of_the_kept_samples() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert!(summary["diagnostics"].is_null());
 }
+
+/// On a linear axis `analyze` speaks the cylinder's units: b̄ in m/(V·s³)
+/// and d's load a force F, the coefficient of its rate 1/M (the nominal
+/// model's Jt is the slide's mass, M = 1200 kg).
+#[test]
+fn analyze_on_a_linear_axis_names_a_force_and_metres() {
+    let lp = Loop::load(
+        &crate::common::repo().join("scenarios/cylinders/slide.toml"),
+        &[],
+    )
+    .unwrap();
+    let a = analyze(&lp);
+    assert_eq!(a.axis, "linear");
+    assert!(
+        rel(a.d_coefficients[1], 1.0 / 1200.0) < 1e-12,
+        "{:?}",
+        a.d_coefficients
+    );
+    let text = a.to_text();
+    assert!(
+        text.contains("m·s⁻³V⁻¹") && text.contains("·F + "),
+        "{text}"
+    );
+    assert!(!text.contains("Tl"), "{text}");
+    let fig2 = analyze(&scenario(&[]));
+    assert_eq!(fig2.axis, "rotary");
+    assert!(fig2.to_text().contains("·Tl + "));
+}
