@@ -1,5 +1,5 @@
 //! Stability margins of a loop transfer function `L(ω)`, found on a dense
-//! logarithmic grid and refined by bisection (crossings) and golden-section
+//! logarithmic grid and refined by regula falsi (crossings, Illinois) and golden-section
 //! search (the smallest distance to −1), every search bounded.
 //!
 //! The conventions are python-control's `stability_margins` (its
@@ -105,8 +105,64 @@ pub fn log_grid(lo: f64, hi: f64, per_decade: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Bisection of `g` (a sign change between `a` and `b`) on log ω.
-fn bisect(g: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
+/// The root of `g` between `a` and `b` (a sign change) on log ω, by the
+/// Illinois variant of regula falsi (Dowell & Jarratt, BIT 11:168–174,
+/// 1971): superlinear (order ≈ 1.44), the bracket kept, so a dozen
+/// evaluations do what [`BISECTIONS`] halvings do. A step that leaves the
+/// bracket or a value that is not finite falls back to halving; at most
+/// [`BISECTIONS`] evaluations.
+fn bisect(g: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+    let (mut xa, mut xb) = (a.ln(), b.ln());
+    let (mut fa, mut fb) = (g(a), g(b));
+    if !(fa.is_finite() && fb.is_finite()) || fa * fb > 0.0 {
+        return halve(g, a, b);
+    }
+    // The last two steps' sides: Illinois halves the retained end's value
+    // when the same end is kept twice running.
+    let mut kept_a = false;
+    for _ in 0..BISECTIONS {
+        if fa == 0.0 {
+            return xa.exp();
+        }
+        if fb == 0.0 || (xb - xa).abs() <= 4.0 * f64::EPSILON * xa.abs().max(xb.abs()).max(1.0) {
+            return xb.exp();
+        }
+        let mut x = (xa * fb - xb * fa) / (fb - fa);
+        if !(x > xa.min(xb) && x < xa.max(xb)) {
+            x = 0.5 * (xa + xb);
+        }
+        let mut fx = g(x.exp());
+        if !fx.is_finite() {
+            x = 0.5 * (xa + xb);
+            fx = g(x.exp());
+            if !fx.is_finite() {
+                return halve(g, xa.min(xb).exp(), xa.max(xb).exp());
+            }
+        }
+        if fx == 0.0 || (x - xb).abs() <= 4.0 * f64::EPSILON * x.abs().max(1.0) {
+            return x.exp();
+        }
+        if (fx > 0.0) == (fb > 0.0) {
+            // The new point replaces b; a is kept.
+            if kept_a {
+                fa *= 0.5;
+            }
+            kept_a = true;
+        } else {
+            // The sign changed: b moves to a.
+            xa = xb;
+            fa = fb;
+            kept_a = false;
+        }
+        xb = x;
+        fb = fx;
+    }
+    xb.exp()
+}
+
+/// Bisection of `g` on log ω ([`BISECTIONS`] halvings): where the
+/// Illinois step cannot start (a value that is not finite at an end).
+fn halve(g: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
     let mut ga = g(a);
     for _ in 0..BISECTIONS {
         let m = (a * b).sqrt();
@@ -380,6 +436,25 @@ pub fn peak(h: &dyn Fn(f64) -> Option<C64>, lo: f64, hi: f64) -> Option<(f64, f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The Illinois refinement of a crossing: |L| − 1 of the double lag
+    /// above, 1/(ω·(1 + ω²)) − 1, crosses at the real root of
+    /// ω³ + ω − 1 = 0, ω = 0.682327803828019 (Cardano:
+    /// ∛(1/2 + √(31/108)) + ∛(1/2 − √(31/108))), found from a grid cell
+    /// [0.5, 1] to 1e-14 in at most 16 evaluations (halving needs 60).
+    #[test]
+    fn a_crossing_is_refined_superlinearly() {
+        let n = std::cell::Cell::new(0usize);
+        let g = |w: f64| {
+            n.set(n.get() + 1);
+            1.0 / (w * (1.0 + w * w)) - 1.0
+        };
+        let r = (31.0f64 / 108.0).sqrt();
+        let want = (0.5 + r).cbrt() + (0.5 - r).cbrt();
+        let got = bisect(&g, 0.5, 1.0);
+        assert!((got - want).abs() < 1e-14 * want, "{got} vs {want}");
+        assert!(n.get() <= 16, "{} evaluations", n.get());
+    }
 
     /// L(s) = K/(s(s + 1)²) with K = 1, by hand: the phase crosses −180°
     /// where 2·atan(ω) = 90°, ω = 1, |L(j)| = 1/(1·2) = 0.5: GM = 2
