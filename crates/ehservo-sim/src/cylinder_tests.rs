@@ -415,12 +415,16 @@ fn single_rod_velocity_ratios() {
         volume: 1e-4,
         bulk_modulus: None,
         relief_pressure: 3e7,
-        relief_time_constant: 1e-3,
-        relief_k_cs: 1e-8,
-        relief_k_cf: 1e-8,
-        relief_q_nom: 1e-3,
+        relief_time_constant: Some(1e-3),
+        relief_k_cs: Some(1e-8),
+        relief_k_cf: Some(1e-8),
+        relief_q_nom: Some(1e-3),
+        relief_full_flow_pressure: None,
+        relief_rated_flow: None,
+        relief_response_time: None,
         tank_pressure: 0.0,
         initial_pressure: Some(1e6),
+        accumulator: None,
     };
     let p = build(&cfg);
     let (ve, vr) = (settle(&p, 10.0, 0.1, 1e6), settle(&p, -10.0, 0.4, 1e6));

@@ -72,6 +72,7 @@
 //! # Ok::<(), ParamError>(())
 //! ```
 
+pub mod accumulator;
 pub mod actuator;
 pub mod axis;
 pub mod behaviour;
@@ -81,8 +82,10 @@ pub mod estimator;
 pub mod force;
 pub mod ifac9007;
 pub mod metrics;
+pub mod pc_pump;
 pub mod physical;
 pub mod plant;
+pub mod relief;
 pub mod sensor;
 pub mod simulation;
 pub mod supply;
