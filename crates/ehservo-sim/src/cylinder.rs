@@ -752,7 +752,13 @@ impl Plant for CylinderPlant {
             s[2].max(0.0),
             s[3].max(0.0),
             self.c.supply_pressure(s[4], &f),
-            s[5],
+            // A pressure-compensated pump has no relief: its slot holds
+            // the regulator's state, not an opening.
+            if matches!(self.c.supply, Supply::PcPump(_)) {
+                0.0
+            } else {
+                s[5]
+            },
             fl,
             fs,
         ];
