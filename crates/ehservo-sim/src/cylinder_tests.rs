@@ -632,8 +632,9 @@ mod friction;
 /// line: in steady extension the valve passes A_A·v from the line (the
 /// P→A edge alone is open, no chamber leakage, ṗ_A = 0), so the pump's
 /// delivery is A_A·v plus its leakage and the line sits at the
-/// compensator's closed form p = (p_set + P_t + r_p·(C_lp·P_t − A_A·v))/(1
-/// + r_p·C_lp) with r_p = band/q_max (ehservo_sim::pc_pump). The
+/// compensator's closed form
+/// p = (p_set + P_t + r_p·(C_lp·P_t − A_A·v))/(1 + r_p·C_lp) with
+/// r_p = band/q_max (ehservo_sim::pc_pump). The
 /// accumulator, the pressure steady, takes no flow (a small one, 10 cm³:
 /// a larger one softens the line and slows the regulator's loop beyond
 /// the 1.5 s the rod has before its stop).
