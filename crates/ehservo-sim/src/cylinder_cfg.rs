@@ -424,7 +424,7 @@ impl CylinderCfg {
         // pressure, a compensator's setting): a relief that cracks below
         // the pressure that holds the load would pass the pump's flow to
         // tank while holding it.
-        let ps = c.supply.setting();
+        let ps = c.supply.setting(pt);
         let hold = c.area[0] * (ps - pt) - (c.area[0] - c.area[1]) * pt;
         let static_load = c.gravity_force + c.force.static_part();
         if static_load > 0.0 && hold <= static_load {

@@ -144,7 +144,9 @@ impl PcPump {
     /// setting scaled by `pressure_factor`: ẏ = 0 gives
     /// q_p = (p_set + P_t − p)/r_p, and q_p − C_lp·(p − P_t) = q_draw, so
     /// p = (p_set + P_t + r_p·(C_lp·P_t − q_draw))/(1 + r_p·C_lp), while
-    /// q_p ≤ q_max (beyond, the pump is at full stroke).
+    /// q_p ≤ q_max (beyond, the pump is at full stroke, and with no
+    /// leakage the line holds no pressure: −∞ is returned, which the
+    /// supply never asks for with no draw).
     pub fn steady_pressure(&self, pt: f64, q_draw: f64, pressure_factor: f64) -> f64 {
         let p_set = self.p_set * pressure_factor + pt;
         let p = (p_set + self.r_p * (self.leakage * pt - q_draw)) / (1.0 + self.r_p * self.leakage);

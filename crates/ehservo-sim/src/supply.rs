@@ -1,5 +1,9 @@
 //! The hydraulic supply: a fixed pressure, or a fixed-displacement pump
-//! into a line volume with a pressure-relief valve, and the tank.
+//! into a line volume with a pressure-relief valve, and the tank. The
+//! relief is given by Hopsan's coefficients or by a datasheet
+//! ([`crate::relief`]); `kind = "pc-pump"` is a pressure-compensated pump
+//! ([`crate::pc_pump`]); either pump's line can carry a gas accumulator
+//! ([`crate::accumulator`]). docs/cylinder.md §9.
 //!
 //! ```text
 //! fixed:  Ps = const
@@ -403,7 +407,7 @@ impl Supply {
         }
         let opt = |key: &str, v: Option<f64>, default: f64| positive(key, v.unwrap_or(default));
         let q_max = d * n / (2.0 * core::f64::consts::PI);
-        let acc = accumulator.map(|a| a.validate(p_set)).transpose()?;
+        let acc = accumulator.map(|a| a.validate(p_set + pt)).transpose()?;
         Ok((
             Supply::PcPump(PcPump {
                 q_max,
@@ -544,13 +548,14 @@ impl Supply {
         }
     }
 
-    /// The supply's pressure setting (Pa): a fixed supply's pressure, a
-    /// relief's cracking pressure, a compensator's setting.
-    pub fn setting(&self) -> f64 {
+    /// The supply's pressure setting (Pa, absolute) over the tank at `pt`:
+    /// a fixed supply's pressure, a relief's cracking pressure, a
+    /// compensator's dead-head pressure (its setting over the tank, + P_t).
+    pub fn setting(&self, pt: f64) -> f64 {
         match self {
             Supply::Fixed { ps } => *ps,
             Supply::Pump(p) => p.p_max,
-            Supply::PcPump(p) => p.p_set,
+            Supply::PcPump(p) => p.p_set + pt,
         }
     }
 }
