@@ -482,10 +482,22 @@ impl Cylinder {
         } else {
             dry.slope.abs() / m
         });
-        if let Supply::Pump(p) = &self.supply {
-            let relief = p.x_max.max(s[5]) * 0.5 / (ps - pt).max(1.0).sqrt();
-            lam = lam.max(p.stiffness * f.bulk_modulus * (p.leakage + relief + s_pa + s_pb));
-            lam = lam.max(p.rate);
+        match &self.supply {
+            Supply::Pump(p) => {
+                let relief = p.x_max.max(s[5]) * 0.5 / (ps - pt).max(1.0).sqrt();
+                lam = lam.max(p.stiffness * f.bulk_modulus * (p.leakage + relief + s_pa + s_pb));
+                lam = lam.max(p.rate);
+            }
+            Supply::PcPump(p) => {
+                // The line through the leakage and the valve's edges, and the
+                // regulator's rates: g2 and the lead's feedthrough of ṗ,
+                // (βe/V_s)/(ω_p1·d).
+                let k = p.beta * f.bulk_modulus / p.volume;
+                let d = p.denom(ps);
+                lam = lam.max(k * (p.leakage + s_pa + s_pb));
+                lam = lam.max(p.r_p / d + k / (p.lead * d));
+            }
+            Supply::Fixed { .. } => {}
         }
         lam
     }
@@ -496,6 +508,9 @@ impl Cylinder {
         let (ps0, x0) = match &self.supply {
             Supply::Fixed { ps } => (ps * f.supply_pressure, 0.0),
             Supply::Pump(p) => (p.p0, 0.0),
+            // Hopsan's regulator starts at full stroke (y0 = q_max·d,
+            // HydraulicPressureControlledPump.hpp lines 128–133).
+            Supply::PcPump(p) => (p.p0, p.y_max(p.p0)),
         };
         let [pa, pb] = match self.initial {
             [Some(a), Some(b)] => [a, b],
@@ -783,7 +798,13 @@ impl Plant for CylinderPlant {
             s[2].max(0.0),
             s[3].max(0.0),
             self.c.supply_pressure(s[4], &f),
-            s[5],
+            // A pressure-compensated pump has no relief: its slot holds
+            // the regulator's state, not an opening.
+            if matches!(self.c.supply, Supply::PcPump(_)) {
+                0.0
+            } else {
+                s[5]
+            },
             fl,
             fs,
         ]);
@@ -821,11 +842,12 @@ impl Plant for CylinderPlant {
         self.c.deriv(t, s, u, &v.f, ds);
     }
 
-    /// The relief valve's opening back inside [0, x_max]
+    /// The supply's second state (the relief valve's opening, or the
+    /// compensator's regulator) back inside its limits
     /// ([`Supply::limit_opening`]).
     #[inline]
     fn limit_state(&self, s: &mut [f64; 6]) {
-        s[5] = self.c.supply.limit_opening(s[5]);
+        s[5] = self.c.supply.limit_opening(s[4], s[5]);
     }
 
     #[inline]

@@ -452,6 +452,11 @@ impl CylinderCfg {
                 + c.environment.as_ref().map_or(0.0, |e| e.peak(stroke));
             (f + (f * f + 2.0 * ks * f * stroke).sqrt()) / ks
         };
+        // At the supply's setting (a fixed pressure, a relief's cracking
+        // pressure, a compensator's setting): a relief that cracks below
+        // the pressure that holds the load would pass the pump's flow to
+        // tank while holding it.
+        let ps = c.supply.setting(pt);
         let hold = c.area[0] * (ps - pt) - (c.area[0] - c.area[1]) * pt;
         let static_load = c.gravity_force + c.force.static_part();
         if static_load > 0.0 && hold <= static_load {
@@ -459,9 +464,10 @@ impl CylinderCfg {
                 match c.supply {
                     Supply::Fixed { .. } => "plant.supply.pressure",
                     Supply::Pump(_) => "plant.supply.relief_pressure",
+                    Supply::PcPump(_) => "plant.supply.compensator_pressure",
                 },
                 format!(
-                    "the supply ({:.4e} Pa) cannot hold the static load of {static_load:.4e} N on the piston side's {:.4e} m²",
+                    "the supply's setting ({:.4e} Pa) cannot hold the static load of {static_load:.4e} N on the piston side's {:.4e} m²",
                     ps, c.area[0]
                 ),
             ));

@@ -415,12 +415,16 @@ fn single_rod_velocity_ratios() {
         volume: 1e-4,
         bulk_modulus: None,
         relief_pressure: 3e7,
-        relief_time_constant: 1e-3,
-        relief_k_cs: 1e-8,
-        relief_k_cf: 1e-8,
-        relief_q_nom: 1e-3,
+        relief_time_constant: Some(1e-3),
+        relief_k_cs: Some(1e-8),
+        relief_k_cf: Some(1e-8),
+        relief_q_nom: Some(1e-3),
+        relief_full_flow_pressure: None,
+        relief_rated_flow: None,
+        relief_response_time: None,
         tank_pressure: 0.0,
         initial_pressure: Some(1e6),
+        accumulator: None,
     };
     let p = build(&cfg);
     let (ve, vr) = (settle(&p, 10.0, 0.1, 1e6), settle(&p, -10.0, 0.4, 1e6));
@@ -624,5 +628,54 @@ fn bad_geometry_is_named() {
 #[path = "cylinder_friction_tests.rs"]
 mod friction;
 
+/// Flow-fed by a pressure-compensated pump with an accumulator on its
+/// line: in steady extension the valve passes A_A·v from the line (the
+/// P→A edge alone is open, no chamber leakage, ṗ_A = 0), so the pump's
+/// delivery is A_A·v plus its leakage and the line sits at the
+/// compensator's closed form
+/// p = (p_set + P_t + r_p·(C_lp·P_t − A_A·v))/(1 + r_p·C_lp) with
+/// r_p = band/q_max (ehservo_sim::pc_pump). The
+/// accumulator, the pressure steady, takes no flow (a small one, 10 cm³:
+/// a larger one softens the line and slows the regulator's loop beyond
+/// the 1.5 s the rod has before its stop).
+#[test]
+fn a_pc_pump_feeds_the_cylinder_at_its_closed_form() {
+    let mut cfg = single_rod();
+    cfg.cylinder.viscous = 2e4;
+    let q_max = 6e-4;
+    cfg.supply = toml::from_str(&format!(
+        "kind = \"pc-pump\"\ndisplacement = {q_max}\nspeed = 6.283185307179586\n\
+         leakage = 1e-12\nvolume = 1e-4\ncompensator_pressure = 2e7\n\
+         compensator_band = 1e6\ntank_pressure = 1e5\ninitial_pressure = 1.9e7\n\
+         accumulator = {{ precharge = 1e7, volume = 1e-5, exponent = 1.4 }}\n"
+    ))
+    .unwrap();
+    let p = build(&cfg);
+    let c = p.cylinder();
+    let Supply::PcPump(pump) = c.supply else {
+        unreachable!()
+    };
+    let mut s = c.initial_state(0.1, 0.0, 0.0, &Factors::ONE);
+    let h = 5e-6;
+    for k in 0..300_000 {
+        rk4_step(
+            |tt, x: &[f64; 6], d: &mut [f64; 6]| p.deriv(tt, x, 4.0, &ONE, d),
+            k as f64 * h,
+            &mut s,
+            h,
+        );
+        p.limit_state(&mut s);
+    }
+    let v = s[1];
+    let q = c.area[0] * v;
+    assert!(v > 0.0 && q < q_max, "v = {v}");
+    let r_p = 1e6 / q_max;
+    let want = (2e7 + 1e5 + r_p * (1e-12 * 1e5 - q)) / (1.0 + r_p * 1e-12);
+    assert!(close(s[4], want, 1e-9), "p_s {} vs {want}", s[4]);
+    assert!(close(pump.steady_pressure(1e5, q, 1.0), want, 1e-12));
+    let mut ds = [0.0; 6];
+    p.deriv(1.0, &s, 4.0, &ONE, &mut ds);
+    assert!(ds[4].abs() < 1e-3 * want, "ṗ_s = {}", ds[4]);
+}
 #[path = "cylinder_env_tests.rs"]
 mod env;

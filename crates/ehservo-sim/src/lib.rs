@@ -72,6 +72,7 @@
 //! # Ok::<(), ParamError>(())
 //! ```
 
+pub mod accumulator;
 pub mod actuator;
 pub mod axis;
 pub mod behaviour;
@@ -83,8 +84,10 @@ pub mod force;
 pub mod hose;
 pub mod ifac9007;
 pub mod metrics;
+pub mod pc_pump;
 pub mod physical;
 pub mod plant;
+pub mod relief;
 pub mod sensor;
 pub mod simulation;
 pub mod supply;

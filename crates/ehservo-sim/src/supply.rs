@@ -1,5 +1,9 @@
 //! The hydraulic supply: a fixed pressure, or a fixed-displacement pump
-//! into a line volume with a pressure-relief valve, and the tank.
+//! into a line volume with a pressure-relief valve, and the tank. The
+//! relief is given by Hopsan's coefficients or by a datasheet
+//! ([`crate::relief`]); `kind = "pc-pump"` is a pressure-compensated pump
+//! ([`crate::pc_pump`]); either pump's line can carry a gas accumulator
+//! ([`crate::accumulator`]). docs/cylinder.md §9.
 //!
 //! ```text
 //! fixed:  Ps = const
@@ -43,12 +47,12 @@
 //! refused unless 0. The line volume is Hopsan's `HydraulicVolumeMultiPort`
 //! read the same way, `(V/βe)·ṗ = Σ q`.
 
+use crate::accumulator::{line_stiffness, Accumulator, AccumulatorCfg};
 use crate::error::{non_negative, positive, KeyError};
+pub use crate::pc_pump::PcPump;
+use crate::relief::ReliefKeys;
+pub use crate::relief::RELIEF_P_NOM;
 use serde::{Deserialize, Serialize};
-
-/// The rated pressure of Hopsan's relief characteristic, `mPnom = 7e6f`
-/// (HydraulicPressureReliefValve.hpp, `initialize`).
-pub const RELIEF_P_NOM: f64 = 7e6;
 
 /// `[plant.supply]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -76,22 +80,87 @@ pub enum SupplyCfg {
         /// The line's bulk modulus (Pa); default the fluid's.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         bulk_modulus: Option<f64>,
-        /// Relief cracking pressure p_max (Pa).
+        /// Relief cracking pressure p_max (Pa): the flow starts there.
         relief_pressure: f64,
-        /// Relief spool time constant τ (s).
-        relief_time_constant: f64,
-        /// Relief characteristic due to the spring, k_cs ((m³/s)/Pa).
-        relief_k_cs: f64,
-        /// Relief characteristic due to flow forces, k_cf ((m³/s)/Pa).
-        relief_k_cf: f64,
-        /// Relief flow at full opening and 7 MPa, q_nom (m³/s).
-        relief_q_nom: f64,
+        /// Relief spool time constant τ (s) (Hopsan's form).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relief_time_constant: Option<f64>,
+        /// Relief characteristic due to the spring, k_cs ((m³/s)/Pa) (Hopsan's form).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relief_k_cs: Option<f64>,
+        /// Relief characteristic due to flow forces, k_cf ((m³/s)/Pa) (Hopsan's form).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relief_k_cf: Option<f64>,
+        /// Relief flow at full opening and 7 MPa, q_nom (m³/s) (Hopsan's form).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relief_q_nom: Option<f64>,
+        /// The relief's pressure at its rated flow (Pa) (datasheet form:
+        /// the p–Q curve's cracking pressure plus its override).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relief_full_flow_pressure: Option<f64>,
+        /// The relief's rated flow (m³/s), passed fully open at
+        /// `relief_full_flow_pressure` (datasheet form).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relief_rated_flow: Option<f64>,
+        /// The relief's response time (s): 90 % of a step, τ = t/ln 10
+        /// (datasheet form).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relief_response_time: Option<f64>,
         /// Tank pressure Pt (Pa). Default 0.
         #[serde(default)]
         tank_pressure: f64,
         /// Ps(0) (Pa); default the tank pressure.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         initial_pressure: Option<f64>,
+        /// A gas accumulator on the line.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        accumulator: Option<AccumulatorCfg>,
+    },
+    /// A pressure-compensated variable pump (Hopsan's
+    /// HydraulicPressureControlledPump) into a line volume.
+    PcPump {
+        /// Maximum displacement D (m³/rev).
+        displacement: f64,
+        /// Shaft speed n (rad/s).
+        speed: f64,
+        /// Leakage coefficient C_lp (m³/(s·Pa)). Default 0.
+        #[serde(default)]
+        leakage: f64,
+        /// Line volume V_s (m³).
+        volume: f64,
+        /// The line's bulk modulus (Pa); default the fluid's.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bulk_modulus: Option<f64>,
+        /// The compensator's setting p_dif (Pa): the pressure at zero
+        /// displacement (dead head).
+        compensator_pressure: f64,
+        /// The compensator's band (Pa): the pressure rise from full to zero
+        /// displacement, r_p·q_max.
+        compensator_band: f64,
+        /// Regulator inductance l_p at 7 MPa (Pa·s²/m³). Default Hopsan's 7e7.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        compensator_inductance: Option<f64>,
+        /// Lead frequency of the regulator ω_p1 (rad/s). Default Hopsan's 200.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        compensator_lead: Option<f64>,
+        /// Time constant of the control valve τ_v (s). Default Hopsan's 1e-3.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        compensator_valve_time_constant: Option<f64>,
+        /// Hopsan's t_p, "time from min to full displacement" (s). Default 0.15.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        on_stroke_time: Option<f64>,
+        /// Hopsan's t_m, "time from full to min displacement" (s). Default 0.12.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        de_stroke_time: Option<f64>,
+        /// Tank pressure Pt (Pa). Default 0.
+        #[serde(default)]
+        tank_pressure: f64,
+        /// Ps(0) (Pa); default the tank pressure.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        initial_pressure: Option<f64>,
+        /// A gas accumulator on the line.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        accumulator: Option<AccumulatorCfg>,
     },
 }
 
@@ -144,6 +213,8 @@ pub enum Supply {
     },
     /// The pump, line and relief valve.
     Pump(Pump),
+    /// The pressure-compensated pump and its line.
+    PcPump(PcPump),
 }
 
 /// A pump supply's constants.
@@ -171,6 +242,8 @@ pub struct Pump {
     pub x_max: f64,
     /// Ps(0).
     pub p0: f64,
+    /// The accumulator on the line.
+    pub acc: Option<Accumulator>,
 }
 
 impl Supply {
@@ -193,69 +266,182 @@ impl Supply {
                 }
                 Ok((Supply::Fixed { ps }, pt))
             }
-            SupplyCfg::Pump {
-                displacement,
-                speed,
-                leakage,
-                volume,
-                bulk_modulus,
-                relief_pressure,
-                relief_time_constant,
-                relief_k_cs,
-                relief_k_cf,
-                relief_q_nom,
-                tank_pressure,
-                initial_pressure,
-            } => {
-                let d = positive("displacement", displacement)?;
-                let n = positive("speed", speed)?;
-                let cl = non_negative("leakage", leakage)?;
-                let v = positive("volume", volume)?;
-                let b = positive("bulk_modulus", bulk_modulus.unwrap_or(beta))?;
-                let p_max = positive("relief_pressure", relief_pressure)?;
-                let tau = positive("relief_time_constant", relief_time_constant)?;
-                let kcs = positive("relief_k_cs", relief_k_cs)?;
-                let kcf = positive("relief_k_cf", relief_k_cf)?;
-                let qn = positive("relief_q_nom", relief_q_nom)?;
-                let pt = non_negative("tank_pressure", tank_pressure)?;
-                if pt >= p_max {
-                    return Err(KeyError::new(
-                        "tank_pressure",
-                        format!("must be below the relief pressure {p_max} Pa (got {pt})"),
-                    ));
-                }
-                let p0 = match initial_pressure {
-                    None => pt,
-                    Some(p) => non_negative("initial_pressure", p)?,
-                };
-                let sq = RELIEF_P_NOM.sqrt();
-                Ok((
-                    Supply::Pump(Pump {
-                        q_ideal: d * n / (2.0 * core::f64::consts::PI),
-                        leakage: cl,
-                        stiffness: b / v,
-                        beta: b,
-                        volume: v,
-                        p_max,
-                        rate: 1.0 / tau,
-                        cs: sq / kcs,
-                        cf: 1.0 / (kcf * sq),
-                        x_max: qn / sq,
-                        p0,
-                    }),
-                    pt,
-                ))
-            }
+            SupplyCfg::Pump { .. } => Self::pump(c, beta),
+            SupplyCfg::PcPump { .. } => Self::pc_pump(c, beta),
         }
+    }
+
+    /// The line's common keys: (V_s, βe, P_t, Ps(0)), the tank pressure
+    /// checked below the supply's `setting` named `setting_key`.
+    fn line(
+        volume: f64,
+        bulk_modulus: Option<f64>,
+        beta: f64,
+        tank_pressure: f64,
+        initial_pressure: Option<f64>,
+        (setting_key, setting): (&str, f64),
+    ) -> Result<[f64; 4], KeyError> {
+        let v = positive("volume", volume)?;
+        let b = positive("bulk_modulus", bulk_modulus.unwrap_or(beta))?;
+        let pt = non_negative("tank_pressure", tank_pressure)?;
+        if pt >= setting {
+            return Err(KeyError::new(
+                "tank_pressure",
+                format!("must be below {setting_key} {setting} Pa (got {pt})"),
+            ));
+        }
+        let p0 = match initial_pressure {
+            None => pt,
+            Some(p) => non_negative("initial_pressure", p)?,
+        };
+        Ok([v, b, pt, p0])
+    }
+
+    /// `kind = "pump"`.
+    fn pump(c: &SupplyCfg, beta: f64) -> Result<(Supply, f64), KeyError> {
+        let SupplyCfg::Pump {
+            displacement,
+            speed,
+            leakage,
+            volume,
+            bulk_modulus,
+            relief_pressure,
+            relief_time_constant,
+            relief_k_cs,
+            relief_k_cf,
+            relief_q_nom,
+            relief_full_flow_pressure,
+            relief_rated_flow,
+            relief_response_time,
+            tank_pressure,
+            initial_pressure,
+            accumulator,
+        } = *c
+        else {
+            unreachable!("called for a pump")
+        };
+        let d = positive("displacement", displacement)?;
+        let n = positive("speed", speed)?;
+        let cl = non_negative("leakage", leakage)?;
+        let p_max = positive("relief_pressure", relief_pressure)?;
+        let [v, b, pt, p0] = Self::line(
+            volume,
+            bulk_modulus,
+            beta,
+            tank_pressure,
+            initial_pressure,
+            ("the relief pressure", p_max),
+        )?;
+        let r = ReliefKeys {
+            time_constant: relief_time_constant,
+            k_cs: relief_k_cs,
+            k_cf: relief_k_cf,
+            q_nom: relief_q_nom,
+            full_flow_pressure: relief_full_flow_pressure,
+            rated_flow: relief_rated_flow,
+            response_time: relief_response_time,
+        }
+        .resolve(p_max, pt)?;
+        let acc = accumulator.map(|a| a.validate(p_max)).transpose()?;
+        Ok((
+            Supply::Pump(Pump {
+                q_ideal: d * n / (2.0 * core::f64::consts::PI),
+                leakage: cl,
+                stiffness: b / v,
+                beta: b,
+                volume: v,
+                p_max,
+                rate: r.rate,
+                cs: r.cs,
+                cf: r.cf,
+                x_max: r.x_max,
+                p0,
+                acc,
+            }),
+            pt,
+        ))
+    }
+
+    /// `kind = "pc-pump"`.
+    fn pc_pump(c: &SupplyCfg, beta: f64) -> Result<(Supply, f64), KeyError> {
+        let SupplyCfg::PcPump {
+            displacement,
+            speed,
+            leakage,
+            volume,
+            bulk_modulus,
+            compensator_pressure,
+            compensator_band,
+            compensator_inductance,
+            compensator_lead,
+            compensator_valve_time_constant,
+            on_stroke_time,
+            de_stroke_time,
+            tank_pressure,
+            initial_pressure,
+            accumulator,
+        } = *c
+        else {
+            unreachable!("called for a pressure-compensated pump")
+        };
+        let d = positive("displacement", displacement)?;
+        let n = positive("speed", speed)?;
+        let cl = non_negative("leakage", leakage)?;
+        let p_set = positive("compensator_pressure", compensator_pressure)?;
+        let band = positive("compensator_band", compensator_band)?;
+        let [v, b, pt, p0] = Self::line(
+            volume,
+            bulk_modulus,
+            beta,
+            tank_pressure,
+            initial_pressure,
+            ("the compensator pressure", p_set),
+        )?;
+        if band >= p_set {
+            return Err(KeyError::new(
+                "compensator_band",
+                format!(
+                    "must be below compensator_pressure = {p_set:e} Pa: the pump would not reach full stroke above the tank (got {band:e})"
+                ),
+            ));
+        }
+        let opt = |key: &str, v: Option<f64>, default: f64| positive(key, v.unwrap_or(default));
+        let q_max = d * n / (2.0 * core::f64::consts::PI);
+        let acc = accumulator.map(|a| a.validate(p_set + pt)).transpose()?;
+        Ok((
+            Supply::PcPump(PcPump {
+                q_max,
+                speed: n,
+                leakage: cl,
+                volume: v,
+                beta: b,
+                p_set,
+                r_p: band / q_max,
+                l_p: opt("compensator_inductance", compensator_inductance, 7e7)?,
+                lead: opt("compensator_lead", compensator_lead, 200.0)?,
+                tau_v: opt(
+                    "compensator_valve_time_constant",
+                    compensator_valve_time_constant,
+                    1e-3,
+                )?,
+                t_on: opt("on_stroke_time", on_stroke_time, 0.15)?,
+                t_off: opt("de_stroke_time", de_stroke_time, 0.12)?,
+                p0,
+                acc,
+            }),
+            pt,
+        ))
     }
 
     /// The pressure the relief valve holds with the pump's whole flow
     /// through it (Pa): the steady Ps with the 4/3 valve closed, found by
-    /// bisection; the fixed pressure for a fixed supply.
+    /// bisection; the fixed pressure for a fixed supply; a
+    /// pressure-compensated pump's steady pressure with no draw (its
+    /// setting, less what its leakage costs).
     pub fn holding_pressure(&self, pt: f64) -> f64 {
         match self {
             Supply::Fixed { ps } => *ps,
-            Supply::Pump(_) => self.holding_pressure_at(pt, 1.0),
+            Supply::Pump(_) | Supply::PcPump(_) => self.holding_pressure_at(pt, 1.0),
         }
     }
 
@@ -266,6 +452,7 @@ impl Supply {
     pub fn holding_pressure_at(&self, pt: f64, pressure_factor: f64) -> f64 {
         match self {
             Supply::Fixed { ps } => ps * pressure_factor,
+            Supply::PcPump(p) => p.steady_pressure(pt, 0.0, pressure_factor),
             Supply::Pump(p) => {
                 let p = &Pump {
                     p_max: p.p_max * pressure_factor,
@@ -307,7 +494,7 @@ impl Supply {
     pub fn pressure(&self, ps_state: f64, pressure_factor: f64) -> f64 {
         match self {
             Supply::Fixed { ps } => ps * pressure_factor,
-            Supply::Pump(_) => ps_state.max(0.0),
+            Supply::Pump(_) | Supply::PcPump(_) => ps_state.max(0.0),
         }
     }
 
@@ -332,6 +519,7 @@ impl Supply {
     ) -> [f64; 2] {
         match self {
             Supply::Fixed { .. } => [0.0, 0.0],
+            Supply::PcPump(p) => p.deriv(ps, xr, pt, q_p, pressure_factor, bulk_factor),
             Supply::Pump(p) => {
                 let p_max = p.p_max * pressure_factor;
                 let relief = Pump { p_max, ..*p };
@@ -340,26 +528,50 @@ impl Supply {
                 let dxr = (xs - xr) * p.rate;
                 let held = (xr <= 0.0 && dxr < 0.0) || (xr >= p.x_max && dxr > 0.0);
                 [
-                    p.stiffness * bulk_factor * (p.q_pump(ps, pt) - qr - q_p),
+                    p.line_stiffness(ps, bulk_factor) * (p.q_pump(ps, pt) - qr - q_p),
                     if held { 0.0 } else { dxr },
                 ]
             }
         }
     }
 
-    /// The relief's opening `xr` put back inside [0, x_max] (the state
-    /// after an RK4 step that crossed a limit); unchanged for a fixed
-    /// supply.
+    /// The supply's second state put back inside its limits at the line
+    /// pressure `ps` (the state after an RK4 step that crossed one): the
+    /// relief's opening `xr` in [0, x_max], a pressure-compensated pump's
+    /// regulator in [0, y_max(ps)]; unchanged for a fixed supply.
     #[inline]
-    pub fn limit_opening(&self, xr: f64) -> f64 {
+    pub fn limit_opening(&self, ps: f64, xr: f64) -> f64 {
         match self {
             Supply::Fixed { .. } => xr,
             Supply::Pump(p) => xr.clamp(0.0, p.x_max),
+            Supply::PcPump(p) => p.limit(ps, xr),
+        }
+    }
+
+    /// The supply's pressure setting (Pa, absolute) over the tank at `pt`:
+    /// a fixed supply's pressure, a relief's cracking pressure, a
+    /// compensator's dead-head pressure (its setting over the tank, + P_t).
+    pub fn setting(&self, pt: f64) -> f64 {
+        match self {
+            Supply::Fixed { ps } => *ps,
+            Supply::Pump(p) => p.p_max,
+            Supply::PcPump(p) => p.p_set + pt,
         }
     }
 }
 
 impl Pump {
+    /// The line's stiffness at Ps with βe scaled by `bulk_factor`:
+    /// 1/(V_s/βe + C_a(Ps)) with the accumulator's compliance C_a
+    /// ([`crate::accumulator`]), βe/V_s without one.
+    #[inline]
+    pub fn line_stiffness(&self, ps: f64, bulk_factor: f64) -> f64 {
+        match &self.acc {
+            None => self.stiffness * bulk_factor,
+            acc => line_stiffness(self.volume, self.beta * bulk_factor, acc.as_ref(), ps),
+        }
+    }
+
     /// The pump's delivery at Ps (m³/s).
     #[inline]
     pub fn q_pump(&self, ps: f64, pt: f64) -> f64 {
@@ -409,12 +621,16 @@ mod tests {
                 volume: 1e-3,
                 bulk_modulus: Some(1e9),
                 relief_pressure: 2e7,
-                relief_time_constant: 1e-3,
-                relief_k_cs: 1e-8,
-                relief_k_cf: 1e-8,
-                relief_q_nom: 0.01,
+                relief_time_constant: Some(1e-3),
+                relief_k_cs: Some(1e-8),
+                relief_k_cf: Some(1e-8),
+                relief_q_nom: Some(0.01),
+                relief_full_flow_pressure: None,
+                relief_rated_flow: None,
+                relief_response_time: None,
                 tank_pressure: 1e5,
                 initial_pressure: None,
+                accumulator: None,
             },
             1e9,
         )
@@ -507,7 +723,7 @@ mod tests {
                     &mut x,
                     h,
                 );
-                x[0] = s.limit_opening(x[0]);
+                x[0] = s.limit_opening(ps, x[0]);
                 let t = k as f64 * h;
                 if t <= t_star - h {
                     let want = exact(t);

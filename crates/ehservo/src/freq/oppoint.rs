@@ -90,6 +90,14 @@ impl LinPlant {
             scenario::AnyPlant::Physical(_) => Ok(LinPlant::Physical(PhysicalPlant::new(p, l))),
             // The cylinder's factors vary it as the simulator does; its
             // force signal at t = 0 (a trim's; `at_time` moves it).
+            scenario::AnyPlant::Cylinder(c)
+                if matches!(c.cylinder().supply, ehservo_sim::supply::Supply::PcPump(_)) =>
+            {
+                Err(KeyError::new(
+                    "plant.supply.kind",
+                    "a pressure-compensated pump (\"pc-pump\") is not linearised yet: its regulator's Jacobian is not written; linearise on kind = \"pump\" or \"fixed\"",
+                ))
+            }
             scenario::AnyPlant::Cylinder(c) => Ok(LinPlant::Cylinder(Box::new(CylinderLin::new(
                 c.clone(),
                 *f,

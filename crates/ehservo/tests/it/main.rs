@@ -23,6 +23,7 @@ mod golden;
 mod guide;
 mod guide_keys;
 mod hopsan;
+mod hopsan_supply;
 mod house;
 mod identify;
 mod identify_axis;

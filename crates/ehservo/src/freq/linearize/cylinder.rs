@@ -102,7 +102,9 @@ impl CylinderLin {
     fn pump(&self) -> Option<Pump> {
         match &self.c().supply {
             Supply::Pump(p) => Some(*p),
-            Supply::Fixed { .. } => None,
+            // A pressure-compensated pump is refused before a CylinderLin
+            // is built (crate::freq::oppoint).
+            Supply::Fixed { .. } | Supply::PcPump(_) => None,
         }
     }
 
@@ -268,7 +270,9 @@ impl CylinderLin {
         a[3][4] = kb * g[PB] * hps;
         b[3] = kb * kqb * dxv;
         if let Some(p) = pump {
-            let kp = p.stiffness * f.bulk_modulus;
+            // With an accumulator the line's stiffness depends on p_s; its
+            // derivative multiplies the flow balance, 0 at a trim.
+            let kp = p.line_stiffness(ps, f.bulk_modulus);
             let p_max = p.p_max * f.supply_pressure;
             let dp = ps - pt;
             let sq = dp.max(0.0).sqrt();
