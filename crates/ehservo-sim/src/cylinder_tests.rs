@@ -677,5 +677,6 @@ fn a_pc_pump_feeds_the_cylinder_at_its_closed_form() {
     p.deriv(1.0, &s, 4.0, &ONE, &mut ds);
     assert!(ds[4].abs() < 1e-3 * want, "ṗ_s = {}", ds[4]);
 }
+
 #[path = "cylinder_env_tests.rs"]
 mod env;
