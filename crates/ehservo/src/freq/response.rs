@@ -557,6 +557,12 @@ impl LoopModel {
     /// hundredth of the slowest nonzero pole or zero of L (or of G), at
     /// least 1e-9.
     pub fn lowest(&self) -> f64 {
+        self.search_band().0
+    }
+
+    /// [`lowest`](Self::lowest) and the [`super::margins::resonance_points`] of
+    /// L's (or G's) poles and zeros: where the margins' grid must be dense.
+    pub fn search_band(&self) -> (f64, Vec<f64>) {
         let m = self.loop_l.as_ref().unwrap_or(&self.g);
         let to_s = |z: C64| match m.dt {
             Some(h) if z.norm() > 0.0 => (z.ln() / h).norm(),
@@ -570,11 +576,12 @@ impl LoopModel {
             .map(|&z| to_s(z))
             .filter(|w| *w > 1e-12 && w.is_finite())
             .fold(f64::INFINITY, f64::min);
-        if slow.is_finite() {
+        let lo = if slow.is_finite() {
             (slow / 100.0).max(1e-9)
         } else {
             1e-3
-        }
+        };
+        (lo, super::margins::resonance_points(&all, m.dt))
     }
 }
 

@@ -84,7 +84,12 @@ pub fn computed(lp: &Loop) -> Option<Stability> {
     } else {
         0.99 * m.nyquist()
     };
-    let l = m.loop_l.as_ref()?.siso_response();
+    // L as `ehservo freq` evaluates it (the controller's and the plant's
+    // responses composed): the Hessenberg form of the loop's state space
+    // (`StateSpace::siso_response`) lost 1e-4 of L on the slide's
+    // discrete loop (its A spans 1 to 10¹²) and 2 % at its resonance,
+    // enough to move a 0.91 dB gain margin to 0.98 dB or to none.
+    m.loop_l.as_ref()?;
     let stable = m.closed_loop_stable();
     if stable == Some(false) {
         // Rejected whatever its margins: not worth their search.
@@ -96,13 +101,15 @@ pub fn computed(lp: &Loop) -> Option<Stability> {
             phase_margin_f_hz: None,
         });
     }
+    let (lo, features) = m.search_band();
     let mg = margins::margins_on(
-        &|w| l.at_frequency(w),
-        m.lowest(),
+        &|w| m.loop_at(w),
+        lo,
         hi,
         m.sampled().then_some(h),
         GRID_PER_DECADE,
         false,
+        &features,
     );
     Some(Stability {
         closed_loop_stable: stable,
@@ -117,6 +124,46 @@ pub fn computed(lp: &Loop) -> Option<Stability> {
 mod tests {
     use super::*;
     use ehservo_core::servo::ServoParams;
+
+    /// A lightly damped axis (the slide from its datasheets, ζ_h = 0.01)
+    /// under a PID whose phase crosses −180° at the 13 Hz resonance: the
+    /// tune's coarse grid must find that crossover as `ehservo freq`'s
+    /// 400 points per decade do (it once reported "no crossover" for a
+    /// loop with 0.9 dB of gain margin).
+    #[test]
+    fn a_resonances_crossover_is_not_missed() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenarios/cylinders/slide-datasheet.toml"
+        );
+        let set: Vec<String> = [
+            "controller.kind=pid",
+            "controller.kp=12.111649",
+            "controller.ki=11.523129",
+            "controller.kd=0.000347",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let lp = Loop::load(std::path::Path::new(path), &set).unwrap();
+        let st = computed(&lp).expect("a PID is linear");
+        let l =
+            super::super::linearise(&lp, "", None, Some(Side::Plus), Discretisation::Zoh).unwrap();
+        let m = &l.lp;
+        let fine = margins::margins(
+            &|w| m.loop_at(w),
+            m.lowest(),
+            m.nyquist() * (1.0 - 1e-9),
+            Some(m.h),
+        );
+        let g = fine.gain_margin.expect("a phase crossover");
+        let got = st.gain_margin_db.expect("found by the tune's grid");
+        assert!(
+            (got - g.gain_margin_db).abs() < 1e-6,
+            "{got} vs {}",
+            g.gain_margin_db
+        );
+    }
 
     /// A P law u = kp·(θd − θ) on the nominal servo (the third-order plant
     /// without load or variation, continuous mode):

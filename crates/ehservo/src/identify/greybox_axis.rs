@@ -336,27 +336,32 @@ impl super::Job<'_> {
 }
 
 /// The grey-box's derived quantities: ω_h = √(βe·(A_A²/V_A + A_B²/V_B)/M)
-/// at the mean position of the estimation data, and f_h.
+/// at the mean position of the estimation data, and f_h, of the cylinder
+/// built with the values (its hoses' equivalent volumes follow βe).
 fn derived(model: &AxisModel, rep: &super::FitReport, exps: &[Experiment]) -> Vec<super::Derived> {
-    let Some(c) = model
-        .prior
-        .plant()
-        .get::<ehservo_sim::cylinder::CylinderPlant>()
-        .map(|p| p.cylinder().clone())
-    else {
-        return Vec::new();
-    };
     let (sum, n) = exps.iter().fold((0.0, 0usize), |(s, n), e| {
         (s + e.y.values.iter().sum::<f64>(), n + e.len())
     });
     let y = sum / n.max(1) as f64;
-    let [va, vb] = c.volumes(y);
-    let at = |name: &str| model.keys.iter().position(|k| k.name == name);
-    let (ib, im) = (at("bulk_modulus"), at("mass"));
+    let nk = model.keys.len();
+    let wh = |v: &[f64]| -> Option<f64> {
+        let lp = model
+            .prior
+            .with_values_on(model.table.clone(), &model.values(&v[..nk]))
+            .ok()?;
+        let c = lp
+            .plant()
+            .get::<ehservo_sim::cylinder::CylinderPlant>()?
+            .cylinder()
+            .clone();
+        let [va, vb] = c.volumes(y);
+        Some((c.beta * (c.area[0].powi(2) / va + c.area[1].powi(2) / vb) / c.mass).sqrt())
+    };
+    if wh(&rep.values()).is_none() {
+        return Vec::new();
+    }
     super::derived::delta(rep, &[("omega_h_rad_s", "rad/s"), ("f_h_Hz", "Hz")], &|v| {
-        let beta = ib.map_or(c.beta, |i| v[i]);
-        let m = im.map_or(c.mass, |i| v[i]);
-        let w = (beta * (c.area[0].powi(2) / va + c.area[1].powi(2) / vb) / m).sqrt();
+        let w = wh(v).unwrap_or(f64::NAN);
         vec![w, w / (2.0 * std::f64::consts::PI)]
     })
 }

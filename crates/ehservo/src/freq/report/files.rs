@@ -167,12 +167,19 @@ impl Out {
         } else {
             2.0 * PI * f_max
         };
-        let lo = lp.lowest();
+        let (lo, features) = lp.search_band();
         let c = |sel: fn(&Responses) -> Option<C64>| move |w: f64| sel(&lp.at(w));
-        let m: Option<Margins> = lp
-            .loop_l
-            .as_ref()
-            .map(|_| margins::margins(&c(|r| r.l), lo, hi, lp.sampled().then_some(h)));
+        let m: Option<Margins> = lp.loop_l.as_ref().map(|_| {
+            margins::margins_on(
+                &c(|r| r.l),
+                lo,
+                hi,
+                lp.sampled().then_some(h),
+                margins::POINTS_PER_DECADE,
+                true,
+                &features,
+            )
+        });
         let peak = |sel: fn(&Responses) -> Option<C64>| {
             margins::peak(&c(sel), lo, hi)
                 .map(|(w, v)| json!({"value": v, "dB": 20.0 * v.log10(), "f_Hz": w / (2.0 * PI)}))
