@@ -527,12 +527,6 @@ impl StateSpace {
             .then_some(y)
     }
 
-    /// The SISO response (input 0, output 0) in a form that is cheap to
-    /// evaluate at many points ([`SisoResponse`]).
-    pub fn siso_response(&self) -> SisoResponse {
-        SisoResponse::new(self)
-    }
-
     /// The SISO response (output 0, input 0) at frequency `w` (rad/s).
     pub fn response(&self, w: f64) -> Option<C64> {
         self.at(self.point(w)).map(|m| m[(0, 0)])
@@ -651,112 +645,6 @@ impl StateSpace {
 /// A complex number as `[re, im]`, for JSON.
 pub fn pair(z: C64) -> [f64; 2] {
     [z.re, z.im]
-}
-
-/// `C[0,·]·(p·I − A)⁻¹·B[·,0] + D[0,0]` of a model reduced once to upper
-/// Hessenberg form, A = Q·H·Qᵀ (Householder, nalgebra): each point then
-/// costs one O(n²) elimination of the Hessenberg `p·I − H` (a row swap
-/// with the next row for the pivot) instead of an O(n³) LU with its
-/// allocations (the method of Laub, "Efficient multivariable frequency
-/// response computations", IEEE TAC 26 (1981) 407–408). The margins of a
-/// tune's every candidate read hundreds of points. Not accurate on a badly
-/// scaled A: on a discrete cylinder loop (entries from 1 to 10¹²) its L
-/// was off by 1e-4 and by 2 % at a resonance, so the margins evaluate L
-/// as `LoopModel::loop_at` composes it instead.
-#[derive(Debug, Clone)]
-pub struct SisoResponse {
-    n: usize,
-    /// H, row-major.
-    h: Vec<f64>,
-    /// Qᵀ·B[·,0].
-    b: Vec<f64>,
-    /// C[0,·]·Q.
-    c: Vec<f64>,
-    d: f64,
-    dt: Option<f64>,
-}
-
-impl SisoResponse {
-    fn new(m: &StateSpace) -> Self {
-        let n = m.n();
-        let (q, h) = if n > 0 {
-            nalgebra::linalg::Hessenberg::new(m.a.clone()).unpack()
-        } else {
-            (DMatrix::zeros(0, 0), DMatrix::zeros(0, 0))
-        };
-        let b0 = m.b.column(0).into_owned();
-        let c0 = m.c.row(0).into_owned();
-        Self {
-            n,
-            h: (0..n * n).map(|k| h[(k / n, k % n)]).collect(),
-            b: (q.transpose() * b0).iter().copied().collect(),
-            c: (c0 * q).iter().copied().collect(),
-            d: m.d[(0, 0)],
-            dt: m.dt,
-        }
-    }
-
-    /// The value at frequency `w` (rad/s): s = jω, or z = e^{jωh}.
-    pub fn at_frequency(&self, w: f64) -> Option<C64> {
-        self.at(match self.dt {
-            None => C64::new(0.0, w),
-            Some(h) => C64::from_polar(1.0, w * h),
-        })
-    }
-
-    /// The value at the complex point `p`; None at a pole (a zero pivot)
-    /// or where it is not finite.
-    pub fn at(&self, p: C64) -> Option<C64> {
-        let n = self.n;
-        if n == 0 {
-            return Some(C64::new(self.d, 0.0));
-        }
-        let w = n + 1;
-        // [p·I − H | Qᵀb], row-major.
-        let mut m: Vec<C64> = Vec::with_capacity(n * w);
-        for i in 0..n {
-            for j in 0..n {
-                let diag = if i == j { p } else { C64::new(0.0, 0.0) };
-                m.push(diag - self.h[i * n + j]);
-            }
-            m.push(C64::new(self.b[i], 0.0));
-        }
-        let mag = |z: C64| z.re.abs() + z.im.abs();
-        for k in 0..n.saturating_sub(1) {
-            // Below the diagonal only row k + 1 has an entry in column k.
-            if mag(m[(k + 1) * w + k]) > mag(m[k * w + k]) {
-                for j in k..w {
-                    m.swap(k * w + j, (k + 1) * w + j);
-                }
-            }
-            let pk = m[k * w + k];
-            if mag(pk) == 0.0 {
-                return None;
-            }
-            let f = m[(k + 1) * w + k] / pk;
-            if mag(f) != 0.0 {
-                for j in k + 1..w {
-                    let v = m[k * w + j];
-                    m[(k + 1) * w + j] -= f * v;
-                }
-            }
-        }
-        let mut y = C64::new(self.d, 0.0);
-        for i in (0..n).rev() {
-            let mut v = m[i * w + n];
-            for j in i + 1..n {
-                v -= m[i * w + j] * m[j * w + n];
-            }
-            let piv = m[i * w + i];
-            if mag(piv) == 0.0 {
-                return None;
-            }
-            // The solution overwrites the right-hand side.
-            m[i * w + n] = v / piv;
-            y += self.c[i] * m[i * w + n];
-        }
-        (y.re.is_finite() && y.im.is_finite()).then_some(y)
-    }
 }
 
 #[cfg(test)]

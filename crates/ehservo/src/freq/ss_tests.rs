@@ -94,65 +94,6 @@ fn poles_zeros_gain_and_response_by_hand() {
     assert!((m[0].zeta.unwrap() - 1.0).abs() < 1e-12);
 }
 
-/// The Hessenberg evaluator against closed forms: (s + 2)/((s + 1)(s + 3))
-/// at s = j is (2 + j)/(2 + 4j) = 0.4 − 0.3j (the case above); the
-/// companion form of 1/((s + 1)(s + 2)(s + 3)(s + 4)) — a full,
-/// non-Hessenberg A after a rotation — at s = 2j is 1/((1 + 2j)(2 + 2j)
-/// (3 + 2j)(4 + 2j)); near its pole s = −1 the residue 1/6.
-#[test]
-fn siso_response_by_hand() {
-    let s = StateSpace::new(
-        DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -3.0, -4.0]),
-        DMatrix::from_row_slice(2, 1, &[0.0, 1.0]),
-        DMatrix::from_row_slice(1, 2, &[2.0, 1.0]),
-        DMatrix::zeros(1, 1),
-        None,
-        (vec![q("x1"), q("x2")], vec![q("u")], vec![q("y")]),
-    );
-    let g = s.siso_response().at_frequency(1.0).unwrap();
-    assert!((g - C64::new(0.4, -0.3)).norm() < 1e-14, "{g}");
-    // s⁴ + 10s³ + 35s² + 50s + 24, in companion form, then turned by an
-    // orthogonal T (a Givens rotation of x1, x3 by 0.7 rad): A' = TᵀAT.
-    let a = DMatrix::from_row_slice(
-        4,
-        4,
-        &[
-            0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., -24., -50., -35., -10.,
-        ],
-    );
-    let (c7, s7) = (0.7f64.cos(), 0.7f64.sin());
-    let mut t = DMatrix::<f64>::identity(4, 4);
-    t[(0, 0)] = c7;
-    t[(0, 2)] = -s7;
-    t[(2, 0)] = s7;
-    t[(2, 2)] = c7;
-    let b = DMatrix::from_row_slice(4, 1, &[0., 0., 0., 1.]);
-    let c = DMatrix::from_row_slice(1, 4, &[1., 0., 0., 0.]);
-    let m = StateSpace::new(
-        t.transpose() * a * &t,
-        t.transpose() * b,
-        c * &t,
-        DMatrix::zeros(1, 1),
-        None,
-        (
-            (1..=4).map(|i| q(&format!("x{i}"))).collect(),
-            vec![q("u")],
-            vec![q("y")],
-        ),
-    );
-    let r = m.siso_response();
-    let j2 = C64::new(0.0, 2.0);
-    let want = 1.0 / ((j2 + 1.0) * (j2 + 2.0) * (j2 + 3.0) * (j2 + 4.0));
-    let got = r.at_frequency(2.0).unwrap();
-    assert!(
-        (got - want).norm() < 1e-14 * want.norm().max(1.0),
-        "{got} vs {want}"
-    );
-    // Near its pole s = −1 it grows as 1/(6·(s + 1)).
-    let near = r.at(C64::new(-1.0 + 1e-6, 0.0)).unwrap();
-    assert!((near.re * 1e-6 * 6.0 - 1.0).abs() < 1e-4, "{near}");
-}
-
 /// A delay of 3 samples: z⁻³ on the unit circle is e^{−3jωh}; its poles
 /// are three at 0 and it has no zeros.
 #[test]

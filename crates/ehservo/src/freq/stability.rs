@@ -85,8 +85,8 @@ pub fn computed(lp: &Loop) -> Option<Stability> {
         0.99 * m.nyquist()
     };
     // L as `ehservo freq` evaluates it (the controller's and the plant's
-    // responses composed): the Hessenberg form of the loop's state space
-    // (`StateSpace::siso_response`) lost 1e-4 of L on the slide's
+    // responses composed): a Hessenberg form of the loop's state space
+    // (Laub 1981, tried and removed) lost 1e-4 of L on the slide's
     // discrete loop (its A spans 1 to 10¹²) and 2 % at its resonance,
     // enough to move a 0.91 dB gain margin to 0.98 dB or to none.
     m.loop_l.as_ref()?;

@@ -123,10 +123,9 @@ fn a_cylinders_grey_box_finds_the_axis_that_made_the_data() {
     // as `run` reads it, each fitted key's variation its interval's.
     let id: toml::Value =
         toml::from_str(&std::fs::read_to_string(out.join("identified.toml")).unwrap()).unwrap();
-    for (k, path, truth) in TRUTH {
+    for (_, path, truth) in TRUTH {
         let v = number(&id, path);
         assert!((v / truth - 1.0).abs() < 1e-3, "{path}: {v}");
-        let _ = k;
     }
     let e = est("bulk_modulus");
     let hi = e["ci95"][1].as_f64().unwrap() / e["value"].as_f64().unwrap() - 1.0;
