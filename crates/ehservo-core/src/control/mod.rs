@@ -579,6 +579,23 @@ pub enum LinearForm {
         /// The output limit under which the law is linear (V; infinite: none).
         u_limit: f64,
     },
+    /// Full state feedback on the measured `x = (θm, θ̇m, θ̈m)` with an
+    /// integral I (`control/state_feedback.rs`):
+    /// `v = ff·z + k3·(θ̈d − θ̈m) + k2·(θ̇d − θ̇m) + k1·(θd − θm) + I`,
+    /// `İ = ki·(θd − θm)`, `u = v/b0`.
+    StateFeedback {
+        /// `[k3, k2, k1, ki]`.
+        k: [f64; 4],
+        /// The feed-forward's weights of θd, θ̇d, θ̈d, θ⃛d (in v's units).
+        feedforward: [f64; 4],
+        /// The valve gain the law divides by: b̄0, the gain at rest.
+        b0: f64,
+        /// Whether the law divides by `b(x, sgn v)` instead (its flow
+        /// linearisation): then b0 is its value at rest only.
+        compensate: bool,
+        /// The output limit under which the law is linear (V; infinite: none).
+        u_limit: f64,
+    },
 }
 
 /// `a == b`, for strings, in a `const` context: the check that a kind's

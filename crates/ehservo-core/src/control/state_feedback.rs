@@ -77,7 +77,9 @@
 //! PID alone cannot place the four closed-loop poles of an underdamped
 //! axis; a second-derivative gain adds the damping).
 
-use super::{flags, Config, Controller, Design, Measurement, Output, Signal, Signals, Tunable};
+use super::{
+    flags, Config, Controller, Design, LinearForm, Measurement, Output, Signal, Signals, Tunable,
+};
 use crate::error::{positive, ParamError};
 use crate::math::{sgn, sqrt, Real};
 use crate::servo::NominalModel;
@@ -369,6 +371,22 @@ impl Config for StateFeedbackConfig {
                 pole: Some(l),
                 ..*self
             })
+        }))
+    }
+
+    /// The law while its limit does not act, dividing by b̄0 (exactly the
+    /// law with `compensate = false`; with it, the law's gain at rest).
+    fn linear(&self, d: &Design) -> Option<Result<LinearForm, ParamError>> {
+        Some(self.build(d).map(|c| LinearForm::StateFeedback {
+            k: c.k,
+            feedforward: if self.feedforward {
+                [c.a[0], c.a[1], c.a[2], 1.0]
+            } else {
+                [0.0; 4]
+            },
+            b0: c.b0,
+            compensate: self.compensate,
+            u_limit: c.u_limit,
         }))
     }
 

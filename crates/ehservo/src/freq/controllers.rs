@@ -24,6 +24,13 @@
 //!   `u = (k1(θd − z1) + k2(θ̇d − z2) + k3(θ̈d − z3) + θ⃛d − z4 − f̄)/b0`; the
 //!   law feeds its own u to the observer at the same instant, so together
 //!   `ż3 = u0 + β3·ε` (u0 the PD part).
+//! - **State feedback** (`control/state_feedback.rs`): ξ = I, inputs
+//!   (θm, θ̇m, θ̈m, z) — the one law that reads more than θm
+//!   ([`ControllerModel::measured`]) —
+//!   `u = (ff·z + k1·(θd − θm) + k2·(θ̇d − θ̇m) + k3·(θ̈d − θ̈m) + I)/b0`,
+//!   `İ = ki·(θd − θm)`; with `compensate` the law divides by b(x, sgn v),
+//!   which the loop puts in at its operating point
+//!   ([`ControllerModel::divided_by`]).
 //! - **Luenberger and Kalman observers** (`ehservo_core::estimate::
 //!   LinearObserver`): discrete by construction. With the state
 //!   `ξ_k = x̂_{k−1}` and inputs `(θ_k, u_{k−1})`:
@@ -62,6 +69,14 @@ pub struct ControllerModel {
     pub parts: Vec<(&'static str, StateSpace)>,
     /// The output limit under which it is linear (V; infinite: none).
     pub u_limit: f64,
+    /// How many of the law's first inputs are measured: 1 (θm), or 3
+    /// (θm, θ̇m, θ̈m: the state feedback's). The reference z follows them.
+    pub measured: usize,
+    /// The valve gain b̄0 the law divides by, when it divides by the gain
+    /// at the measured state instead (`compensate`: the state feedback's
+    /// flow linearisation); [`ControllerModel::divided_by`] puts that gain
+    /// in at an operating point.
+    pub compensated_b0: Option<f64>,
 }
 
 impl ControllerModel {
@@ -78,6 +93,18 @@ impl ControllerModel {
             .iter()
             .map(|(n, m)| (*n, Self::to_mode(m, h)))
             .collect()
+    }
+
+    /// The law dividing by `b` where its model divides by b̄0 (a
+    /// compensating law linearised at a point whose gain is `b`): its
+    /// output scaled by b̄0/b. Unchanged for a law that does not compensate.
+    pub fn divided_by(mut self, b: f64) -> Self {
+        if let Some(b0) = self.compensated_b0 {
+            let k = b0 / b;
+            self.law.c *= k;
+            self.law.d *= k;
+        }
+        self
     }
 
     fn to_mode(m: &StateSpace, h: Option<f64>) -> StateSpace {
@@ -127,6 +154,64 @@ pub fn model_of(kind: &'static str, form: LinearForm) -> ControllerModel {
             a,
             u_limit,
         } => eso_model(kind, k, beta, b0, a, u_limit),
+        LinearForm::StateFeedback {
+            k,
+            feedforward,
+            b0,
+            compensate,
+            u_limit,
+        } => {
+            let mut m = state_feedback_model(kind, k, feedforward, b0, u_limit);
+            m.compensated_b0 = compensate.then_some(b0);
+            m
+        }
+    }
+}
+
+/// The state feedback's inputs: the measured (θm, θ̇m, θ̈m), then z.
+pub fn state_feedback_inputs() -> Vec<Quantity> {
+    let mut v = vec![
+        Quantity::new("theta_m", "rad"),
+        Quantity::new("theta_dot_m", "rad/s"),
+        Quantity::new("theta_ddot_m", "rad/s²"),
+    ];
+    v.extend(controller_inputs().into_iter().skip(1));
+    v
+}
+
+/// The state feedback's model (module doc): ξ = I, `İ = ki·(θd − θm)`,
+/// `u = (ff·z + k1·(θd − θm) + k2·(θ̇d − θ̇m) + k3·(θ̈d − θ̈m) + I)/b0`.
+fn state_feedback_model(
+    kind: &'static str,
+    [k3, k2, k1, ki]: [f64; 4],
+    ff: [f64; 4],
+    b0: f64,
+    u_limit: f64,
+) -> ControllerModel {
+    let am = DMatrix::zeros(1, 1);
+    let bm = DMatrix::from_row_slice(1, 7, &[-ki, 0.0, 0.0, ki, 0.0, 0.0, 0.0]);
+    let cm = DMatrix::from_element(1, 1, 1.0 / b0);
+    let d = [-k1, -k2, -k3, k1 + ff[0], k2 + ff[1], k3 + ff[2], ff[3]];
+    let dm = DMatrix::from_fn(1, 7, |_, j| d[j] / b0);
+    let law = StateSpace::new(
+        am,
+        bm,
+        cm,
+        dm,
+        None,
+        (
+            vec![Quantity::new("integral", "rad/s³")],
+            state_feedback_inputs(),
+            u_out(),
+        ),
+    );
+    ControllerModel {
+        kind,
+        law,
+        parts: Vec::new(),
+        u_limit,
+        measured: 3,
+        compensated_b0: None,
     }
 }
 
@@ -167,6 +252,8 @@ fn pid_model(
         law,
         parts: Vec::new(),
         u_limit,
+        measured: 1,
+        compensated_b0: None,
     }
 }
 
@@ -274,6 +361,8 @@ fn eso_model(
         law,
         parts: vec![("observer", observer), ("law", static_law)],
         u_limit,
+        measured: 1,
+        compensated_b0: None,
     }
 }
 
@@ -337,6 +426,7 @@ mod tests {
     use super::*;
     use ehservo_core::control::adrc::AdrcConfig;
     use ehservo_core::control::pid::PidConfig;
+    use ehservo_core::control::state_feedback::StateFeedbackConfig;
     use ehservo_core::control::{Config, Controller};
     use ehservo_core::estimate::Estimator;
     use ehservo_core::sampled::SampledController;
@@ -355,16 +445,21 @@ mod tests {
 
     /// A random input sequence: θm and z of the sizes a run sees.
     fn inputs(n: usize, seed: u64) -> Vec<Vec<f64>> {
+        measured_inputs(n, seed, 1)
+    }
+
+    /// The first `measured` of (θm, θ̇m, θ̈m), then z, of a run's sizes.
+    fn measured_inputs(n: usize, seed: u64, measured: usize) -> Vec<Vec<f64>> {
         let mut r = ChaCha8Rng::seed_from_u64(seed);
+        let x = [0.1, 0.6, 4.0];
+        let z = [0.1, 0.6, 4.0, 25.0];
         (0..n)
             .map(|_| {
-                vec![
-                    r.random_range(-0.1..0.1),
-                    r.random_range(-0.1..0.1),
-                    r.random_range(-0.6..0.6),
-                    r.random_range(-4.0..4.0),
-                    r.random_range(-25.0..25.0),
-                ]
+                x[..measured]
+                    .iter()
+                    .chain(&z)
+                    .map(|&a| r.random_range(-a..a))
+                    .collect()
             })
             .collect()
     }
@@ -372,14 +467,17 @@ mod tests {
     /// The core controller in its sampled loop against the model, sample
     /// by sample: the same commands to round-off (1e-9 of the largest).
     fn against_law<C: Controller + Clone>(c: C, model: &StateSpace, h: f64, what: &str) {
-        let ins = inputs(400, 5);
+        let measured = model.inputs.len() - 4;
+        let ins = measured_inputs(400, 5, measured);
         let mut sc = SampledController::new(c, h).unwrap();
         let want: Vec<f64> = ins
             .iter()
             .enumerate()
             .map(|(k, v)| {
-                sc.step(k as f64 * h, [v[0], 0.0, 0.0], [v[1], v[2], v[3], v[4]])
-                    .u
+                let mut x = [0.0; 3];
+                x[..measured].copy_from_slice(&v[..measured]);
+                let z = &v[measured..];
+                sc.step(k as f64 * h, x, [z[0], z[1], z[2], z[3]]).u
             })
             .collect();
         let got = simulate(model, &ins);
@@ -393,17 +491,18 @@ mod tests {
         }
     }
 
-    /// The kinds with a linear form are the PID and the ADRC; every other
-    /// registered kind has none (and `linearize` names it as nonlinear).
+    /// The kinds with a linear form are the PID, the ADRC and the state
+    /// feedback; every other registered kind has none (and `linearize`
+    /// names it as nonlinear).
     #[test]
-    fn the_linear_kinds_are_the_pid_and_the_adrc() {
+    fn the_linear_kinds_are_the_pid_the_adrc_and_the_state_feedback() {
         let d = design(0.01);
         let linear: Vec<&str> = ControllerCfg::KINDS
             .iter()
             .copied()
             .filter(|k| controller_model(&ControllerCfg::default_of(k).unwrap(), &d).is_some())
             .collect();
-        assert_eq!(linear, ["pid", "adrc"]);
+        assert_eq!(linear, ["pid", "adrc", "state-feedback"]);
     }
 
     #[test]
@@ -458,6 +557,65 @@ mod tests {
                 let inp = nalgebra::DVector::from_vec(vec![v[0], u]);
                 z = &obs_d.a * &z + &obs_d.b * inp;
             }
+        }
+    }
+
+    /// The state feedback without its flow linearisation is linear: its
+    /// model is the sampled law, with and without the feed-forward and the
+    /// integral, at two periods.
+    #[test]
+    fn state_feedback_model_is_the_sampled_law() {
+        for (dt, feedforward, integral) in [
+            (0.001, true, true),
+            (0.002, false, true),
+            (0.001, true, false),
+        ] {
+            let cfg = StateFeedbackConfig {
+                compensate: false,
+                feedforward,
+                integral,
+                ..StateFeedbackConfig::default()
+            };
+            let d = design(dt);
+            let m = model_of("state-feedback", cfg.linear(&d).unwrap().unwrap());
+            assert_eq!(m.measured, 3);
+            against_law(
+                cfg.build(&d).unwrap(),
+                &m.for_mode(Some(dt)),
+                dt,
+                "state-feedback",
+            );
+        }
+    }
+
+    /// The state feedback's feedback paths by hand at s = j·ω, with
+    /// poles −1, −2, −3, −4 on the paper's ā (k3 = 10 − ā3, k2 = 35 − ā2,
+    /// k1 = 50 − ā1, ki = 24: the quartic (s+1)(s+2)(s+3)(s+4)):
+    /// −u/θm = (k1 + ki/s)/b̄0, −u/θ̇m = k2/b̄0, −u/θ̈m = k3/b̄0.
+    #[test]
+    fn state_feedback_paths_by_hand() {
+        let cfg = StateFeedbackConfig {
+            poles: Some([-1.0, -2.0, -3.0, -4.0]),
+            compensate: false,
+            ..StateFeedbackConfig::default()
+        };
+        let d = design(0.001);
+        let a = d.model.coeffs.as_array();
+        let b0 = d.model.b_at_rest();
+        let m = model_of("state-feedback", cfg.linear(&d).unwrap().unwrap());
+        let w = 3.0;
+        let j = super::super::ss::C64::new(0.0, w);
+        let want = [
+            (50.0 - a[0] + 24.0 / j) / b0,
+            (35.0 - a[1]) / b0 + 0.0 * j,
+            (10.0 - a[2]) / b0 + 0.0 * j,
+        ];
+        for (i, want) in want.iter().enumerate() {
+            let got = -m.law.siso(0, i).response(w).unwrap();
+            assert!(
+                (got - want).norm() < 1e-12 * want.norm(),
+                "input {i}: {got} vs {want}"
+            );
         }
     }
 

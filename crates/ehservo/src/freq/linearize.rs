@@ -59,7 +59,7 @@ impl Side {
     }
 
     /// The sign a kinked quantity at exactly its kink takes on this side.
-    fn sign(&self) -> f64 {
+    pub(crate) fn sign(&self) -> f64 {
         match self {
             Side::Minus => -1.0,
             Side::Plus => 1.0,

@@ -5,7 +5,7 @@
 //! | [`ss`] | state-space models with named, unit-carrying signals; responses, poles, zeros, DC gain, damping; ZOH (matrix exponential), RK4 and Euler maps |
 //! | [`linearize`] | the [`linearize::Linearize`] trait: analytic Jacobians of the plants, the actuator stage and the delays, with their kinks and one-sided Jacobians |
 //! | [`oppoint`] | operating points: a trim (Newton) or a time along the run |
-//! | [`controllers`] | the linear controllers (PID, ADRC: observer and law) and the Luenberger/Kalman observers as state-space models |
+//! | [`controllers`] | the linear controllers (PID, ADRC: observer and law; state feedback on the three measured channels) and the Luenberger/Kalman observers as state-space models |
 //! | [`response`] | the loop: G, G_d, C, L, S, T, θ/θd, θ/d |
 //! | [`margins`] | gain, phase, delay and stability margins with every crossover; bandwidth, peaks |
 //! | [`measure`] | measured responses on the simulator: sinestream, Welch's H1 with coherence (multisine, chirp) |
@@ -241,12 +241,22 @@ pub fn linearisation_json(l: &Linearised) -> Value {
     let axis = l.setup.axis();
     let theta = response::quantity_for_axis(&ss::Quantity::new("theta", "rad"), axis);
     let u = ss::Quantity::new("u", "V");
-    let feedback = match axis {
-        crate::axis::Axis::Rotary => {
+    let feedback = match (axis, lp.measured.is_some()) {
+        (crate::axis::Axis::Rotary, false) => {
             "C = −u/θm: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
         }
-        crate::axis::Axis::Linear => {
+        (crate::axis::Axis::Linear, false) => {
             "C = −u/ym: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
+        }
+        (_, true) => {
+            let x = if axis == crate::axis::Axis::Rotary {
+                "θ"
+            } else {
+                "y"
+            };
+            format!(
+                "C = −∂u/∂({x}m, {x}̇m, {x}̈m): negative feedback of the three measured channels, L = C·z^−ns·G3d·z^−nc with G3d = measured_channels (the command to ({x}, {x}̇, {x}̈)); the C curve is the equivalent feedback on {x}m, L/(z^−ns·Gd·z^−nc)"
+            )
         }
     };
     json!({
@@ -272,6 +282,7 @@ pub fn linearisation_json(l: &Linearised) -> Value {
             "model": lp.sampled().then(|| StateSpace::delay(lp.computation_delay, lp.h, &u).to_json()),
         },
         "controller": ctrl,
+        "measured_channels": lp.measured.as_ref().map(model_json),
         "loop": loop_json,
         "estimator": lp.observer.as_ref().map(model_json),
         "conventions": {
@@ -290,6 +301,7 @@ pub fn all_finite(l: &Linearised) -> bool {
         &lp.g_d,
         &lp.controller_loop,
         &lp.feedback,
+        &lp.measured,
         &lp.loop_l,
         &lp.observer,
     ]
@@ -354,5 +366,65 @@ mod tests {
         // P_L > 0 at θ = 0.2 (the load 2·sin 0.8 > 0): the negative
         // direction has the larger flow gain.
         assert!(m.lp.g.b[(2, 0)] > p.lp.g.b[(2, 0)]);
+    }
+
+    /// The state feedback's loop closes on the polynomial placed by hand.
+    /// The plant linearised at rest is `θ⃛ = −α1θ − α2θ̇ − α3θ̈ + β·u`
+    /// (read off its companion form: A's last row, B's last entry), and the
+    /// law without compensation is `u = (k1·e + k2·ė + k3·ë + I)/b̄0`,
+    /// `İ = ki·e`. Then, with g = β/b̄0, the closed loop's characteristic
+    /// polynomial is `s⁴ + (α3 + g·k3)s³ + (α2 + g·k2)s² + (α1 + g·k1)s +
+    /// g·ki`: its roots must be the loop's closed-loop poles, composed
+    /// through the measured channels (θ, θ̇, θ̈) = (C, CA, CA²)·x.
+    #[test]
+    fn state_feedback_closes_on_the_polynomial_by_hand() {
+        let toml = "[simulation]\nmode = \"continuous\"\n[uncertainty]\na_bias = 0.0\nb_bias = 0.0\n[controller]\nkind = \"state-feedback\"\ncompensate = false\npoles = [-20.0, -30.0, -40.0, -150.0]\n";
+        let s = Loop::parse(toml).unwrap();
+        let l = linearise(
+            &s,
+            "sf.toml",
+            Some(At::Trim(0.0)),
+            Some(Side::Plus),
+            Discretisation::Zoh,
+        )
+        .unwrap();
+        let g = &l.lp.g;
+        assert_eq!(g.n(), 3, "no actuator: the plant's three states");
+        let (alpha, beta) = ([-g.a[(2, 0)], -g.a[(2, 1)], -g.a[(2, 2)]], g.b[(2, 0)]);
+        let design = s.design();
+        let a = design.model.coeffs.as_array();
+        // k = quartic − ā (the law's design, by hand from its poles):
+        // (s+20)(s+30)(s+40)(s+150): Σp = 240; pairs 600 + 800 + 3000 +
+        // 1200 + 4500 + 6000 = 16100; triples 24000 + 90000 + 120000 +
+        // 180000 = 414000; product 3600000.
+        let (k3, k2, k1, ki) = (240.0 - a[2], 16100.0 - a[1], 414000.0 - a[0], 3_600_000.0);
+        let gb = beta / design.model.b_at_rest();
+        let c = [
+            alpha[2] + gb * k3,
+            alpha[1] + gb * k2,
+            alpha[0] + gb * k1,
+            gb * ki,
+        ];
+        let mut poles = l.lp.closed_loop_poles().unwrap();
+        poles.retain(|p| p.norm() > 1e-9);
+        assert_eq!(poles.len(), 4, "{poles:?}");
+        for p in &poles {
+            // p⁴ + c3p³ + c2p² + c1p + c0 = 0, relative to its largest term.
+            let terms = [
+                p.powi(4),
+                c[0] * p.powi(3),
+                c[1] * p.powi(2),
+                c[2] * p,
+                c[3].into(),
+            ];
+            let big = terms.iter().fold(0.0f64, |m, t| m.max(t.norm()));
+            let sum: ss::C64 = terms.iter().sum();
+            assert!(
+                sum.norm() < 1e-8 * big,
+                "pole {p}: residual {}",
+                sum.norm() / big
+            );
+        }
+        assert_eq!(l.lp.closed_loop_stable(), Some(true));
     }
 }

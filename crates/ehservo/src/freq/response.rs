@@ -79,8 +79,13 @@ pub struct LoopModel {
     pub controller: Option<ControllerModel>,
     /// Its model in the loop's time base (inputs θm, z; output u).
     pub controller_loop: Option<StateSpace>,
-    /// C = −u/θm in the loop's time base.
+    /// C = −u/θm in the loop's time base; a law that reads the measured
+    /// (θm, θ̇m, θ̈m) has the row `−∂u/∂(θm, θ̇m, θ̈m)` (the state feedback).
     pub feedback: Option<StateSpace>,
+    /// The measured channels' path when the law reads (θm, θ̇m, θ̈m): G
+    /// with the outputs (θ, θ̇, θ̈), in the loop's time base (G_d's with
+    /// them, sampled). None for a law that reads θm alone.
+    pub measured: Option<StateSpace>,
     /// L as one model (SISO: θm's error in, θm out): C ∘ z^{−n_s} ∘ G_d ∘ z^{−n_c}.
     pub loop_l: Option<StateSpace>,
     /// The observer of `[estimator]`, when it is linear (Luenberger, Kalman).
@@ -189,7 +194,12 @@ struct ControllerModels {
 
 /// The linear controller's models: as built, in the loop's time base, and
 /// as the feedback C = −u/θm.
-fn controller_models(setup: &Loop, sampled: bool) -> Result<ControllerModels, KeyError> {
+fn controller_models(
+    setup: &Loop,
+    sampled: bool,
+    at: (&OperatingPoint, Side),
+    notes: &mut Vec<String>,
+) -> Result<ControllerModels, KeyError> {
     let h = setup.sim().step;
     let controller = match controller_model(setup.controller(), setup.design()) {
         None => None,
@@ -200,18 +210,97 @@ fn controller_models(setup: &Loop, sampled: bool) -> Result<ControllerModels, Ke
             )
         })?),
     };
+    let controller = controller.map(|c| match c.compensated_b0 {
+        Some(b0) => {
+            let b = compensated_gain(setup, at.0, at.1);
+            notes.push(format!(
+                "controller.compensate: the law divides by the valve's gain at the measured state, b(x, sgn v); linearised at the point on the {} side, by b = {b:.6e} (b̄0 = {b0:.6e} at rest)",
+                at.1.as_str()
+            ));
+            c.divided_by(b)
+        }
+        None => c,
+    });
     let controller_loop = controller
         .as_ref()
         .map(|c| c.for_mode(sampled.then_some(h)));
-    let feedback = controller_loop.as_ref().map(|c| {
-        c.siso(0, 0)
-            .scaled_output(-1.0, vec![Quantity::new("minus_u", "V")])
-    });
+    let feedback = controller
+        .as_ref()
+        .zip(controller_loop.as_ref())
+        .map(|(m, c)| {
+            c.inputs_from(0, m.measured)
+                .scaled_output(-1.0, vec![Quantity::new("minus_u", "V")])
+        });
     Ok(ControllerModels {
         controller,
         controller_loop,
         feedback,
     })
+}
+
+/// The gain a compensating law divides by at `op`: the nominal model's
+/// `b(x, s)` (floored as the law floors it) at the point's position and
+/// speed, at rest in acceleration, in the valve direction `s` of `side`.
+fn compensated_gain(setup: &Loop, op: &OperatingPoint, side: Side) -> f64 {
+    let speed = match (op.v_m_s, op.theta_dot_deg_s) {
+        (Some(v), _) => v,
+        (None, Some(d)) => d * ehservo_core::math::DR,
+        (None, None) => 0.0,
+    };
+    let x = [op.position(), speed, 0.0];
+    let model = &setup.design().model;
+    let b0 = model.b_at_rest();
+    model.gain_for(&x, side.sign(), 1e-3 * b0).0
+}
+
+/// G discretised as `discretisation` says, at the loop's period.
+fn discretise(
+    g: &StateSpace,
+    discretisation: Discretisation,
+    setup: &Loop,
+) -> Result<StateSpace, KeyError> {
+    let h = setup.sim().step;
+    match discretisation {
+        Discretisation::Zoh => g.zoh(h),
+        Discretisation::Rk4 => g.rk4_map(h, setup.sim().substeps),
+    }
+    .map_err(|e| KeyError::new("plant", e.to_string()))
+}
+
+/// G with the outputs (θ, θ̇, θ̈), continuous, when the law reads the
+/// three (the state feedback) from the sensors; None for a law that reads
+/// θm alone, or (with a note) when the law's channels are not G's
+/// derivatives: an estimator supplies some, or G's input reaches θ sooner
+/// than its third integral.
+fn measured_path(
+    setup: &Loop,
+    g: &StateSpace,
+    controller: Option<&ControllerModel>,
+    notes: &mut Vec<String>,
+) -> Option<StateSpace> {
+    if controller.is_none_or(|c| c.measured == 1) {
+        return None;
+    }
+    if !setup.stages().sensor.measured().is_all() {
+        notes.push(
+            "controller: the law reads the estimator's x̂ for the channels the sensors do not measure; the estimator in the loop is not modelled, so the loop is not computed"
+                .into(),
+        );
+        return None;
+    }
+    let names = vec![
+        Quantity::new("theta", "rad"),
+        Quantity::new("theta_dot", "rad/s"),
+        Quantity::new("theta_ddot", "rad/s²"),
+    ];
+    let g3 = g.with_derivatives(names);
+    if g3.is_none() {
+        notes.push(
+            "controller: the plant's command reaches θ sooner than its third integral, so θ̇m and θ̈m are not G's derivatives; the loop is not computed"
+                .into(),
+        );
+    }
+    g3
 }
 
 /// The loop's delays: the sample period and the samples of the sensor's
@@ -231,6 +320,19 @@ fn open_loop(
     delays: &Delays,
 ) -> Result<Option<StateSpace>, KeyError> {
     let h = delays.h;
+    if let (Some(c), true) = (feedback, g.outputs.len() > 1) {
+        // Several measured channels, each delayed alike: the delays
+        // commute with G, so both sit on the command, z^{−(n_s + n_c)}.
+        let u = Quantity::new("u", "V");
+        let m = match g_d {
+            Some(gd) => StateSpace::delay(delays.computation + delays.sensor, h, &u).series(gd),
+            None => Ok(g.clone()),
+        };
+        return m
+            .and_then(|m| m.series(c))
+            .map(Some)
+            .map_err(|e| KeyError::new("loop", e.0));
+    }
     Ok(match (feedback, g_d) {
         (Some(c), Some(gd)) => {
             let theta = Quantity::new("theta", "rad");
@@ -312,13 +414,7 @@ impl LoopModel {
         }
         let sampled = setup.sim().mode == Mode::Sampled;
         let g_d = if sampled {
-            Some(
-                match discretisation {
-                    Discretisation::Zoh => g.zoh(h),
-                    Discretisation::Rk4 => g.rk4_map(h, setup.sim().substeps),
-                }
-                .map_err(|e| KeyError::new("plant", e.to_string()))?,
-            )
+            Some(discretise(&g, discretisation, setup)?)
         } else {
             None
         };
@@ -332,13 +428,29 @@ impl LoopModel {
             controller,
             controller_loop,
             feedback,
-        } = controller_models(setup, sampled)?;
+        } = controller_models(setup, sampled, (op, side), &mut notes)?;
         let delays = Delays {
             h,
             sensor: sensor_delay,
             computation: computation_delay,
         };
-        let loop_l = open_loop(&g, g_d.as_ref(), feedback.as_ref(), &delays)?;
+        let measured = measured_path(setup, &g, controller.as_ref(), &mut notes);
+        let measured_d = match (&measured, sampled) {
+            (Some(g3), true) => Some(discretise(g3, discretisation, setup)?),
+            _ => None,
+        };
+        let loop_l = match &measured {
+            Some(g3) => open_loop(g3, measured_d.as_ref(), feedback.as_ref(), &delays)?,
+            None => open_loop(&g, g_d.as_ref(), feedback.as_ref(), &delays)?,
+        };
+        let measured = if sampled { measured_d } else { measured };
+        let (controller, controller_loop, feedback) =
+            if measured.is_none() && controller.as_ref().is_some_and(|c| c.measured > 1) {
+                (None, None, None)
+            } else {
+                (controller, controller_loop, feedback)
+            };
+        let loop_l = if feedback.is_some() { loop_l } else { None };
         let observer = match &setup.stages().estimator {
             Some(AnyEstimator::Linear(o)) if sampled => Some(observer_model(o, h)),
             _ => None,
@@ -356,6 +468,7 @@ impl LoopModel {
             controller,
             controller_loop,
             feedback,
+            measured,
             loop_l,
             observer,
             kinks,
@@ -380,6 +493,7 @@ impl LoopModel {
             self.g_d.as_mut(),
             self.controller_loop.as_mut(),
             self.feedback.as_mut(),
+            self.measured.as_mut(),
             self.loop_l.as_mut(),
             self.observer.as_mut(),
         ];
@@ -422,8 +536,17 @@ impl LoopModel {
     /// L at ω (rad/s) alone, as [`at`](Self::at) gives it (None without a
     /// linear controller): what the margins need, without the other curves.
     pub fn loop_at(&self, w: f64) -> Option<C64> {
-        let (p, delay) = self.plant_path(w);
-        Some(self.feedback.as_ref()?.response(w)? * p? * delay)
+        let f = self.feedback.as_ref()?;
+        let Some(g3) = &self.measured else {
+            let (p, delay) = self.plant_path(w);
+            return Some(f.response(w)? * p? * delay);
+        };
+        // The row −∂u/∂(θm, θ̇m, θ̈m) times the column of the measured
+        // channels, delayed alike by z^{−(n_s + n_c)}.
+        let n = self.sensor_delay + self.computation_delay;
+        let z = C64::from_polar(1.0, -(n as f64) * w * self.h);
+        let l = (f.at(f.point(w))? * g3.at(g3.point(w))?)[(0, 0)];
+        Some(if self.sampled() { l * z } else { l })
     }
 
     /// Every curve at ω (rad/s).
@@ -431,19 +554,32 @@ impl LoopModel {
         let g = self.g.response(w);
         let (plant_path, loop_delay) = self.plant_path(w);
         let g_d = self.g_d.as_ref().and(plant_path.map(|p| p * loop_delay));
-        let c = self.feedback.as_ref().and_then(|f| f.response(w));
-        let l = match (c, plant_path) {
-            (Some(c), Some(p)) => Some(c * p * loop_delay),
-            _ => None,
+        let (c, l) = match &self.measured {
+            None => {
+                let c = self.feedback.as_ref().and_then(|f| f.response(w));
+                let l = match (c, plant_path) {
+                    (Some(c), Some(p)) => Some(c * p * loop_delay),
+                    _ => None,
+                };
+                (c, l)
+            }
+            // A law that reads θ̇m and θ̈m too: C is the equivalent
+            // feedback on θm alone, L over the position's path.
+            Some(_) => {
+                let l = self.loop_at(w);
+                let c = l.zip(plant_path).map(|(l, p)| l / (p * loop_delay));
+                (c, l)
+            }
         };
         let s = l.map(|l| 1.0 / (1.0 + l));
         let t = l.map(|l| l / (1.0 + l));
+        let first_z = self.controller.as_ref().map_or(1, |c| c.measured);
         let cr = self.controller_loop.as_ref().and_then(|k| {
             let jw = C64::new(0.0, w);
             let mut sum = C64::new(0.0, 0.0);
             let mut pow = C64::new(1.0, 0.0);
             for i in 0..4 {
-                sum += k.siso(0, 1 + i).response(w)? * pow;
+                sum += k.siso(0, first_z + i).response(w)? * pow;
                 pow *= jw;
             }
             Some(sum)

@@ -340,6 +340,53 @@ impl StateSpace {
         )
     }
 
+    /// The sub-model of inputs `first..first + count`, every output.
+    pub fn inputs_from(&self, first: usize, count: usize) -> StateSpace {
+        StateSpace::new(
+            self.a.clone(),
+            self.b.columns(first, count).into_owned(),
+            self.c.clone(),
+            self.d.columns(first, count).into_owned(),
+            self.dt,
+            (
+                self.states.clone(),
+                self.inputs[first..first + count].to_vec(),
+                self.outputs.clone(),
+            ),
+        )
+    }
+
+    /// A continuous SISO model with its output's first two derivatives as
+    /// outputs too, `(y, ẏ, ÿ) = (C, C·A, C·A²)·x`: what a sensor of the
+    /// velocity and the acceleration reads. None unless the input reaches
+    /// y no sooner than its third integral (`D = C·B = C·A·B = 0`), so
+    /// that a held input has no part in the derivatives.
+    pub fn with_derivatives(&self, names: Vec<Quantity>) -> Option<StateSpace> {
+        let ca = &self.c * &self.a;
+        let ca2 = &ca * &self.a;
+        let zero = |m: &DMatrix<f64>| m.iter().all(|v| *v == 0.0);
+        if self.dt.is_some()
+            || self.outputs.len() != 1
+            || self.inputs.len() != 1
+            || !(zero(&self.d) && zero(&(&self.c * &self.b)) && zero(&(&ca * &self.b)))
+        {
+            return None;
+        }
+        let n = self.n();
+        let mut c = DMatrix::zeros(3, n);
+        c.row_mut(0).copy_from(&self.c.row(0));
+        c.row_mut(1).copy_from(&ca.row(0));
+        c.row_mut(2).copy_from(&ca2.row(0));
+        Some(StateSpace::new(
+            self.a.clone(),
+            self.b.clone(),
+            c,
+            DMatrix::zeros(3, 1),
+            None,
+            (self.states.clone(), self.inputs.clone(), names),
+        ))
+    }
+
     /// The same model with its outputs scaled by `k` (and renamed).
     pub fn scaled_output(&self, k: f64, outputs: Vec<Quantity>) -> StateSpace {
         let mut s = self.clone();

@@ -60,8 +60,8 @@ impl Stability {
 }
 
 /// The computed stability of `lp`'s loop; None when its law is not linear
-/// (no model of it: the sliding laws, the neural ones, state feedback
-/// with its flow compensation) or when the loop cannot be linearised at
+/// (no model of it: the sliding laws, the neural ones; a state feedback
+/// whose channels come from an estimator) or when the loop cannot be linearised at
 /// the trim (no trim found, a model that is not finite there): then only
 /// the run's own findings judge it.
 ///
