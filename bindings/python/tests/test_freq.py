@@ -29,6 +29,18 @@ CASES = {
     ),
     "adrc-fig2": ("scenarios/league/adrc-fig2.toml", []),
     "pid-10ms-valve": ("scenarios/realistic/base-10ms.toml", ["controller.kind=pid"]),
+    # The state feedback reads (θ, θ̇, θ̈): its loop closes through the
+    # plant's three measured channels (ω_h·h ≤ 1 wants the 1 ms sample;
+    # the delays give L a phase crossover).
+    "sf-fig2-1ms-delays": (
+        "docs/league/suite/scenarios/pid/fig2.toml",
+        [
+            "controller.kind=state-feedback",
+            "simulation.step=0.001",
+            "sensor.delay=2",
+            "simulation.computation_delay=true",
+        ],
+    ),
 }
 
 
@@ -71,14 +83,34 @@ def test_margins_match_python_control(case, cli, repo, tmp_path, monkeypatch):
     lin = ehservo.linearize(path, set=sets)
     summary, _ = _freq(cli, tmp_path, path, sets)
     m = summary["computed"]["margins"]
+    # Every crossover ehservo reports, checked on python-control's own
+    # evaluation of the exported L: |L| = 1 at a gain crossover with the
+    # phase margin there, ∠L = −180° at a phase crossover with |L| = 1/GM.
+    for g in m["gain_crossovers"]:
+        L = _response(lin.loop, [g["omega_rad_s"]])[0]
+        assert abs(abs(L) - 1.0) < REL, (g, abs(L))
+    pmw = m["phase_margin"]
+    L = _response(lin.loop, [pmw["omega_rad_s"]])[0]
+    assert abs(((math.degrees(np.angle(L)) + 180.0) % 360.0) - pmw["phase_margin_deg"]) < 1e-6
+    for p in m["phase_crossovers"]:
+        L = _response(lin.loop, [p["omega_rad_s"]])[0]
+        assert abs(L.imag) < REL * abs(L) and L.real < 0, (p, L)
+    how = {}  # python-control's default: poly, or frd where it doubts poly
     gm, pm, wpc, wgc = ct.margin(lin.loop)
+    if abs(abs(_response(lin.loop, [wgc])[0]) - 1.0) > REL:
+        # python-control's default ('poly') method puts the state
+        # feedback's gain crossover where its own frequency_response has
+        # |L| = 0.93 (python-control 0.10.2): its 'frd' method is the one its
+        # responses confirm.
+        how = {"method": "frd"}
+        gm, pm, _, wpc, wgc, _ = ct.stability_margins(lin.loop, **how)
     assert math.isfinite(gm) and math.isfinite(pm), (gm, pm)
     assert _rel(gm, m["gain_margin"]["gain_margin"]) < REL, (gm, m["gain_margin"])
     assert _rel(wpc, m["gain_margin"]["omega_rad_s"]) < REL, (wpc, m["gain_margin"])
     assert _rel(pm, m["phase_margin"]["phase_margin_deg"]) < REL, (pm, m["phase_margin"])
     assert _rel(wgc, m["phase_margin"]["omega_rad_s"]) < REL, (wgc, m["phase_margin"])
     # Every crossover python-control finds (at ω > 0) is ehservo's.
-    gms, pms, sms, wpcs, wgcs, wms = ct.stability_margins(lin.loop, returnall=True)
+    gms, pms, sms, wpcs, wgcs, wms = ct.stability_margins(lin.loop, returnall=True, **how)
     ours_p = sorted(p["omega_rad_s"] for p in m["phase_crossovers"])
     theirs_p = sorted(w for w, g in zip(wpcs, gms) if w > 0 and math.isfinite(g) and g > 1e-10)
     assert len(ours_p) == len(theirs_p), (ours_p, theirs_p)
@@ -110,8 +142,14 @@ def test_responses_match_python_control(case, cli, repo, tmp_path, monkeypatch):
         "S": ct.feedback(ct.ss([], [], [], [[1.0]], L.dt), L),
         "T": ct.feedback(L, 1),
     }
+    if lin.measured is not None:
+        # C is then the feedback on θm equivalent to the row: L/Gd.
+        models["C"] = None
     for name, sys in models.items():
-        theirs = _response(sys, w)
+        if sys is None:
+            theirs = _response(L, w) / _response(models["Gd"], w)
+        else:
+            theirs = _response(sys, w)
         ours = _curve(cols, name)
         err = np.max(np.abs(ours - theirs) / np.abs(theirs))
         assert err < REL, f"{name}: relative error {err:.3e}"
@@ -184,3 +222,24 @@ def test_python_models_are_the_json(repo, monkeypatch):
     lo = ehservo.linearize(text, trim=10.0, side="minus")
     hi = ehservo.linearize(text, trim=10.0, side="plus")
     assert lo.plant.B[2, 0] > hi.plant.B[2, 0]
+
+
+def test_freq_from_python_is_the_clis_on_a_cylinder(cli, repo, tmp_path, monkeypatch):
+    """``ehservo.freq`` writes the CLI's folder and returns its freq.json:
+    on the slide (a linear axis, mm and m/V) with the state feedback, equal
+    to the CLI's to the bit, and nothing in it is in degrees or radians of
+    the position."""
+    monkeypatch.chdir(repo)
+    path = "scenarios/cylinders/slide.toml"
+    ours = ehservo.freq(path, out=tmp_path / "py", side="plus", measure="none", plot=False)
+    cli("freq", path, "--side", "plus", "--measure", "none", "--no-plot", "-q", "--out", tmp_path / "cli")
+    theirs = json.loads((tmp_path / "cli" / "freq.json").read_text())
+    assert ours == theirs
+    assert (tmp_path / "py" / "response.csv").read_bytes() == (tmp_path / "cli" / "response.csv").read_bytes()
+    text = json.dumps(ours)
+    assert "theta" not in text and "rad/V" not in text and "_deg" not in text.replace("phase_margin_deg", "")
+    m = ours["computed"]["margins"]
+    assert m["gain_margin"]["gain_margin_dB"] > 0 and m["phase_margin"]["phase_margin_deg"] > 0
+    lin = ehservo.linearize(path, side="plus")
+    assert lin.axis == "linear" and "y = 180 mm" in repr(lin)
+    assert lin.measured is not None and lin.feedback.ninputs == 3

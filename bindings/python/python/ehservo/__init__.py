@@ -43,6 +43,7 @@ __all__ = [
     "Controller",
     "linearize",
     "Linearization",
+    "freq",
     "RunResult",
     "Signal",
     "ScenarioError",
@@ -440,13 +441,18 @@ class Linearization:
     gains, damping, the kinks and notes, the units of every signal).
 
     ``plant`` is the plant with its actuator, continuous, from the command
-    u (V) to θ (rad); ``plant_alone`` and ``actuator`` its two parts;
+    u (V) to θ (rad; on a linear axis, a cylinder, y in m: every signal
+    named for the angle is then y, in m); ``plant_alone`` and ``actuator`` its two parts;
     ``plant_discrete`` G at the sample period (ZOH, or the simulator's RK4
     map with ``discretise="rk4"``); ``sensor_delay`` and
     ``computation_delay`` the z⁻ⁿ of ``sensor.delay`` and
     ``simulation.computation_delay``; ``controller`` a linear law (PID,
-    ADRC) in the loop's time base with inputs (θm, θd, θ̇d, θ̈d, θ⃛d) and
-    output u; ``feedback`` its path C = −u/θm; ``loop`` L =
+    ADRC, state feedback) in the loop's time base with inputs (θm, θd, θ̇d,
+    θ̈d, θ⃛d) and output u (the state feedback's: (θm, θ̇m, θ̈m, θd, …));
+    ``feedback`` its path C = −u/θm (the state feedback's row
+    −∂u/∂(θm, θ̇m, θ̈m)); ``measured`` the plant's path to the three
+    measured channels (θ, θ̇, θ̈) for the state feedback, else None;
+    ``loop`` L =
     C·z⁻ⁿˢ·G_d·z⁻ⁿᶜ; ``parts`` the ADRC's ``observer`` and ``law``;
     ``estimator`` a Luenberger or Kalman observer (inputs θm, u_prev)."""
 
@@ -465,6 +471,7 @@ class Linearization:
         self.controller_law = _ss(ctrl.get("law"), "law")
         self.feedback = _ss(ctrl.get("feedback"), "C")
         self.parts = {k: _ss(v, k) for k, v in (ctrl.get("parts") or {}).items()}
+        self.measured = _ss(data.get("measured_channels"), "G3")
         self.loop = _ss((data.get("loop") or {}).get("model"), "L")
         self.estimator = _ss(data.get("estimator"), "estimator")
 
@@ -473,11 +480,22 @@ class Linearization:
         """Where the loop was linearised (``data["operating_point"]``)."""
         return self.data["operating_point"]
 
+    @property
+    def axis(self) -> str:
+        """``"rotary"`` (θ in rad, shown in degrees) or ``"linear"`` (y in m,
+        shown in mm), from the operating point."""
+        return "rotary" if "theta_deg" in self.operating_point else "linear"
+
     def __repr__(self) -> str:
         op = self.operating_point
+        where = (
+            f"θ = {op['theta_deg']:.6g}°"
+            if self.axis == "rotary"
+            else f"y = {op['x_mm']:.6g} mm"
+        )
         return (
             f"ehservo.Linearization({self.data['scenario']!r}, {op['kind']} at "
-            f"θ = {op['theta_deg']:.6g}°, controller={'none' if self.controller is None else 'linear'})"
+            f"{where}, controller={'none' if self.controller is None else 'linear'})"
         )
 
 
@@ -507,3 +525,52 @@ def linearize(
         path, text, overrides(set, **keywords), at, trim, side, discretise
     )
     return Linearization(json.loads(raw))
+
+
+def freq(
+    scenario: Optional[PathLike] = None,
+    *,
+    out: PathLike,
+    at: Optional[float] = None,
+    trim: Optional[float] = None,
+    side: Optional[str] = None,
+    discretise: str = "zoh",
+    measure: Union[str, Sequence[str]] = "sine",
+    points: Optional[int] = None,
+    amplitude: Optional[float] = None,
+    threads: Optional[int] = None,
+    plot: bool = True,
+    set: SetArg = None,
+    **keywords: Any,
+) -> Dict[str, Any]:
+    """Computes and measures the loop's frequency responses as ``ehservo
+    freq`` does, writes its folder to ``out`` (freq.json, response.csv,
+    the measured CSVs, the Bode and Nyquist plots unless ``plot=False``)
+    and returns freq.json as a dict: the margins, Ms, Mt and bandwidths,
+    with the position in the axis's units (``x_mm`` and m/V on a
+    cylinder, ``theta_deg`` and rad/V on a rotary axis).
+
+    ``at``, ``trim`` and ``side`` choose the operating point as for
+    :func:`linearize` (``trim`` in degrees or mm). ``measure``: "sine",
+    "multisine", "chirp", a list of them, or "none". ``amplitude``: the
+    tracking sine's, in the axis's unit (default 0.5). ``points``: the
+    computed grid's.
+    """
+    path, text = _source(scenario)
+    methods = [measure] if isinstance(measure, str) else list(measure)
+    raw = _ehservo.freq(
+        path,
+        text,
+        overrides(set, **keywords),
+        os.fspath(out),
+        at,
+        trim,
+        side,
+        discretise,
+        methods,
+        points,
+        amplitude,
+        threads,
+        plot,
+    )
+    return json.loads(raw)

@@ -41,6 +41,21 @@ def linearize(
     side: Optional[str] = None,
     discretise: str = "zoh",
 ) -> str: ...
+def freq(
+    path: Optional[str],
+    text: Optional[str],
+    overrides: List[str],
+    out: str,
+    at: Optional[float] = None,
+    trim: Optional[float] = None,
+    side: Optional[str] = None,
+    discretise: str = "zoh",
+    measure: List[str] = ...,
+    points: Optional[int] = None,
+    amplitude: Optional[float] = None,
+    threads: Optional[int] = None,
+    plot: bool = True,
+) -> str: ...
 
 FLAGS: Dict[str, int]
 
