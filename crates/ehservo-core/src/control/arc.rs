@@ -302,6 +302,19 @@ impl Config for ArcConfig {
         Ok(self.build(d)?.cast())
     }
 
+    /// k_s, ε and Γ as the rules give them (module doc), when left out.
+    fn designed(&self, d: &Design) -> Option<Result<Self, ParamError>> {
+        Some(self.build(d).map(|c| {
+            let (k_s, eps, gamma) = c.gains();
+            Self {
+                k_s: Some(k_s),
+                eps: Some(eps),
+                gamma: Some(gamma),
+                ..*self
+            }
+        }))
+    }
+
     fn build(&self, d: &Design) -> Result<Arc, ParamError> {
         non_negative("bound_a", self.bound_a)?;
         non_negative("bound_b", self.bound_b)?;
@@ -456,6 +469,19 @@ mod tests {
             surface: SwitchingSurface::try_new([3.0, 2.0, 1.0]).unwrap(),
             dt: 0.01,
         }
+    }
+
+    /// The designed values are the rules' and build the same law: on the
+    /// surface p = (3, 2, 1), k_s = p1/3 = 1, and ε = h_ref²/(4·k_s).
+    #[test]
+    fn designed_fills_the_rules_and_builds_the_same_law() {
+        let d = simple();
+        let cfg = ArcConfig::default();
+        let got = cfg.designed(&d).unwrap().unwrap();
+        assert_eq!(got.k_s, Some(1.0));
+        let built = cfg.build(&d).unwrap();
+        assert_eq!(got.build(&d).unwrap(), built);
+        assert!(got.eps.unwrap() > 0.0 && got.gamma.unwrap().iter().all(|g| *g > 0.0));
     }
 
     fn cfg() -> ArcConfig {

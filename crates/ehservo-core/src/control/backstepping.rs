@@ -267,6 +267,16 @@ impl<T: Real> Backstepping<T> {
     }
 }
 
+impl BacksteppingConfig {
+    /// Z's rule, `0.1·(X3 + (c1 + c2)·X2 + (1 + c1·c2)·X1)` at the paper's
+    /// scales X.
+    fn z_rule(&self) -> f64 {
+        let x = Rbf::paper_scale();
+        let (c1, c2) = (self.c1, self.c2);
+        0.1 * (x[2] + (c1 + c2) * x[1] + (1.0 + c1 * c2) * x[0])
+    }
+}
+
 impl Config for BacksteppingConfig {
     const KIND: &'static str = "backstepping";
     const USES_SURFACE: bool = false;
@@ -281,6 +291,19 @@ impl Config for BacksteppingConfig {
     type Law<F: Real> = Backstepping<F>;
     fn build_in<F: Real>(&self, d: &Design) -> Result<Backstepping<F>, ParamError> {
         Ok(self.build(d)?.cast())
+    }
+
+    /// Γ, γϱ and the z3 scale Z of their rules (module doc), when left out.
+    fn designed(&self, d: &Design) -> Option<Result<Self, ParamError>> {
+        Some(self.build(d).map(|c| {
+            let (_, gamma, gamma_rho) = c.gains();
+            Self {
+                gamma: Some(gamma),
+                gamma_rho: Some(gamma_rho),
+                error_scale: Some(self.error_scale.unwrap_or_else(|| self.z_rule())),
+                ..*self
+            }
+        }))
     }
 
     fn build(&self, d: &Design) -> Result<Backstepping, ParamError> {
@@ -302,7 +325,7 @@ impl Config for BacksteppingConfig {
         let xv = a[0] * x[0] + a[1] * x[1] + a[2] * x[2];
         let z = match self.error_scale {
             Some(z) => positive("error_scale", z)?,
-            None => 0.1 * (x[2] + (c1 + c2) * x[1] + (1.0 + c1 * c2) * x[0]),
+            None => self.z_rule(),
         };
         let gamma = match self.gamma {
             Some(g) => {
@@ -431,6 +454,27 @@ mod tests {
             surface: SwitchingSurface::paper(),
             dt: 0.01,
         }
+    }
+
+    /// The designed values are the rules' and build the same law. By hand
+    /// at the paper's scales X = (6.25°, 12.5π°/s, 25π²°/s²) in rad =
+    /// (0.109083, 0.685389, 4.306427) and c1 = c2 = 30:
+    /// Z = 0.1·(4.306427 + 60·0.685389 + 901·0.109083) = 14.371363.
+    #[test]
+    fn designed_fills_the_rules_and_builds_the_same_law() {
+        let d = design(Load::paper());
+        let cfg = BacksteppingConfig::default();
+        let got = cfg.designed(&d).unwrap().unwrap();
+        let z = got.error_scale.unwrap();
+        assert!((z - 14.371363).abs() < 1e-6, "{z}");
+        assert!(got.gamma.is_some() && got.gamma_rho.is_some());
+        assert_eq!(got.build(&d).unwrap(), cfg.build(&d).unwrap());
+        // A given Z is kept as given.
+        let given = BacksteppingConfig {
+            error_scale: Some(3.0),
+            ..cfg
+        };
+        assert_eq!(given.designed(&d).unwrap().unwrap().error_scale, Some(3.0));
     }
 
     /// c = (1, 2, 3), Γ = (10, 20, 30), γϱ = 2, no load (d = 0),
