@@ -575,8 +575,17 @@ impl StateSpace {
     }
 
     /// The SISO response (output 0, input 0) at frequency `w` (rad/s).
+    ///
+    /// Up to [`STACK_STATES`] states it is solved on the stack
+    /// ([`siso_at`]): the margins evaluate L at thousands of points per
+    /// candidate of a tune, where the heap's matrices cost more than the
+    /// solve.
     pub fn response(&self, w: f64) -> Option<C64> {
-        self.at(self.point(w)).map(|m| m[(0, 0)])
+        let n = self.n();
+        if n > STACK_STATES || self.inputs.is_empty() || self.outputs.is_empty() {
+            return self.at(self.point(w)).map(|m| m[(0, 0)]);
+        }
+        siso_at(self, self.point(w))
     }
 
     /// The poles (eigenvalues of A), sorted.
@@ -697,3 +706,62 @@ pub fn pair(z: C64) -> [f64; 2] {
 #[cfg(test)]
 #[path = "ss_tests.rs"]
 mod tests;
+
+/// The most states [`StateSpace::response`] solves on the stack.
+pub const STACK_STATES: usize = 24;
+
+/// `c·(p·I − A)⁻¹·b + d` of output 0 and input 0 at the complex point `p`,
+/// by Gaussian elimination with partial pivoting (the pivot of largest
+/// |re| + |im|, as nalgebra's LU picks it) on the augmented `[pI − A | b]`
+/// in a stack array; None when a pivot vanishes (p is a pole) or the value
+/// is not finite. Needs `n ≤ STACK_STATES`.
+fn siso_at(m: &StateSpace, p: C64) -> Option<C64> {
+    let n = m.n();
+    let d = m.d[(0, 0)];
+    if n == 0 {
+        return Some(C64::new(d, 0.0));
+    }
+    let zero = C64::new(0.0, 0.0);
+    let mut g = [[zero; STACK_STATES + 1]; STACK_STATES];
+    for (i, row) in g.iter_mut().enumerate().take(n) {
+        for (j, v) in row.iter_mut().enumerate().take(n) {
+            *v = C64::new(-m.a[(i, j)], 0.0);
+        }
+        row[i] += p;
+        row[n] = C64::new(m.b[(i, 0)], 0.0);
+    }
+    let norm1 = |z: C64| z.re.abs() + z.im.abs();
+    for k in 0..n {
+        let piv = (k..n).fold(k, |best, i| {
+            if norm1(g[i][k]) > norm1(g[best][k]) {
+                i
+            } else {
+                best
+            }
+        });
+        if norm1(g[piv][k]) == 0.0 {
+            return None;
+        }
+        g.swap(k, piv);
+        let pivot = g[k][k];
+        for i in k + 1..n {
+            let f = g[i][k] / pivot;
+            if f != zero {
+                for j in k + 1..=n {
+                    let v = g[k][j];
+                    g[i][j] -= f * v;
+                }
+            }
+        }
+    }
+    let mut x = [zero; STACK_STATES];
+    for i in (0..n).rev() {
+        let mut acc = g[i][n];
+        for j in i + 1..n {
+            acc -= g[i][j] * x[j];
+        }
+        x[i] = acc / g[i][i];
+    }
+    let y = (0..n).fold(C64::new(d, 0.0), |acc, j| acc + x[j] * m.c[(0, j)]);
+    (y.re.is_finite() && y.im.is_finite()).then_some(y)
+}
