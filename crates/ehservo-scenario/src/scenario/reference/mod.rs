@@ -262,6 +262,7 @@ impl schemars::JsonSchema for ReferenceRaw {
         // The nested types as read, in `g`'s own definitions.
         g.subschema_for::<ReferenceKind>();
         g.subschema_for::<ComponentCfg>();
+        g.subschema_for::<Quantity>();
         let mut writing = g.settings().clone().for_serialize().into_generator();
         let mut s = <ReferenceCfg as schemars::JsonSchema>::json_schema(&mut writing);
         s.insert("additionalProperties".into(), false.into());
