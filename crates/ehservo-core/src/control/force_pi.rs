@@ -370,14 +370,16 @@ mod tests {
         let out = law.law(&m, &[0.5], &mut ds);
         assert_eq!((out.u, out.u_unsat, ds[0]), (1.0, 2.5, 0.0));
         assert_eq!(out.flags, flags::SATURATED);
-        // A negative error under the same clamp unwinds: İ = 1e-2·(−2e4).
+        // A wound-up I = 3.5 V with the force now 20 kN over: v = 1e-4·(−2e4)
+        // + 3.5 = 1.5 V, still clamped to +1 V, but the negative error
+        // unwinds it: İ = 1e-2·(−2e4) = −200 V/s.
         let m = Measurement {
             t: 0.0,
             x: [2e4, 0.0, 0.0],
             z: [0.0, 0.0, 0.0, 0.0],
         };
-        let out = law.law(&m, &[3.0], &mut ds);
-        assert_eq!((out.u, ds[0]), (-1.0, -200.0));
+        let out = law.law(&m, &[3.5], &mut ds);
+        assert_eq!((out.u, out.u_unsat, ds[0]), (1.0, 1.5, -200.0));
     }
 
     #[test]
