@@ -332,6 +332,17 @@ fn check_quantity(s: &Scenario) -> Result<(), KeyError> {
             ),
         );
     }
+    if !q.is_position() && s.estimator.is_some() {
+        // The estimators are designed on the position's model: x = (q, ẏ, ÿ)
+        // is not a chain of derivatives they could estimate.
+        return bad(
+            "estimator",
+            format!(
+                "an estimator of x is designed on the position's model: a `{}` loop measures its channels (set [sensor] measured to all three)",
+                q.name()
+            ),
+        );
+    }
     match (q.is_position(), s.controller.closes_on_force()) {
         (true, true) => bad(
             "controller.kind",
