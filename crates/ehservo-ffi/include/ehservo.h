@@ -260,9 +260,10 @@ EhservoStatus ehservo_sim_e_max_deg(const EhservoSim *sim,
 
 /*
  The display unit of the scenario's axis, as a static NUL-terminated
- string: `"deg"` (rotary) or `"mm"` (linear); null for a null handle.
- Positions and errors in the C ABI's samples are SI (rad or m); the
- metrics are in this unit.
+ string: `"deg"` (rotary), `"mm"` (linear), `"kN"` (a force loop) or
+ `"bar"` (a load-pressure loop); null for a null handle. Positions and
+ errors in the C ABI's samples are SI (rad, m, N or Pa); the metrics are
+ in this unit.
 
  # Safety
  `sim` is null or a live handle.

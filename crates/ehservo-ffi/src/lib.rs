@@ -501,9 +501,10 @@ pub unsafe extern "C" fn ehservo_sim_e_max_deg(
 }
 
 /// The display unit of the scenario's axis, as a static NUL-terminated
-/// string: `"deg"` (rotary) or `"mm"` (linear); null for a null handle.
-/// Positions and errors in the C ABI's samples are SI (rad or m); the
-/// metrics are in this unit.
+/// string: `"deg"` (rotary), `"mm"` (linear), `"kN"` (a force loop) or
+/// `"bar"` (a load-pressure loop); null for a null handle. Positions and
+/// errors in the C ABI's samples are SI (rad, m, N or Pa); the metrics are
+/// in this unit.
 ///
 /// # Safety
 /// `sim` is null or a live handle.
@@ -515,6 +516,8 @@ pub unsafe extern "C" fn ehservo_sim_axis_unit(sim: *const EhservoSim) -> *const
         Some(s) => match s.inner.metrics().axis {
             ehservo_scenario::axis::Axis::Rotary => c"deg".as_ptr(),
             ehservo_scenario::axis::Axis::Linear => c"mm".as_ptr(),
+            ehservo_scenario::axis::Axis::Force => c"kN".as_ptr(),
+            ehservo_scenario::axis::Axis::Pressure => c"bar".as_ptr(),
         },
     }
 }

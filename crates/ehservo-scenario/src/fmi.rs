@@ -295,7 +295,7 @@ pub fn plant_variables(
     let mut out = variables_on(FmuKind::Plant, axis);
     if external_load {
         let (unit, description) = match axis {
-            crate::axis::Axis::Linear => (
+            crate::axis::Axis::Linear | crate::axis::Axis::Force | crate::axis::Axis::Pressure => (
                 "N",
                 "External force on the rod, opposing extension, added to the scenario's load",
             ),

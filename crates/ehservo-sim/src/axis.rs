@@ -8,6 +8,14 @@
 //! rotary axis keeps the names the paper's scenarios always had
 //! (`theta_deg`, `e_deg`, `e_max_deg`), a linear one says `y_mm`, `e_mm`
 //! and `e_max` with `unit = "mm"` beside it.
+//!
+//! **The loop's quantity.** A loop may close on a force or a pressure
+//! instead of the position (issue #49 item 1, `[reference] quantity`,
+//! docs/force-control.md): its axis is then [`Axis::Force`] (N inside,
+//! kN outside: `f_kN`, `e_kN`) or [`Axis::Pressure`] (the load pressure
+//! p_L = p_A − α·p_B, Pa inside, bar outside: `p_l_bar`). The controller
+//! then measures x = (q, ẏ, ÿ): the quantity and the rod's motion, whose
+//! columns keep the rod's axis ([`Axis::motion`]: `y_dot_mm_s`).
 
 use ehservo_core::math::DR;
 use serde::{Deserialize, Serialize};
@@ -36,6 +44,59 @@ pub enum Axis {
     Rotary,
     /// A length y: SI m, shown in millimetres.
     Linear,
+    /// A force F (a load cell's): SI N, shown in kilonewtons.
+    Force,
+    /// A load pressure p_L = p_A − α·p_B: SI Pa, shown in bar.
+    Pressure,
+}
+
+/// What a loop closes on: `[reference] quantity` (default `"position"`).
+///
+/// ```
+/// use ehservo_sim::axis::{Axis, Quantity};
+///
+/// assert_eq!(Quantity::Position.axis_on(Axis::Linear), Axis::Linear);
+/// assert_eq!(Quantity::Force.axis_on(Axis::Linear), Axis::Force);
+/// assert_eq!(Quantity::LoadPressure.axis_on(Axis::Linear), Axis::Pressure);
+/// ```
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Quantity {
+    /// The plant's position (the rod's y, or θ): every loop before issue #49.
+    #[default]
+    Position,
+    /// The environment's force on the rod, as a load cell between the rod
+    /// and the environment measures it (N).
+    Force,
+    /// The load pressure p_L = p_A − α·p_B, α = A_B/A_A (Pa).
+    LoadPressure,
+}
+
+impl Quantity {
+    /// The scenario's spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Position => "position",
+            Quantity::Force => "force",
+            Quantity::LoadPressure => "load-pressure",
+        }
+    }
+
+    /// Whether this is the default, the position.
+    pub fn is_position(&self) -> bool {
+        *self == Quantity::Position
+    }
+
+    /// The loop's axis on a plant whose own axis is `plant`.
+    pub fn axis_on(self, plant: Axis) -> Axis {
+        match self {
+            Quantity::Position => plant,
+            Quantity::Force => Axis::Force,
+            Quantity::LoadPressure => Axis::Pressure,
+        }
+    }
 }
 
 impl Axis {
@@ -44,6 +105,8 @@ impl Axis {
         match self {
             Axis::Rotary => "rotary",
             Axis::Linear => "linear",
+            Axis::Force => "force",
+            Axis::Pressure => "pressure",
         }
     }
 
@@ -52,14 +115,19 @@ impl Axis {
         match self {
             Axis::Rotary => "angle",
             Axis::Linear => "length",
+            Axis::Force => "force",
+            Axis::Pressure => "load pressure",
         }
     }
 
-    /// The position's symbol in names: `theta` or `y`.
+    /// The position's symbol in names: `theta` or `y` (`f`, `p_l` for a
+    /// force or a load pressure).
     pub fn symbol(self) -> &'static str {
         match self {
             Axis::Rotary => "theta",
             Axis::Linear => "y",
+            Axis::Force => "f",
+            Axis::Pressure => "p_l",
         }
     }
 
@@ -68,6 +136,8 @@ impl Axis {
         match self {
             Axis::Rotary => "θ",
             Axis::Linear => "y",
+            Axis::Force => "F",
+            Axis::Pressure => "p_L",
         }
     }
 
@@ -76,6 +146,8 @@ impl Axis {
         match self {
             Axis::Rotary => "rad",
             Axis::Linear => "m",
+            Axis::Force => "N",
+            Axis::Pressure => "Pa",
         }
     }
 
@@ -84,6 +156,8 @@ impl Axis {
         match self {
             Axis::Rotary => "deg",
             Axis::Linear => "mm",
+            Axis::Force => "kN",
+            Axis::Pressure => "bar",
         }
     }
 
@@ -92,6 +166,8 @@ impl Axis {
         match self {
             Axis::Rotary => "°",
             Axis::Linear => " mm",
+            Axis::Force => " kN",
+            Axis::Pressure => " bar",
         }
     }
 
@@ -100,6 +176,8 @@ impl Axis {
         match self {
             Axis::Rotary => "°",
             Axis::Linear => "mm",
+            Axis::Force => "kN",
+            Axis::Pressure => "bar",
         }
     }
 
@@ -116,6 +194,8 @@ impl Axis {
         match self {
             Axis::Rotary => si / DR,
             Axis::Linear => si * 1e3,
+            Axis::Force => si / 1e3,
+            Axis::Pressure => si / 1e5,
         }
     }
 
@@ -127,6 +207,8 @@ impl Axis {
         match self {
             Axis::Rotary => shown * DR,
             Axis::Linear => shown / 1e3,
+            Axis::Force => shown * 1e3,
+            Axis::Pressure => shown * 1e5,
         }
     }
 
@@ -144,7 +226,23 @@ impl Axis {
     pub fn metric(self, bare: &str) -> String {
         match self {
             Axis::Rotary => format!("{bare}_deg"),
-            Axis::Linear => bare.to_string(),
+            Axis::Linear | Axis::Force | Axis::Pressure => bare.to_string(),
+        }
+    }
+
+    /// Whether x is a position (a rotary or a linear axis), not a force
+    /// or a pressure.
+    pub fn is_position(self) -> bool {
+        matches!(self, Axis::Rotary | Axis::Linear)
+    }
+
+    /// The axis of x's second and third channels: a position's own; the
+    /// rod's (linear) on a force or pressure loop, whose controller
+    /// measures x = (q, ẏ, ÿ) (the motion a force law feeds forward).
+    pub fn motion(self) -> Axis {
+        match self {
+            Axis::Rotary | Axis::Linear => self,
+            Axis::Force | Axis::Pressure => Axis::Linear,
         }
     }
 
@@ -154,7 +252,7 @@ impl Axis {
     /// (`rad/s³` → `m/s³`) becomes `m`; nothing changes on a rotary axis.
     pub fn si_name(self, name: &str) -> String {
         match self {
-            Axis::Rotary => name.to_string(),
+            Axis::Rotary | Axis::Force | Axis::Pressure => name.to_string(),
             Axis::Linear => {
                 let mut out = String::with_capacity(name.len());
                 let mut rest = name;
@@ -203,6 +301,22 @@ mod tests {
         assert_eq!(Axis::Linear.display(0.0125), 12.5);
         assert_eq!(Axis::Linear.to_si(12.5), 0.0125);
         assert_eq!(Axis::Rotary.to_si(5.0), 5.0 * DR);
+    }
+
+    #[test]
+    fn force_and_pressure_show_kn_and_bar() {
+        // 20 000 N is 20 kN; 50e5 Pa is 50 bar; the rod's motion keeps mm.
+        assert_eq!(Axis::Force.display(20_000.0), 20.0);
+        assert_eq!(Axis::Force.to_si(20.0), 20_000.0);
+        assert_eq!(Axis::Pressure.display(5e6), 50.0);
+        assert_eq!(Axis::Pressure.to_si(50.0), 5e6);
+        assert_eq!(Axis::Force.column("", ""), "f_kN");
+        assert_eq!(Axis::Force.column("_d", ""), "f_d_kN");
+        assert_eq!(Axis::Pressure.column("", ""), "p_l_bar");
+        assert_eq!(Axis::Force.motion().column("_dot", "_s"), "y_dot_mm_s");
+        assert_eq!(Axis::Force.metric("e_max"), "e_max");
+        assert_eq!(Axis::Force.si_name("p_N"), "p_N");
+        assert!(!Axis::Force.is_position() && Axis::Linear.is_position());
     }
 
     #[test]

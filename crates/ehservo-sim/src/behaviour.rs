@@ -243,6 +243,8 @@ pub fn columns(axis: crate::axis::Axis) -> [&'static str; 7] {
         match axis {
             crate::axis::Axis::Rotary => "oscillation_amplitude_deg",
             crate::axis::Axis::Linear => "oscillation_amplitude_mm",
+            crate::axis::Axis::Force => "oscillation_amplitude_kN",
+            crate::axis::Axis::Pressure => "oscillation_amplitude_bar",
         },
         "oscillation_period_s",
     ]

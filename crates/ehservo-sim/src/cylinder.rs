@@ -81,7 +81,7 @@
 //! force (viscous, Coulomb, stiction) and the load (spring, gravity,
 //! external force), each scaled by `1 + bias + random·r`.
 
-use crate::axis::Axis;
+use crate::axis::{Axis, Quantity};
 use crate::environment::Environment;
 use crate::force::{Force, ForceCfg};
 use crate::plant::{Draw, Plant, PlantConfig, PlantContext, UncertaintySpec, MAX_STATES};
@@ -174,6 +174,9 @@ pub struct Cylinder {
 pub struct CylinderPlant {
     c: Cylinder,
     model: NominalModel,
+    /// What x₀ is: the rod's position (the default), the environment's
+    /// force or the load pressure (`[reference] quantity`).
+    output: Quantity,
 }
 
 /// One hold interval's variation of a cylinder.
@@ -540,7 +543,28 @@ impl CylinderPlant {
     /// From a validated cylinder.
     pub fn new(c: Cylinder, y_nominal: f64) -> Self {
         let model = Self::nominal_model(&c, y_nominal);
-        Self { c, model }
+        Self {
+            c,
+            model,
+            output: Quantity::Position,
+        }
+    }
+
+    /// The same plant measuring `q` as x₀, with the rod's velocity and
+    /// acceleration as x₁ and x₂ when `q` is not the position
+    /// (docs/force-control.md). The loader checks that `q` can be
+    /// measured (an environment for a force, a rod without a pinion).
+    pub fn with_output(mut self, q: Quantity) -> Self {
+        self.output = q;
+        self
+    }
+
+    /// The load pressure p_L = p_A − α·p_B, α = A_B/A_A, of the chamber
+    /// pressures as the trace gives them (max(p̃, 0)).
+    #[inline]
+    pub fn load_pressure(&self, s: &[f64; 6]) -> f64 {
+        let a = &self.c.area;
+        s[2].max(0.0) - a[1] / a[0] * s[3].max(0.0)
     }
 
     /// The cylinder.
@@ -576,6 +600,7 @@ impl CylinderPlant {
     /// #     x0: [0.0; 3],
     /// #     base_dir: None,
     /// #     reference_range: None,
+    /// #     quantity: Default::default(),
     /// # };
     /// // A double-rod cylinder: A = π(D² − d²)/4 on both sides.
     /// let cfg: CylinderCfg = toml::from_str(r#"
@@ -769,7 +794,7 @@ impl Plant for CylinderPlant {
         if self.c.radius.is_some() {
             Axis::Rotary
         } else {
-            Axis::Linear
+            self.output.axis_on(Axis::Linear)
         }
     }
 
@@ -777,6 +802,11 @@ impl Plant for CylinderPlant {
     /// there), as the axis's x₀: the rod's y, or (y − stroke/2)/r through
     /// a pinion of radius r.
     fn end_stops(&self) -> Option<[f64; 2]> {
+        if !self.output.is_position() {
+            // x₀ is a force or a pressure: the stops' contacts are not
+            // seen in it (the trace's f_stop_N shows them).
+            return None;
+        }
         let half = 0.5 * self.c.stroke;
         Some(match self.c.radius {
             None => [0.0, self.c.stroke],
@@ -832,7 +862,18 @@ impl Plant for CylinderPlant {
         let (force, _, _, _) = self.c.forces(t, s, &v.f);
         let a = force / (self.c.mass * v.f.mass);
         match self.c.radius {
-            None => [s[0], s[1], a],
+            None => match self.output {
+                Quantity::Position => [s[0], s[1], a],
+                Quantity::Force => [
+                    self.c
+                        .environment
+                        .as_ref()
+                        .map_or(0.0, |e| e.force(t, s[0], s[1])),
+                    s[1],
+                    a,
+                ],
+                Quantity::LoadPressure => [self.load_pressure(s), s[1], a],
+            },
             Some(r) => [(s[0] - 0.5 * self.c.stroke) / r, s[1] / r, a / r],
         }
     }

@@ -161,6 +161,7 @@ pub struct NominalCfg {
 /// #     x0: [0.0; 3],
 /// #     base_dir: None,
 /// #     reference_range: None,
+/// #     quantity: Default::default(),
 /// # };
 /// // A 63/36 mm single-rod cylinder, 0.5 m stroke, on a fixed 200 bar supply,
 /// // a critically centred valve: the inside of a scenario's `[plant]` table.
@@ -535,8 +536,9 @@ impl PlantConfig for CylinderCfg {
 
     fn build(&self, ctx: &PlantContext) -> Result<CylinderPlant, KeyError> {
         let c = self.resolve(ctx)?;
+        check_quantity(ctx.quantity, &c)?;
         let y = self.nominal.position.unwrap_or(0.5 * c.stroke);
-        let p = CylinderPlant::new(c, y);
+        let p = CylinderPlant::new(c, y).with_output(ctx.quantity);
         // Values each finite can still make the model's constants overflow
         // (an area of 1e308, a subnormal mass): what the controller would
         // be designed on must be numbers.
@@ -567,6 +569,32 @@ impl PlantConfig for CylinderCfg {
         }
         Ok(p)
     }
+}
+
+/// Whether the loop's quantity `q` can be measured on `c`: a force needs
+/// the environment whose force the load cell reads, and a force or a
+/// pressure loop a rod without a pinion (its x is then (q, ẏ, ÿ) of the rod).
+fn check_quantity(q: crate::axis::Quantity, c: &Cylinder) -> Result<(), KeyError> {
+    use crate::axis::Quantity;
+    if q.is_position() {
+        return Ok(());
+    }
+    if c.radius.is_some() {
+        return Err(KeyError::new(
+            "reference.quantity",
+            format!(
+                "`{}` is a linear cylinder's: remove [plant.transmission] (a rack and pinion turns the axis rotary)",
+                q.name()
+            ),
+        ));
+    }
+    if q == Quantity::Force && c.environment.is_none() {
+        return Err(KeyError::new(
+            "reference.quantity",
+            "`force` is the environment's force on the rod (a load cell's): give [plant.environment], or use `load-pressure`",
+        ));
+    }
+    Ok(())
 }
 
 /// The schema of the rod's friction: [`Friction`]'s own (one struct serves

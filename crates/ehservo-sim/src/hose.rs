@@ -224,6 +224,7 @@ mod tests {
             x0: [0.0; 3],
             base_dir: None,
             reference_range: None,
+            quantity: Default::default(),
         };
         let p = cfg.build(&ctx).unwrap();
         let q = std::f64::consts::FRAC_PI_4;

@@ -166,7 +166,7 @@ impl Ifac9007Params {
 /// use ehservo_sim::ifac9007::Ifac9007Cfg;
 /// # use ehservo_sim::plant::{PlantConfig, PlantContext, UncertaintySpec};
 /// # let ctx = PlantContext { load: None, load_given: false, uncertainty: UncertaintySpec::NONE,
-/// #     x0: [0.0; 3], base_dir: None, reference_range: None };
+/// #     x0: [0.0; 3], base_dir: None, reference_range: None, quantity: Default::default() };
 /// // m = 0.4 is outside the box [0.05, 0.3] (jl:50): refused by its key…
 /// let cfg: Ifac9007Cfg = toml::from_str("m = 0.4").unwrap();
 /// assert_eq!(cfg.build(&ctx).unwrap_err().key, "plant.m");

@@ -15,6 +15,7 @@ fn ctx(spec: UncertaintySpec) -> PlantContext {
         x0: [0.0; 3],
         base_dir: None,
         reference_range: None,
+        quantity: Default::default(),
     }
 }
 

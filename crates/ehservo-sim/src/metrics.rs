@@ -97,6 +97,12 @@ macro_rules! metric_table {
             /// carries its unit.
             pub const CSV_LINEAR: [&'static str; 13] = [$(metric_table!(@csv $field $kind)),*];
 
+            /// The columns of a force loop's metrics in a CSV: `e_max_kN` …
+            pub const CSV_FORCE: [&'static str; 13] = [$(metric_table!(@csvu $field $kind "_kN")),*];
+
+            /// The columns of a load-pressure loop's metrics in a CSV: `e_max_bar` …
+            pub const CSV_PRESSURE: [&'static str; 13] = [$(metric_table!(@csvu $field $kind "_bar")),*];
+
             /// The unit of a metric on `axis` (`""` for a ratio, a count or a flag).
             pub fn unit_of(name: &str, axis: Axis) -> &'static str {
                 $(
@@ -109,6 +115,12 @@ macro_rules! metric_table {
                     if name == metric_table!(@csv $field $kind) {
                         return metric_table!(@unit Axis::Linear $kind $($unit)?);
                     }
+                    if name == metric_table!(@csvu $field $kind "_kN") {
+                        return metric_table!(@unit Axis::Force $kind $($unit)?);
+                    }
+                    if name == metric_table!(@csvu $field $kind "_bar") {
+                        return metric_table!(@unit Axis::Pressure $kind $($unit)?);
+                    }
                 )*
                 ""
             }
@@ -116,10 +128,7 @@ macro_rules! metric_table {
             /// A metric by name, as a number (`diverged` is 1 or 0): any
             /// axis's bare name, or the error's name in this axis's unit.
             pub fn get(&self, name: &str) -> Option<f64> {
-                let own = match self.axis {
-                    Axis::Rotary => &Self::NAMES,
-                    Axis::Linear => &Self::CSV_LINEAR,
-                };
+                let own = Self::csv_names(self.axis);
                 let i = Self::NAMES_LINEAR
                     .iter()
                     .position(|n| *n == name)
@@ -140,6 +149,8 @@ macro_rules! metric_table {
     (@rotary $field:ident $kind:ident) => { stringify!($field) };
     (@csv $field:ident error) => { concat!(stringify!($field), "_mm") };
     (@csv $field:ident $kind:ident) => { stringify!($field) };
+    (@csvu $field:ident error $s:literal) => { concat!(stringify!($field), $s) };
+    (@csvu $field:ident $kind:ident $s:literal) => { stringify!($field) };
     (@unit $axis:ident error) => { $axis.unit() };
     (@unit $axis:ident value $unit:literal) => { $unit };
     (@unit $axis:ident $kind:ident) => { "" };
@@ -174,6 +185,8 @@ impl Metrics {
         match axis {
             Axis::Rotary => &Self::NAMES,
             Axis::Linear => &Self::CSV_LINEAR,
+            Axis::Force => &Self::CSV_FORCE,
+            Axis::Pressure => &Self::CSV_PRESSURE,
         }
     }
 
@@ -182,7 +195,7 @@ impl Metrics {
     pub fn names(axis: Axis) -> &'static [&'static str; 13] {
         match axis {
             Axis::Rotary => &Self::NAMES,
-            Axis::Linear => &Self::NAMES_LINEAR,
+            Axis::Linear | Axis::Force | Axis::Pressure => &Self::NAMES_LINEAR,
         }
     }
 
@@ -200,9 +213,10 @@ impl Metrics {
 
 impl Serialize for Metrics {
     /// The keys of [`Metrics::names`] for the axis, in that order, and on a
-    /// linear axis `"unit": "mm"` after the errors.
+    /// linear axis `"unit": "mm"` after the errors (`"kN"`, `"bar"` on a
+    /// force or pressure loop).
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let linear = self.axis == Axis::Linear;
+        let linear = self.axis != Axis::Rotary;
         let mut m = s.serialize_map(Some(13 + usize::from(linear)))?;
         let names = Self::names(self.axis);
         for (i, name) in names.iter().enumerate() {
@@ -259,10 +273,11 @@ impl<'de> Deserialize<'de> for Metrics {
             diverged: r.diverged,
             diverged_at_s: r.diverged_at_s,
             samples: r.samples,
-            axis: if r.unit.as_deref() == Some("mm") {
-                Axis::Linear
-            } else {
-                Axis::Rotary
+            axis: match r.unit.as_deref() {
+                Some("mm") => Axis::Linear,
+                Some("kN") => Axis::Force,
+                Some("bar") => Axis::Pressure,
+                _ => Axis::Rotary,
             },
             behaviour: Behaviour::default(),
         })

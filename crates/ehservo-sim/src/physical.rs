@@ -174,6 +174,7 @@ impl Plant for PhysicalPlant {
 ///     x0: [0.0; 3],
 ///     base_dir: None,
 ///     reference_range: None,
+///     quantity: Default::default(),
 /// };
 /// // The same servo as `"third-order"`, in (θ, θ̇, Pl): the controller is
 /// // told the same nominal model.

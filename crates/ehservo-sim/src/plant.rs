@@ -353,6 +353,10 @@ pub struct PlantContext {
     /// run (SI), sampled: a plant with a stroke checks it (given for a
     /// linear axis; `None` may be the case on a rotary one).
     pub reference_range: Option<(f64, f64)>,
+    /// What the loop closes on (`[reference] quantity`): a plant that can
+    /// measure a force or a pressure gives it as x₀ (the cylinder); any
+    /// other is refused by the loader before it is built.
+    pub quantity: crate::axis::Quantity,
 }
 
 /// A plant model as a scenario names it: `[plant] model = "…"` and that
@@ -371,6 +375,7 @@ pub struct PlantContext {
 ///     x0: [0.0; 3],
 ///     base_dir: None,
 ///     reference_range: None,
+///     quantity: Default::default(),
 /// };
 /// assert_eq!(ThirdOrderCfg::MODEL, "third-order");
 /// // A bad key comes back as its path from the scenario's root.

@@ -288,6 +288,7 @@ impl Plant for ThirdOrderPlant {
 /// #     x0: [0.0; 3],
 /// #     base_dir: None,
 /// #     reference_range: None,
+/// #     quantity: Default::default(),
 /// # };
 /// // Twice the paper's inertia, every other key the paper's.
 /// let cfg: ThirdOrderCfg = toml::from_str("[params]\nJt = 0.11304").unwrap();
@@ -665,6 +666,7 @@ mod tests {
             x0: [0.0; 3],
             base_dir: None,
             reference_range: None,
+            quantity: Default::default(),
         };
         let bad = ThirdOrderCfg {
             params: ServoParams {

@@ -79,6 +79,8 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
             match lp.axis() {
                 crate::axis::Axis::Rotary => "theta, theta_dot, theta_ddot in rad, rad/s, rad/s2",
                 crate::axis::Axis::Linear => "y, y_dot, y_ddot in m, m/s, m/s2",
+                crate::axis::Axis::Force => "f, y_dot, y_ddot in N, m/s, m/s2",
+                crate::axis::Axis::Pressure => "p_l, y_dot, y_ddot in Pa, m/s, m/s2",
             }
         ),
         FmuKind::ClosedLoop => format!(
@@ -141,7 +143,7 @@ pub fn model_description(kind: FmuKind, lp: &Loop, scenario_toml: &str) -> Strin
             let p = crate::stepper::PlantStepper::new(lp);
             plant_variables(p.axis(), p.states(), p.takes_external_load())
         }
-        _ => variables_on(kind, s.plant.axis()),
+        _ => variables_on(kind, lp.axis()),
     };
     for v in &vars {
         let (causality, rest) = match v.causality {

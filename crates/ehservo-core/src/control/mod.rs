@@ -34,6 +34,7 @@
 pub mod adrc;
 pub mod arc;
 pub mod backstepping;
+pub mod force_pi;
 /// Serde for an enum written in scenarios by name: `as_str` out, `parse`
 /// in, and the names listed in the error for anything else.
 #[cfg(feature = "serde")]
@@ -509,6 +510,10 @@ pub trait Config {
     /// `ehservo tune` varies when the tune file names none. Empty: nothing
     /// to tune.
     const TUNABLE: &'static [Tunable] = &[];
+    /// Whether the law closes a force or load-pressure loop (it measures
+    /// x = (q, ẏ, ÿ), `[reference] quantity`), not a position loop. A
+    /// scenario pairs each kind with its kind of loop. Default false.
+    const CLOSES_ON_FORCE: bool = false;
     /// The controller built: plain data, so it can be moved to (and shared
     /// with) another thread (a Python `Controller` stepped from a thread).
     type Controller: Controller<State: Send + Sync> + Clone + Send + Sync;
@@ -649,6 +654,7 @@ macro_rules! controller_kinds {
             Backstepping "backstepping" => $crate::control::backstepping::BacksteppingConfig,
             StateFeedback "state-feedback" => $crate::control::state_feedback::StateFeedbackConfig,
             OpenLoop "open-loop" => $crate::control::open_loop::OpenLoopConfig,
+            ForcePi "force-pi" => $crate::control::force_pi::ForcePiConfig,
         }
     };
 }

@@ -35,6 +35,7 @@ pub(super) fn build(s: &Scenario) -> Result<Parts, KeyError> {
     crate::limits::check_run(s)?;
     check_position_limit(s)?;
     let spec = check_uncertainty(s)?;
+    check_quantity(s)?;
     let reference = s.reference()?;
     let reference_range = reference_range(s, &reference)?;
     let plant = s.plant.build(&PlantContext {
@@ -44,6 +45,7 @@ pub(super) fn build(s: &Scenario) -> Result<Parts, KeyError> {
         x0: s.simulation.x0,
         base_dir: s.base_dir.clone(),
         reference_range,
+        quantity: s.reference.quantity,
     })?;
     let model = *plant.nominal();
     let surface = s.surface()?;
@@ -295,7 +297,7 @@ fn check_uncertainty(s: &Scenario) -> Result<UncertaintySpec, KeyError> {
 /// (`volts_per_deg`·θd), not a position: it has no range to check.
 fn reference_range(s: &Scenario, reference: &AnyReference) -> Result<Option<(f64, f64)>, KeyError> {
     let axis = s.plant.axis();
-    let position = s.controller.kind() != "open-loop";
+    let position = s.controller.kind() != "open-loop" && s.reference.quantity.is_position();
     let range = (position
         && (axis == Axis::Linear || s.plant.end_stops() || s.reference.offset_deg.is_some()))
     .then(|| range_of(reference, s.simulation.horizon, s.simulation.step));
@@ -309,6 +311,52 @@ fn reference_range(s: &Scenario, reference: &AnyReference) -> Result<Option<(f64
         );
     }
     Ok(range)
+}
+
+/// The loop's quantity (`reference.quantity`) against the plant and the
+/// controller: a force or a pressure needs a plant with pressure states
+/// (a cylinder: the rest it checks itself, `CylinderCfg::build`), and each
+/// controller kind closes one kind of loop ([`Config::CLOSES_ON_FORCE`]).
+///
+/// [`Config::CLOSES_ON_FORCE`]: ehservo_core::control::Config::CLOSES_ON_FORCE
+fn check_quantity(s: &Scenario) -> Result<(), KeyError> {
+    let q = s.reference.quantity;
+    let kind = s.controller.kind();
+    if !q.is_position() && s.plant.model() != "cylinder" {
+        return bad(
+            "reference.quantity",
+            format!(
+                "`{}` needs a plant with chamber pressures: model `{}` has none (use model = \"cylinder\")",
+                q.name(),
+                s.plant.model()
+            ),
+        );
+    }
+    if !q.is_position() && s.estimator.is_some() {
+        // The estimators are designed on the position's model: x = (q, ẏ, ÿ)
+        // is not a chain of derivatives they could estimate.
+        return bad(
+            "estimator",
+            format!(
+                "an estimator of x is designed on the position's model: a `{}` loop measures its channels (set [sensor] measured to all three)",
+                q.name()
+            ),
+        );
+    }
+    match (q.is_position(), s.controller.closes_on_force()) {
+        (true, true) => bad(
+            "controller.kind",
+            format!("`{kind}` closes a force or pressure loop: set [reference] quantity = \"force\" or \"load-pressure\""),
+        ),
+        (false, false) => bad(
+            "controller.kind",
+            format!(
+                "`{kind}` closes a position loop; this loop's quantity is `{}`: use kind = \"force-pi\"",
+                q.name()
+            ),
+        ),
+        _ => Ok(()),
+    }
 }
 
 /// The stages around the plant: the variation, the valve, the sensors,
@@ -522,7 +570,7 @@ impl Scenario {
     /// The reference, checked and built (a CSV file is read), on the
     /// plant's axis.
     pub(crate) fn reference(&self) -> Result<AnyReference, KeyError> {
-        let axis = self.plant.axis();
+        let axis = self.axis();
         let limit = if self.plant.end_stops() {
             f64::INFINITY
         } else {
@@ -534,6 +582,12 @@ impl Scenario {
             limit,
             self.base_dir.as_deref(),
         )
+    }
+
+    /// The loop's axis: the plant's, or the force or pressure the loop
+    /// closes on (`[reference] quantity`).
+    pub fn axis(&self) -> Axis {
+        self.reference.quantity.axis_on(self.plant.axis())
     }
 
     /// The true variation, resolved for the plant (the paper's keys at

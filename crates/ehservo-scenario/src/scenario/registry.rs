@@ -101,6 +101,14 @@ macro_rules! registry {
                 }
             }
 
+            /// Whether the kind's law closes a force or pressure loop
+            /// ([`Config::CLOSES_ON_FORCE`]).
+            pub fn closes_on_force(&self) -> bool {
+                match self {
+                    $(Self::$variant(_) => <$ty as Config>::CLOSES_ON_FORCE,)*
+                }
+            }
+
             /// Calls `v` with the typed parameters.
             pub fn visit<V: Visit>(&self, v: V) -> V::Out {
                 match self {

@@ -527,6 +527,7 @@ fn a_rod_beyond_its_stop_is_a_divergence() {
         x0: [0.0; 3],
         base_dir: None,
         reference_range: None,
+        quantity: Default::default(),
     };
     let plant = cfg.build(&ctx).unwrap();
     let mut st = stages(Actuator::IDENTITY);

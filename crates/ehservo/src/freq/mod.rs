@@ -34,6 +34,25 @@ use response::{Discretisation, LoopModel};
 use serde_json::{json, Value};
 use ss::{pair, StateSpace};
 
+/// The frequency domain's refusal of a force or pressure loop (issue #49
+/// item 7, open): its responses are not written for a loop whose x₀ is
+/// not a position.
+pub fn position_loop(setup: &Loop, file: &str) -> Result<(), ScenarioError> {
+    let axis = setup.axis();
+    if axis.is_position() {
+        Ok(())
+    } else {
+        Err(bad(
+            file,
+            "reference.quantity",
+            format!(
+                "a {} loop has no frequency responses in this version (issue #49 item 7): use a position loop",
+                axis.name()
+            ),
+        ))
+    }
+}
+
 /// A bad request about a scenario: its file, the key (or flag) and why.
 pub fn bad(file: &str, key: &str, reason: impl Into<String>) -> ScenarioError {
     ScenarioError {
@@ -97,6 +116,7 @@ pub fn linearise(
         Some(At::Time(_)) => "--at",
         _ => "--trim",
     };
+    position_loop(setup, file)?;
     let plant = LinPlant::of(setup).map_err(|e| bad(file, &e.key, e.reason.to_string()))?;
     let act = ActuatorStage::new(&setup.stages().actuator);
     let at = at.unwrap_or_else(|| default_at(setup));
@@ -245,7 +265,7 @@ pub fn linearisation_json(l: &Linearised) -> Value {
         (crate::axis::Axis::Rotary, false) => {
             "C = −u/θm: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
         }
-        (crate::axis::Axis::Linear, false) => {
+        (_, false) => {
             "C = −u/ym: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
         }
         (_, true) => {

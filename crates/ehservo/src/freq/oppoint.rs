@@ -217,6 +217,7 @@ impl OperatingPoint {
         Option<f64>,
         Option<f64>,
     ) {
+        // A force or pressure loop is refused before (`freq::position_loop`).
         match axis {
             Axis::Rotary => (
                 Some(x / DR),
@@ -226,7 +227,7 @@ impl OperatingPoint {
                 None,
                 (v != 0.0).then(|| v / DR),
             ),
-            Axis::Linear => (
+            Axis::Linear | Axis::Force | Axis::Pressure => (
                 None,
                 Some(x),
                 Some(axis.display(x)),

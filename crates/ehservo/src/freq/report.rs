@@ -204,6 +204,7 @@ struct MeasuredSet {
 
 /// Runs `ehservo freq` on a loaded scenario into `dir`.
 pub fn freq_to_dir(setup: &Loop, file: &str, o: &FreqOptions, dir: &Path) -> Result<FreqSummary> {
+    super::position_loop(setup, file)?;
     let h = setup.sim().step;
     let nyq = 0.5 / h;
     let f_max = o.f_max.unwrap_or(0.99 * nyq);

@@ -147,7 +147,7 @@ pub fn curves(axis: Axis) -> Vec<(&'static str, String, String)> {
         .iter()
         .map(|(n, u, d)| match axis {
             Axis::Rotary => (*n, u.to_string(), d.to_string()),
-            Axis::Linear => (*n, axis.si_name(u), d.replace('θ', axis.letter())),
+            _ => (*n, axis.si_name(u), d.replace('θ', axis.letter())),
         })
         .collect()
 }

@@ -661,6 +661,15 @@ impl Loader<'_> {
             crate::axis::Axis::Linear => {
                 (("e_limit_mm", m.e_limit_mm), ("e_limit_deg", m.e_limit_deg))
             }
+            other => {
+                return Err(self.bad(
+                    "margin.scenario",
+                    format!(
+                        "the margin's scenario is a {} loop: a league's margin runs on a position loop in this version",
+                        other.name()
+                    ),
+                ))
+            }
         };
         if other.1.is_some() {
             return Err(self.bad(

@@ -129,16 +129,15 @@ pub fn trace_figure(lp: &Loop, run: &RunResult) -> Figure {
     if !s.actuator.is_identity() {
         u_series.push(Series::new("valve", t.clone(), col(&|x| x.u_plant), 1).dash(Dash::Dashed));
     }
-    let ax = s.plant.axis();
+    let ax = lp.axis();
     let (sym, unit) = (ax.letter(), ax.unit());
     let theta = panel(
         &format!("(a) {sym}d (dotted) and {sym}"),
         &format!(
             "{} ({unit})",
-            if ax == Axis::Rotary {
-                "angle"
-            } else {
-                "position"
+            match ax {
+                Axis::Linear => "position",
+                _ => ax.quantity(),
             }
         ),
         vec![
@@ -186,7 +185,7 @@ fn column(run: &RunResult, f: &dyn Fn(&Sample) -> f64) -> Vec<f64> {
 /// headline (e_max): the y axis is scaled to it and the transient clipped,
 /// with t_s marked.
 fn error_panel(s: &Scenario, run: &RunResult, t: &[f64]) -> Panel {
-    let ax = s.plant.axis();
+    let ax = run.metrics.axis;
     let (sym, unit) = (ax.letter(), ax.unit());
     let mut e_panel = panel(
         &match run.metrics.e_max {
@@ -233,7 +232,8 @@ fn seen_panel(s: &Scenario, run: &RunResult, t: &[f64]) -> Option<Panel> {
     if exact_sensor && s.estimator.is_none() {
         return None;
     }
-    let ax = s.plant.axis();
+    // x₂: the rod's acceleration on a force or pressure loop.
+    let ax = run.metrics.axis.motion();
     let (sym, unit) = (ax.letter(), ax.unit());
     let source = match (&s.estimator, s.sensor.measured.has(2)) {
         (Some(e), false) => format!("estimated ({})", e.kind()),

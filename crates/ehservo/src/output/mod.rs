@@ -67,12 +67,25 @@ pub struct TraceLayout {
 /// The columns of the position, velocity and acceleration with the
 /// stem `stem` (`""`, `"_meas"`, `"_est"`): `theta_meas_deg`,
 /// `theta_dot_meas_deg_s`, … on a rotary axis, `y_meas_mm` … on a linear.
+/// On a force or pressure loop x is (q, ẏ, ÿ): `f_meas_kN`, then the
+/// rod's `y_dot_meas_mm_s`, `y_ddot_meas_mm_s2` ([`Axis::motion`]).
 fn channels(axis: Axis, stem: &str) -> [String; 3] {
+    let motion = axis.motion();
     [
         axis.column(stem, ""),
-        axis.column(&format!("_dot{stem}"), "_s"),
-        axis.column(&format!("_ddot{stem}"), "_s2"),
+        motion.column(&format!("_dot{stem}"), "_s"),
+        motion.column(&format!("_ddot{stem}"), "_s2"),
     ]
+}
+
+/// x in its display units: x₀ in the axis's, x₁ and x₂ in its motion's.
+#[inline]
+fn shown(axis: Axis, i: usize, v: f64) -> f64 {
+    if i == 0 {
+        axis.display(v)
+    } else {
+        axis.motion().display(v)
+    }
 }
 
 /// What a trace carries beside the controller's signals.
@@ -175,7 +188,7 @@ impl TraceLayout {
         if self.actuator {
             out.push(s.u_plant);
         }
-        out.extend([a.display(s.x[1]), a.display(s.x[2])]);
+        out.extend([shown(a, 1, s.x[1]), shown(a, 2, s.x[2])]);
         out.extend(&s.states[..self.states]);
         if self.spool {
             out.push(s.spool);
@@ -183,10 +196,10 @@ impl TraceLayout {
         out.extend(
             (0..3)
                 .filter(|&i| self.measured[i])
-                .map(|i| a.display(s.x_ctrl[i])),
+                .map(|i| shown(a, i, s.x_ctrl[i])),
         );
         if self.estimated {
-            out.extend(s.x_est.map(|v| a.display(v)));
+            out.extend((0..3).map(|i| shown(a, i, s.x_est[i])));
         }
     }
 }

@@ -17,6 +17,7 @@ mod environment;
 mod faults;
 mod fmu_import;
 mod fmu_import_fmi2;
+mod force;
 mod freq;
 mod freq_cylinder;
 mod golden;

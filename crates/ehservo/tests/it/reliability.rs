@@ -75,6 +75,13 @@ fn small_league(dir: &Path) -> PathBuf {
 fn bases() -> Vec<String> {
     let mut b = vec![String::new()];
     for k in ehservo::scenario::ControllerCfg::KINDS {
+        // A force law closes a force loop: its base is the specimen's
+        // (every key of the force loop, the environment's among them).
+        if *k == "force-pi" {
+            let f = crate::common::repo().join("scenarios/force/force-pi.toml");
+            b.push(std::fs::read_to_string(f).unwrap());
+            continue;
+        }
         // State feedback refuses the paper's servo at its 0.01 s step
         // (ω_h·h = 1.14 > 1): its base is the same servo at 1 ms.
         let step = if *k == "state-feedback" {

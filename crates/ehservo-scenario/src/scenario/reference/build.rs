@@ -33,10 +33,13 @@ impl ReferenceCfg {
             }
         };
         let amplitude = || -> Result<f64, Bad> {
-            match axis {
-                Axis::Rotary => finite(amp_key, self.amplitude()),
-                Axis::Linear => finite(amp_key, required(kind, amp_key, self.amplitude_mm)?),
-            }
+            let given = match axis {
+                Axis::Rotary => return finite(amp_key, self.amplitude()),
+                Axis::Linear => self.amplitude_mm,
+                Axis::Force => self.amplitude_kn,
+                Axis::Pressure => self.amplitude_bar,
+            };
+            finite(amp_key, required(kind, amp_key, given)?)
         };
         let tau = || {
             let t = required(kind, "prefilter_tau", self.prefilter_tau)?;
@@ -54,7 +57,7 @@ impl ReferenceCfg {
             ReferenceKind::Sine => {
                 let a = match axis {
                     Axis::Rotary => non_negative(amp_key, self.amplitude())?,
-                    Axis::Linear => amplitude()?,
+                    _ => amplitude()?,
                 };
                 within(amp_key, si(a))?;
                 let f = positive("frequency_hz", self.frequency())?;
@@ -75,6 +78,8 @@ impl ReferenceCfg {
                 let given = match axis {
                     Axis::Rotary => self.slope_deg_per_s,
                     Axis::Linear => self.slope_mm_per_s,
+                    // Refused before (`build_on`): no slope key in kN or bar.
+                    Axis::Force | Axis::Pressure => None,
                 };
                 let slope = finite(slope_key, required(kind, slope_key, given)?)?;
                 let t0 = start()?;
@@ -162,6 +167,8 @@ impl ReferenceCfg {
             let a = match axis {
                 Axis::Rotary => c.amplitude_deg,
                 Axis::Linear => c.amplitude_mm,
+                // Refused before (`build_on`): no component key in kN or bar.
+                Axis::Force | Axis::Pressure => None,
             };
             let Some(a) = a else {
                 return bad("components", format!("component {n}: {akey} is required"));
@@ -176,10 +183,7 @@ impl ReferenceCfg {
                 what("phase_deg", "must be finite", c.phase_deg)?;
             }
             comps.push(Component {
-                amplitude: match axis {
-                    Axis::Rotary => a * DR,
-                    Axis::Linear => a / 1e3,
-                },
+                amplitude: axis.to_si(a),
                 frequency: c.frequency_hz,
                 phase: c.phase_deg * DR,
             });

@@ -38,7 +38,7 @@ use ehservo_core::math::DR;
 use ehservo_core::reference::{
     Chirp, Component, Knot, LagState, Multisine, Prefiltered, Reference, Sine, MAX_COMPONENTS,
 };
-use ehservo_sim::axis::Axis;
+use ehservo_sim::axis::{Axis, Quantity};
 use ehservo_sim::error::{KeyError, Reason};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -113,11 +113,14 @@ impl ReferenceKind {
     /// on either axis (`kind` and the offsets always).
     pub fn takes(self, key: &str) -> bool {
         let rotary = match key {
-            "amplitude_mm" => "amplitude_deg",
+            "amplitude_mm" | "amplitude_kN" | "amplitude_bar" => "amplitude_deg",
             "slope_mm_per_s" => "slope_deg_per_s",
             k => k,
         };
-        key == "kind" || key.starts_with("offset_") || self.keys().contains(&rotary)
+        key == "kind"
+            || key == "quantity"
+            || key.starts_with("offset_")
+            || self.keys().contains(&rotary)
     }
 
     fn is_sine(&self) -> bool {
@@ -151,6 +154,11 @@ pub struct ReferenceCfg {
     /// Default `"sine"`.
     #[serde(skip_serializing_if = "ReferenceKind::is_sine")]
     pub kind: ReferenceKind,
+    /// What the loop closes on: `"position"` (the default), `"force"`
+    /// (the environment's force on a cylinder's rod, keys in kN) or
+    /// `"load-pressure"` (p_L = p_A − α·p_B, keys in bar).
+    #[serde(default, skip_serializing_if = "Quantity::is_position")]
+    pub quantity: Quantity,
     /// Amplitude (deg): sine, step, square, chirp, on a rotary axis
     /// (default 5 there); refused on a linear axis.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -165,6 +173,20 @@ pub struct ReferenceCfg {
     /// Offset added to every kind (mm; a linear axis). Default 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub offset_mm: Option<f64>,
+    /// Amplitude (kN): sine, step, square, chirp, on a force loop, where
+    /// it is required.
+    #[serde(rename = "amplitude_kN", skip_serializing_if = "Option::is_none")]
+    pub amplitude_kn: Option<f64>,
+    /// Offset added to every kind (kN; a force loop). Default 0.
+    #[serde(rename = "offset_kN", skip_serializing_if = "Option::is_none")]
+    pub offset_kn: Option<f64>,
+    /// Amplitude (bar): sine, step, square, chirp, on a load-pressure
+    /// loop, where it is required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub amplitude_bar: Option<f64>,
+    /// Offset added to every kind (bar; a load-pressure loop). Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_bar: Option<f64>,
     /// Frequency (Hz): sine, square.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frequency_hz: Option<f64>,
@@ -205,10 +227,17 @@ pub struct ReferenceCfg {
 #[serde(deny_unknown_fields, default)]
 struct ReferenceRaw {
     kind: ReferenceKind,
+    quantity: Quantity,
     amplitude_deg: Option<f64>,
     amplitude_mm: Option<f64>,
     offset_deg: Option<f64>,
     offset_mm: Option<f64>,
+    #[serde(rename = "amplitude_kN")]
+    amplitude_kn: Option<f64>,
+    #[serde(rename = "offset_kN")]
+    offset_kn: Option<f64>,
+    amplitude_bar: Option<f64>,
+    offset_bar: Option<f64>,
     frequency_hz: Option<f64>,
     start: Option<f64>,
     prefilter_tau: Option<f64>,
@@ -233,6 +262,7 @@ impl schemars::JsonSchema for ReferenceRaw {
         // The nested types as read, in `g`'s own definitions.
         g.subschema_for::<ReferenceKind>();
         g.subschema_for::<ComponentCfg>();
+        g.subschema_for::<Quantity>();
         let mut writing = g.settings().clone().for_serialize().into_generator();
         let mut s = <ReferenceCfg as schemars::JsonSchema>::json_schema(&mut writing);
         s.insert("additionalProperties".into(), false.into());
@@ -254,17 +284,23 @@ impl From<ReferenceRaw> for ReferenceCfg {
         let fill = |v: Option<f64>, d: f64| if sine { v.or(Some(d)) } else { v };
         // The paper's 5° is a rotary default: a sine in millimetres keeps
         // its own amplitude.
-        let amplitude_deg = if r.amplitude_mm.is_some() {
+        let own = [r.amplitude_mm, r.amplitude_kn, r.amplitude_bar];
+        let amplitude_deg = if own.iter().any(Option::is_some) {
             r.amplitude_deg
         } else {
             fill(r.amplitude_deg, DEFAULT_AMPLITUDE_DEG)
         };
         Self {
             kind: r.kind,
+            quantity: r.quantity,
             amplitude_deg,
             amplitude_mm: r.amplitude_mm,
             offset_deg: r.offset_deg,
             offset_mm: r.offset_mm,
+            amplitude_kn: r.amplitude_kn,
+            offset_kn: r.offset_kn,
+            amplitude_bar: r.amplitude_bar,
+            offset_bar: r.offset_bar,
             frequency_hz: fill(r.frequency_hz, DEFAULT_FREQUENCY_HZ),
             start: r.start,
             prefilter_tau: r.prefilter_tau,
@@ -318,6 +354,8 @@ impl ReferenceCfg {
         [
             f("amplitude_deg", self.amplitude_deg.is_some()),
             f("amplitude_deg", self.amplitude_mm.is_some()),
+            f("amplitude_deg", self.amplitude_kn.is_some()),
+            f("amplitude_deg", self.amplitude_bar.is_some()),
             f("frequency_hz", self.frequency_hz.is_some()),
             f("start", self.start.is_some()),
             f("prefilter_tau", self.prefilter_tau.is_some()),
@@ -342,28 +380,36 @@ impl ReferenceCfg {
     /// The keys set in the unit that is not `axis`'s: the first one.
     fn foreign_key(&self, axis: Axis) -> Option<&'static str> {
         let comps = self.components.iter().flatten();
-        match axis {
-            Axis::Rotary => [
-                ("amplitude_mm", self.amplitude_mm.is_some()),
-                ("offset_mm", self.offset_mm.is_some()),
-                ("slope_mm_per_s", self.slope_mm_per_s.is_some()),
-                (
-                    "components",
-                    comps.clone().any(|c| c.amplitude_mm.is_some()),
-                ),
-            ],
-            Axis::Linear => [
-                ("amplitude_deg", self.amplitude_deg.is_some()),
-                ("offset_deg", self.offset_deg.is_some()),
-                ("slope_deg_per_s", self.slope_deg_per_s.is_some()),
-                (
-                    "components",
-                    comps.clone().any(|c| c.amplitude_deg.is_some()),
-                ),
-            ],
-        }
+        let deg = comps.clone().any(|c| c.amplitude_deg.is_some());
+        let mm = comps.clone().any(|c| c.amplitude_mm.is_some());
+        [
+            ("amplitude_mm", Axis::Linear, self.amplitude_mm.is_some()),
+            ("offset_mm", Axis::Linear, self.offset_mm.is_some()),
+            (
+                "slope_mm_per_s",
+                Axis::Linear,
+                self.slope_mm_per_s.is_some(),
+            ),
+            ("components", Axis::Linear, mm),
+            ("amplitude_deg", Axis::Rotary, self.amplitude_deg.is_some()),
+            ("offset_deg", Axis::Rotary, self.offset_deg.is_some()),
+            (
+                "slope_deg_per_s",
+                Axis::Rotary,
+                self.slope_deg_per_s.is_some(),
+            ),
+            ("components", Axis::Rotary, deg),
+            ("amplitude_kN", Axis::Force, self.amplitude_kn.is_some()),
+            ("offset_kN", Axis::Force, self.offset_kn.is_some()),
+            (
+                "amplitude_bar",
+                Axis::Pressure,
+                self.amplitude_bar.is_some(),
+            ),
+            ("offset_bar", Axis::Pressure, self.offset_bar.is_some()),
+        ]
         .into_iter()
-        .find_map(|(k, set)| set.then_some(k))
+        .find_map(|(k, unit, set)| (set && unit != axis).then_some(k))
     }
 
     /// A key's name in `axis`'s unit (`amplitude_deg` → `amplitude_mm`).
@@ -373,7 +419,11 @@ impl ReferenceCfg {
             (Axis::Linear, "amplitude_deg") => "amplitude_mm",
             (Axis::Linear, "slope_deg_per_s") => "slope_mm_per_s",
             (Axis::Linear, "offset_deg") => "offset_mm",
-            (Axis::Linear, k) => k,
+            (Axis::Force, "amplitude_deg") => "amplitude_kN",
+            (Axis::Force, "offset_deg") => "offset_kN",
+            (Axis::Pressure, "amplitude_deg") => "amplitude_bar",
+            (Axis::Pressure, "offset_deg") => "offset_bar",
+            (_, k) => k,
         }
     }
 
@@ -471,20 +521,41 @@ impl ReferenceCfg {
         // (`ReferenceRaw`): a rotary default, never a linear axis's. There
         // the amplitude in millimetres is required, and the error says so
         // rather than blame a key in degrees the file does not have.
-        if axis == Axis::Linear
+        let own_amplitude = match axis {
+            Axis::Rotary => self.amplitude_deg,
+            Axis::Linear => self.amplitude_mm,
+            Axis::Force => self.amplitude_kn,
+            Axis::Pressure => self.amplitude_bar,
+        };
+        if axis != Axis::Rotary
             && kind == ReferenceKind::Sine
-            && self.amplitude_mm.is_none()
+            && own_amplitude.is_none()
             && self.amplitude_deg == Some(DEFAULT_AMPLITUDE_DEG)
         {
             return bad(
-                "amplitude_mm",
-                "is required by kind `sine` on a linear axis (the default of 5 is the paper's degrees)",
+                Self::unit_key(axis, "amplitude_deg"),
+                format!(
+                    "is required by kind `sine` on a {} axis (the default of 5 is the paper's degrees)",
+                    axis.name()
+                ),
+            );
+        }
+        if !axis.is_position() && matches!(kind, ReferenceKind::Ramp | ReferenceKind::Multisine) {
+            return bad(
+                "kind",
+                format!(
+                    "kind `{}` is not offered on a {} loop in this version (step, sine, square, chirp and csv are)",
+                    kind.name(),
+                    axis.name()
+                ),
             );
         }
         if let Some(k) = self.foreign_key(axis) {
             let (this, other) = match axis {
                 Axis::Rotary => ("rotary (in degrees)", "_deg"),
                 Axis::Linear => ("linear (in millimetres)", "_mm"),
+                Axis::Force => ("a force (in kN)", "_kN"),
+                Axis::Pressure => ("a load pressure (in bar)", "_bar"),
             };
             return bad(
                 k,
@@ -494,6 +565,8 @@ impl ReferenceCfg {
         let offset = match axis {
             Axis::Rotary => finite("offset_deg", self.offset_deg.unwrap_or(0.0))?,
             Axis::Linear => finite("offset_mm", self.offset_mm.unwrap_or(0.0))?,
+            Axis::Force => finite("offset_kN", self.offset_kn.unwrap_or(0.0))?,
+            Axis::Pressure => finite("offset_bar", self.offset_bar.unwrap_or(0.0))?,
         };
         let built = self.build_kind(axis, horizon, theta_limit, base_dir)?;
         Ok(if offset == 0.0 {

@@ -137,10 +137,7 @@ pub fn read_csv_on(path: &Path, axis: Axis) -> Result<Vec<Knot>, CsvError> {
         }
         knots.push(Knot {
             t: v[0],
-            v: match axis {
-                Axis::Rotary => v[1] * DR,
-                Axis::Linear => v[1] / 1e3,
-            },
+            v: axis.to_si(v[1]),
         });
     }
     match knots.len() {

@@ -230,7 +230,7 @@ pub(super) fn bode(
         a,
         op[match axis {
             Axis::Rotary => "theta_deg",
-            Axis::Linear => "x_mm",
+            Axis::Linear | Axis::Force | Axis::Pressure => "x_mm",
         }]
         .as_f64()
         .unwrap_or(0.0),

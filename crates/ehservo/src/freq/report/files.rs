@@ -88,7 +88,7 @@ pub(super) fn write(
                 json!(settings.amplitude / ehservo_core::math::DR),
             );
         }
-        Axis::Linear => {
+        Axis::Linear | Axis::Force | Axis::Pressure => {
             excitation.insert("x0_m".into(), json!(settings.theta0));
             excitation.insert("x0_mm".into(), json!(axis.display(settings.theta0)));
             excitation.insert("amplitude_m".into(), json!(settings.amplitude));

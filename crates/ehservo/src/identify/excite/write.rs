@@ -35,6 +35,10 @@ pub fn excite_to_dir(
             crate::scenario::Loop::parse_with("name = \"prior\"", "<the paper's Fig. 2 case>", set)?
         }
     };
+    crate::freq::position_loop(
+        &prior,
+        &prior_path.map_or("<prior>".into(), |p| p.display().to_string()),
+    )?;
     let d = design(spec)?;
     let plan = Plan::on(&prior, spec, &d)?;
     let (h, kp, pk) = (plan.h, plan.kp, plan.pk);
@@ -48,6 +52,8 @@ pub fn excite_to_dir(
         (Loop::Open, _) => "u_V",
         (Loop::Closed, Axis::Rotary) => "reference_rad",
         (Loop::Closed, Axis::Linear) => "reference_m",
+        (Loop::Closed, Axis::Force) => "reference_N",
+        (Loop::Closed, Axis::Pressure) => "reference_Pa",
     };
     let _ = writeln!(csv, "t_s,{col}");
     for (k, v) in d.values.iter().enumerate() {
@@ -163,6 +169,8 @@ fn chirp_reference(spec: &Spec, axis: Axis) -> toml::Table {
     let key = match axis {
         Axis::Rotary => "amplitude_deg",
         Axis::Linear => "amplitude_mm",
+        Axis::Force => "amplitude_kN",
+        Axis::Pressure => "amplitude_bar",
     };
     reference.insert(key.into(), to_display(spec, axis, spec.amplitude).into());
     reference.insert("f0_hz".into(), spec.f0.into());
@@ -176,10 +184,7 @@ fn chirp_reference(spec: &Spec, axis: Axis) -> toml::Table {
 /// sample (piecewise constant), so that the table's linear interpolation is
 /// the zero-order hold at every sample instant. It must fit an input file.
 fn reference_csv(spec: &Spec, axis: Axis, values: &[f64], h: f64) -> Result<String> {
-    let mut t = match axis {
-        Axis::Rotary => String::from("t,theta_deg\n"),
-        Axis::Linear => String::from("t,y_mm\n"),
-    };
+    let mut t = format!("t,{}\n", axis.column("", ""));
     let piecewise = spec.signal != Signal::Multisine;
     let n = values.len();
     for k in 0..n {
@@ -250,9 +255,10 @@ fn scenario_table(
         None => {
             ctrl.insert("kind".into(), "open-loop".into());
             // 1 V per unit of the reference table (° or mm).
+            // A force or pressure prior is refused first (`excite_to_dir`).
             let key = match prior.axis() {
                 Axis::Rotary => "volts_per_deg",
-                Axis::Linear => "volts_per_mm",
+                _ => "volts_per_mm",
             };
             ctrl.insert(key.into(), 1.0.into());
         }
