@@ -70,7 +70,7 @@ impl AccumulatorCfg {
         if !(1.0..=MAX_EXPONENT).contains(&n) {
             return Err(KeyError::new(
                 "accumulator.exponent",
-                format!("must lie in [1, 5/3] (1 isothermal, 1.4 adiabatic nitrogen; got {n})"),
+                format!("must lie in [1, 5/3] (1 isothermal, 1.4 adiabatic nitrogen; got {n:?})"),
             ));
         }
         if p0 >= setting {

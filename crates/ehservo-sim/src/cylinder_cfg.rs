@@ -252,6 +252,62 @@ fn at(table: &'static str) -> impl Fn(KeyError) -> KeyError {
     move |e| e.under(&format!("plant.{table}"))
 }
 
+/// [`Cylinder::stated_penetration`]'s bound at factors 1 (m), written as
+/// (F/k_s)·(1 + √(1 + 2·k_s·L/F)) so that it stays finite for any finite F
+/// (F² overflowed beyond 1e154 N, and an infinite δ let every position
+/// pass [`Cylinder::beyond_stops`]). Refused when the static forces that
+/// can hold the rod on a stop (the supply's on the piston, the weight, the
+/// load force's peak, the load spring's and the environment's force at
+/// the stop, [`crate::environment::Environment::stop_force`]) would rest it deeper than the
+/// stroke is long, F_s/k_s > L: the rod would sit outside the cylinder
+/// (issue #46: a spring preload of −1e12 N left a 400 mm rod 714 m out,
+/// "bounded"). The key is the largest part of F_s.
+fn stated_penetration(c: &Cylinder, ps: f64, ks: f64) -> Result<f64, KeyError> {
+    let l = c.stroke;
+    let supply_key = match c.supply {
+        Supply::Fixed { .. } => "plant.supply.pressure",
+        Supply::Pump(_) => "plant.supply.relief_pressure",
+        Supply::PcPump(_) => "plant.supply.compensator_pressure",
+    };
+    let env = c.environment.as_ref();
+    let parts = [
+        (supply_key, c.area[0] * ps),
+        ("plant.load.mass", c.gravity_force.abs()),
+        ("plant.load.force", c.force.peak()),
+        (
+            "plant.load.spring",
+            c.spring * c.spring_origin.abs().max((l - c.spring_origin).abs()),
+        ),
+    ];
+    let others: f64 = parts.iter().map(|p| p.1).sum();
+    let at_stop = others + env.map_or(0.0, |e| e.stop_force(l));
+    let rest = at_stop / ks;
+    if rest.is_nan() || rest > l {
+        let (key, part) = parts
+            .iter()
+            .copied()
+            .chain([("plant.environment", env.map_or(0.0, |e| e.stop_force(l)))])
+            .fold(("plant.end_stop.stiffness", 0.0), |a, p| {
+                if p.1 > a.1 {
+                    p
+                } else {
+                    a
+                }
+            });
+        return Err(KeyError::new(
+            key,
+            format!(
+                "up to {part:.3e} N (of {at_stop:.3e} N in all) holds the rod on an end stop (k_s = {ks:.3e} N/m) {rest:.3e} m deep, more than the stroke ({l:e} m): lower it, or stiffen plant.end_stop"
+            ),
+        ));
+    }
+    let f = others + env.map_or(0.0, |e| e.peak(l));
+    if f <= 0.0 {
+        return Ok(0.0);
+    }
+    Ok(f / ks * (1.0 + (1.0 + 2.0 * ks * l / f).sqrt()))
+}
+
 impl CylinderCfg {
     /// Checks every key; the error is the full key path and the reason.
     pub fn resolve(&self, ctx: &PlantContext) -> Result<Cylinder, KeyError> {
@@ -353,7 +409,7 @@ impl CylinderCfg {
         if incline.abs() > 90.0 {
             return Err(ld(KeyError::new(
                 "incline_deg",
-                format!("must be within ±90° (got {incline})"),
+                format!("must be within ±90° (got {incline:?})"),
             )));
         }
         let gravity = non_negative("gravity", l.gravity).map_err(&ld)?;
@@ -444,15 +500,7 @@ impl CylinderCfg {
         // The relief must be able to hold the static load: a supply that
         // cannot push the load off the bottom of the stroke is a mistake.
         let ps = c.supply.holding_pressure(pt);
-        c.penetration = {
-            // Cylinder::stated_penetration's bound at factors 1.
-            let f = c.area[0] * ps
-                + c.gravity_force.abs()
-                + c.force.peak()
-                + spring * spring_origin.abs().max((stroke - spring_origin).abs())
-                + c.environment.as_ref().map_or(0.0, |e| e.peak(stroke));
-            (f + (f * f + 2.0 * ks * f * stroke).sqrt()) / ks
-        };
+        c.penetration = stated_penetration(&c, ps, ks)?;
         // At the supply's setting (a fixed pressure, a relief's cracking
         // pressure, a compensator's setting): a relief that cracks below
         // the pressure that holds the load would pass the pump's flow to

@@ -309,3 +309,32 @@ fn the_environment_is_passive() {
         "ΔH {dh} J vs ∫ {work} J (of {gross} J)"
     );
 }
+
+/// The force an environment can hold the rod on a stop with (issue #46,
+/// round four), by hand on a 0.4 m stroke with the mount moving ±1 mm:
+/// - a spring k = 2e6 N/m, F₀ = 1e4 N at x_c = 0.2: at 0 it presses by
+///   F₀ + k·(1e-3 − 0.2) = 1e4 − 3.98e5 < 0, at 0.4 by
+///   −F₀ − k·(0.4 − 0.2 − 1e-3) = −1e4 − 3.98e5 < 0: 0 (it holds the rod
+///   off both stops, however stiff: k = 1e15 N/m gives 0 too);
+/// - F₀ = −1e12 N: at 0.4, 1e12 − 3.98e5 = 9.99999602e11 N;
+/// - a specimen at x_c = 0.19: never at 0 (its face stays above 0.189),
+///   never at 0.4 (it pushes towards retraction): 0; at x_c = 5e-4 its
+///   face reaches −5e-4, k·5e-4 = 1e3 N at k = 2e6.
+#[test]
+fn the_environment_holds_the_rod_on_a_stop_only_past_its_reach() {
+    let mm = Force::Sine {
+        amplitude: 1e-3,
+        omega: 4.0 * std::f64::consts::PI,
+        phase: 0.0,
+        offset: 0.0,
+    };
+    let spring = |k: f64, f0: f64| env(Contact::Attached, k, 0.0, f0, 0.2, mm.clone());
+    assert_eq!(spring(2e6, 1e4).stop_force(0.4), 0.0);
+    assert_eq!(spring(1e15, 1e4).stop_force(0.4), 0.0);
+    let f = spring(2e6, -1e12).stop_force(0.4);
+    assert!((f - 9.99999602e11).abs() < 1e-3, "{f}");
+    let spec = |x: f64| env(Contact::Unilateral, 2e6, 0.0, 0.0, x, mm.clone());
+    assert_eq!(spec(0.19).stop_force(0.4), 0.0);
+    let f = spec(5e-4).stop_force(0.4);
+    assert!((f - 1e3).abs() < 1e-9, "{f}");
+}

@@ -622,7 +622,7 @@ fn bad_geometry_is_named() {
             tank_pressure: 1e7,
         })
         .to_string(),
-        "`plant.supply.tank_pressure`: must be below the supply pressure 10000000 Pa (got 10000000)"
+        "`plant.supply.tank_pressure`: must be below the supply pressure 10000000.0 Pa (got 10000000.0)"
     );
 }
 

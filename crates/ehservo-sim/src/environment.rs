@@ -184,7 +184,7 @@ impl Environment {
             return Err(KeyError::new(
                 "position",
                 format!(
-                    "the contact point must be within the stroke [0, {stroke}] m (got {position})"
+                    "the contact point must be within the stroke [0, {stroke:?}] m (got {position:?})"
                 ),
             ));
         }
@@ -277,6 +277,26 @@ impl Environment {
     /// [`crate::cylinder::Cylinder::stated_penetration`]).
     pub fn peak(&self, stroke: f64) -> f64 {
         self.preload.abs() + self.stiffness * (stroke + self.motion.peak())
+    }
+
+    /// The largest force the spring can hold the rod on an end stop with
+    /// (N, ≥ 0), the mount anywhere within ±max|x_e|: at y = 0 it presses
+    /// by F₀ + k·(max|x_e| − x_c) (a specimen by k·(max|x_e| − x_c) when
+    /// positive: it touches the rod at 0 only if the mount has moved its
+    /// face below 0), at y = stroke (towards extension) by
+    /// −F₀ − k·(stroke − x_c − max|x_e|) (a specimen never: it only
+    /// pushes towards retraction). Its damping is left out, as in
+    /// [`Environment::peak`].
+    pub fn stop_force(&self, stroke: f64) -> f64 {
+        let (k, xc, xe) = (self.stiffness, self.position, self.motion.peak());
+        let (bottom, top) = match self.contact {
+            Contact::Unilateral => (k * (xe - xc), 0.0),
+            Contact::Attached => (
+                self.preload + k * (xe - xc),
+                -self.preload - k * (stroke - xc - xe),
+            ),
+        };
+        bottom.max(top).max(0.0)
     }
 }
 

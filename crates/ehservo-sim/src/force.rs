@@ -137,7 +137,7 @@ impl Force {
                 if f <= 0.0 {
                     return Err(KeyError::new(
                         "frequency_hz",
-                        format!("must be > 0 (got {f})"),
+                        format!("must be > 0 (got {f:?})"),
                     ));
                 }
                 Force::Sine {

@@ -78,6 +78,30 @@ pub const MAX_STATES: usize = 7;
 /// ([`Plant::stiffness`]).
 pub const MAX_REFINE: u32 = 4096;
 
+/// RK4's stability limit on the negative real axis, |λ·h| ≤ 2.785
+/// (Hairer & Wanner, *Solving ODEs II*, §IV.2, Fig. 2.1), rounded down.
+pub const RK4_STABLE: f64 = 2.78;
+
+/// Whether [`MAX_REFINE`] RK4 steps of `h/MAX_REFINE` keep the rate
+/// `lambda` within [`RK4_STABLE`] (a NaN rate is left to the state's
+/// own check, `non-finite-state`). A plant
+/// whose rate is beyond it stops as `too-stiff` (a relief valve of 1e-8 s
+/// ran 2 minutes unstable before, 1e-300 s went non-finite).
+///
+/// ```
+/// use ehservo_sim::plant::resolvable;
+///
+/// // 4096 steps of 1e-4/4096 s: |λ| up to 2.78·4096/1e-4 = 1.1387e8 1/s.
+/// assert!(resolvable(1.1e8, 1e-4));
+/// assert!(!resolvable(1.2e8, 1e-4));
+/// assert!(resolvable(0.0, 1e-4));
+/// ```
+#[inline(always)]
+pub fn resolvable(lambda: f64, h: f64) -> bool {
+    let beyond = lambda * h > RK4_STABLE * MAX_REFINE as f64;
+    !beyond
+}
+
 /// How many RK4 steps of `h/n` resolve the rate `lambda` over `h > 0`:
 /// ⌈|λ|·h/2.5⌉ within [1, MAX_REFINE] (2.5 keeps inside RK4's stability
 /// limit of about 2.8 on the real and the imaginary axis).

@@ -261,7 +261,7 @@ impl Supply {
                 if pt >= ps {
                     return Err(KeyError::new(
                         "tank_pressure",
-                        format!("must be below the supply pressure {ps} Pa (got {pt})"),
+                        format!("must be below the supply pressure {ps:?} Pa (got {pt:?})"),
                     ));
                 }
                 Ok((Supply::Fixed { ps }, pt))
@@ -287,7 +287,7 @@ impl Supply {
         if pt >= setting {
             return Err(KeyError::new(
                 "tank_pressure",
-                format!("must be below {setting_key} {setting} Pa (got {pt})"),
+                format!("must be below {setting_key} {setting:?} Pa (got {pt:?})"),
             ));
         }
         let p0 = match initial_pressure {
@@ -764,7 +764,7 @@ mod tests {
         assert_eq!(e.key, "tank_pressure");
         assert_eq!(
             e.reason.to_string(),
-            "must be below the supply pressure 10000000 Pa (got 20000000)"
+            "must be below the supply pressure 10000000.0 Pa (got 20000000.0)"
         );
         let e = Supply::try_new(
             &SupplyCfg::Fixed {

@@ -203,7 +203,7 @@ impl SpoolValve {
         let lap = c.lap.map_or([0.0; 4], |l| l.values());
         for (i, l) in lap.iter().enumerate() {
             if !l.is_finite() {
-                return err("lap", format!("edge {}: must be finite (got {l})", i + 1));
+                return err("lap", format!("edge {}: must be finite (got {l:?})", i + 1));
             }
             if *l <= -x_max {
                 return err(

@@ -160,7 +160,7 @@ pub fn design_gains(
     if a[2] <= 2.0 * lambda {
         return Err(ParamError::new(
             "design_pole",
-            "must be < ā3/2: the closed-loop poles' sum is fixed at −ā3 (a lightly damped axis, small ā3, leaves no room: use kind = \"state-feedback\", or give kp, ki, kd)",
+            "must be < ā3/2: the poles' sum is fixed at −ā3 (use kind = \"state-feedback\", or give kp, ki, kd)",
             lambda,
         ));
     }

@@ -157,7 +157,8 @@ impl Default for Adaptive {
 /// divided by the number of components, square-rooted: the error norm
 /// above. `atol` holds one value for every component, or one per
 /// component across the parts in order (a shorter list repeats its last
-/// value). NaN when any ê is not finite.
+/// value). A component whose ê is exactly 0 adds 0, whatever its
+/// tolerance; NaN when any ê is not finite.
 pub fn scaled_rms(parts: &[(&[f64], &[f64], &[f64])], rtol: f64, atol: &[f64]) -> f64 {
     let mut sum = 0.0;
     let mut n = 0usize;
@@ -165,7 +166,10 @@ pub fn scaled_rms(parts: &[(&[f64], &[f64], &[f64])], rtol: f64, atol: &[f64]) -
         for ((a, b), d) in y0.iter().zip(y1.iter()).zip(e.iter()) {
             let at = atol.get(n).or(atol.last()).copied().unwrap_or(0.0);
             let sc = at + rtol * a.abs().max(b.abs());
-            let r = d / sc;
+            // A zero estimate is no error even where the tolerance is 0
+            // (atol 0 on a state that stays at 0): 0/0 would be NaN and
+            // reject every step. A nonzero one against 0 is infinite.
+            let r = if *d == 0.0 { 0.0 } else { d / sc };
             sum += r * r;
             n += 1;
         }

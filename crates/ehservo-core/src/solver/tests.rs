@@ -268,3 +268,41 @@ fn scaled_rms_by_hand() {
         "{r}"
     );
 }
+
+/// atol 0 on a state that stays at 0 (issue #46, round four: every step
+/// of a cylinder at rest was rejected, ê/(0 + rtol·0) = 0/0 = NaN): a
+/// zero estimate adds 0, so ê = (1e-6, 0), y = (1, 0), rtol 1e-3, atol 0
+/// gives √((1e-6/1e-3)²/2) = 7.0711e-4; a nonzero ê against a zero scale
+/// is infinite (the step is rejected).
+#[test]
+fn a_zero_error_at_zero_tolerance_is_no_error() {
+    let r = scaled_rms(&[(&[1.0, 0.0], &[1.0, 0.0], &[1e-6, 0.0])], 1e-3, &[0.0]);
+    assert!((r - 7.0711e-4).abs() < 1e-8, "{r}");
+    let inf = scaled_rms(&[(&[1.0, 0.0], &[1.0, 0.0], &[1e-6, 1e-300])], 1e-3, &[0.0]);
+    assert!(inf.is_infinite(), "{inf}");
+    // And an integration of ẏ = (−y₀, 0) from (1, 0) at atol 0 reaches t = 1.
+    let ctl = StepControl {
+        max_step: 1.0,
+        max_steps: 100_000,
+    };
+    let norm =
+        |y0: &[f64; 2], y1: &[f64; 2], e: &[f64; 2]| scaled_rms(&[(y0, y1, e)], 1e-8, &[0.0]);
+    let mut y = [1.0, 0.0];
+    let mut a = Adaptive::new();
+    a.integrate(
+        &DOPRI5,
+        &ctl,
+        |_, y: &[f64; 2], d: &mut [f64; 2]| *d = [-y[0], 0.0],
+        norm,
+        |_| {},
+        0.0,
+        1.0,
+        &mut y,
+    )
+    .expect("a state at rest does not stop the solver");
+    // e⁻¹ = 0.36788 within 10·rtol of its size.
+    assert!(
+        (y[0] - (-1.0f64).exp()).abs() < 1e-7 && y[1] == 0.0,
+        "{y:?}"
+    );
+}

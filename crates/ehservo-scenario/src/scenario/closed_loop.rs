@@ -260,10 +260,16 @@ impl Loop {
             let c = c.cylinder();
             let dp = c.supply.holding_pressure(c.pt) - c.pt;
             if c.hose_drop > 0.05 * dp {
+                // In %, with an exponent once it is long (a 1e300 m hose).
+                let pct = 100.0 * c.hose_drop / dp;
+                let pct = if pct < 1e6 {
+                    format!("{pct:.1}")
+                } else {
+                    format!("{pct:.3e}")
+                };
                 v.push(format!(
-                    "[plant.hose]: the longer hose drops {:.4e} Pa at the valve's full flow, {:.1} % of the supply's {dp:.4e} Pa: the hose is folded into the chamber as a volume without resistance (docs/cylinder.md, \"Hoses\"), which a drop this large makes unfair",
-                    c.hose_drop,
-                    100.0 * c.hose_drop / dp
+                    "[plant.hose]: the longer hose drops {:.4e} Pa at the valve's full flow, {pct} % of the supply's {dp:.4e} Pa: the hose is folded into the chamber as a volume without resistance (docs/cylinder.md, \"Hoses\"), which a drop this large makes unfair",
+                    c.hose_drop
                 ));
             }
         }

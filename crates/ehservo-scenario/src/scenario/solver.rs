@@ -9,6 +9,12 @@ use ehservo_sim::simulation::{AdaptiveConfig, Atol, Mode, MAX_ATOL};
 pub const DEFAULT_RTOL: f64 = 1e-6;
 /// The default absolute tolerance of an adaptive solver (every state).
 pub const DEFAULT_ATOL: f64 = 1e-9;
+/// The smallest relative tolerance, 10 ulps of 1 (2.22e-15): a step's
+/// rounding alone is of the order of an ulp of the state, so a finer
+/// rtol is never met where atol does not dominate. Hairer & Wanner's
+/// RADAU5 (radau5.f, "CHECK IF TOLERANCES ARE O.K.") refuses
+/// RTOL ≤ 10·UROUND the same way.
+pub const MIN_RTOL: f64 = 10.0 * f64::EPSILON;
 
 fn bad<T>(key: &str, reason: impl Into<ehservo_sim::error::Reason>) -> Result<T, KeyError> {
     Err(KeyError::new(key, reason))
@@ -57,6 +63,12 @@ pub(super) fn adaptive(s: &Scenario, plant_dim: usize) -> Result<Option<Adaptive
             format!("must be in (0, 1) (got {rtol:e})"),
         );
     }
+    if rtol < MIN_RTOL {
+        return bad(
+            "simulation.rtol",
+            format!("must be at least 10 ulps, {MIN_RTOL:.3e}: a step's rounding alone is of the order of 1 ulp of the state, so a finer tolerance is never met (got {rtol:e})"),
+        );
+    }
     let atol = match &sim.atol {
         None => Atol::scalar(DEFAULT_ATOL),
         Some(AtolCfg::Scalar(a)) => Atol::scalar(*a),
@@ -95,12 +107,40 @@ pub(super) fn adaptive(s: &Scenario, plant_dim: usize) -> Result<Option<Adaptive
         return bad(
             "simulation.max_step",
             format!(
-                "must be at most the sample period simulation.step = {} s (no step crosses a sample; got {max_step} s)",
+                "must be at most the sample period simulation.step = {:?} s (no step crosses a sample; got {max_step:?} s)",
                 sim.step
             ),
         );
     }
     let budget = crate::limits::adaptive_step_budget(s, tab.stages());
+    // Every sample takes at least ⌈step/max_step⌉ steps: a max_step that
+    // plans more steps than the budget is refused before any work, not
+    // found out as `solver-step-budget` after it.
+    let samples = crate::limits::count_from_f64(
+        "simulation.horizon",
+        "samples",
+        (sim.horizon / sim.step).round(),
+    );
+    let per_sample = crate::limits::count_from_f64(
+        "simulation.max_step",
+        "steps a sample",
+        (sim.step / max_step).ceil(),
+    );
+    let least = match (samples, per_sample) {
+        (Ok(n), Ok(m)) => crate::limits::work_of(n, m),
+        _ => u64::MAX,
+    };
+    if least > budget {
+        return bad(
+            "simulation.max_step",
+            format!(
+                "{max_step:e} s makes at least {:.3e} steps of the {budget} a run may take (the run limit of 4e8 evaluations, {} a step, less the law's): raise max_step to at least {:.3e} s",
+                (sim.horizon / max_step).ceil(),
+                tab.stages(),
+                sim.horizon / (budget.max(1) as f64)
+            ),
+        );
+    }
     AdaptiveConfig::try_new(sim.solver, rtol, atol, max_step, budget)
         .map(Some)
         .map_err(|e| KeyError::param("simulation", e))

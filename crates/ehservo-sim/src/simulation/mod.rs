@@ -274,6 +274,10 @@ pub struct Simulation<P: Plant, C: Controller, R: Reference> {
     /// (the sampled controller keeps its own state): the check after each
     /// step then need not scan it again.
     xi_finite: bool,
+    /// The last sample's plant was stiffer than RK4 split
+    /// [`crate::plant::MAX_REFINE`] times can follow: a `too-stiff`
+    /// divergence unless an earlier check names the cause.
+    unresolved: bool,
     estimator: Option<AnyEstimator>,
     /// The command applied over the current sample period (the previous
     /// one with a computation delay; the estimator's input).
@@ -504,6 +508,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             adaptive,
             per_hold,
             xi_finite: xi.all_finite(),
+            unresolved: false,
             estimator: stages.estimator,
             u_applied: 0.0,
             log_states: false,
@@ -657,6 +662,8 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             self.diverge(t_next, DivergenceReason::ThetaLimit);
         } else if self.plant.beyond_stops(&self.y.pa.x, &var) {
             self.diverge(t_next, DivergenceReason::BeyondEndStop);
+        } else if self.unresolved {
+            self.diverge(t_next, DivergenceReason::TooStiff);
         }
         true
     }

@@ -178,7 +178,7 @@ impl<P: Plant> PlantAlone<P> {
             m: self.substeps,
             per_hold: self.per_hold,
         };
-        held.integrate(
+        let resolved = held.integrate(
             &self.plant,
             &self.actuator,
             &mut self.unc,
@@ -198,6 +198,8 @@ impl<P: Plant> PlantAlone<P> {
             Some(DivergenceReason::ThetaLimit)
         } else if self.plant.beyond_stops(&self.y.x, &var) {
             Some(DivergenceReason::BeyondEndStop)
+        } else if !resolved {
+            Some(DivergenceReason::TooStiff)
         } else {
             None
         };

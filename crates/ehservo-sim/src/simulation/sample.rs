@@ -160,6 +160,11 @@ pub enum DivergenceReason {
     SolverStepBudget,
     /// An adaptive solver's step fell below ten ulps of the time.
     SolverStepTooSmall,
+    /// The plant's fastest rate λ (its [`crate::plant::Plant::stiffness`])
+    /// needs more than [`crate::plant::MAX_REFINE`] RK4 steps a sub-step
+    /// to be stable ([`crate::plant::resolvable`]): what RK4 would
+    /// compute there is not the model's solution.
+    TooStiff,
     /// The plant failed: an FMU returned an error status or panicked
     /// ([`crate::plant::Plant::failed`]; its message is on stderr).
     PlantFailed,
@@ -182,6 +187,9 @@ impl DivergenceReason {
             }
             DivergenceReason::SolverStepTooSmall => {
                 "the adaptive solver's step fell below ten ulps of the time"
+            }
+            DivergenceReason::TooStiff => {
+                "the plant is stiffer than 4096 RK4 steps a sub-step can follow (raise simulation.substeps, or use solver = \"dopri5\")"
             }
             DivergenceReason::PlantFailed => {
                 "the plant's FMU failed: an error status, or it asked to terminate (its message is on stderr)"

@@ -5,7 +5,7 @@
 
 use super::{PlantAct, Sample, Simulation, Stop, TruthAt};
 use crate::actuator::Actuator;
-use crate::plant::{refinement, Plant};
+use crate::plant::{refinement, resolvable, Plant, MAX_REFINE};
 use crate::uncertainty::Varying;
 use ehservo_core::control::Controller;
 use ehservo_core::reference::Reference;
@@ -159,7 +159,7 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
             m,
             per_hold: self.per_hold,
         };
-        held.integrate(
+        self.unresolved = !held.integrate(
             &self.plant,
             &self.actuator,
             &mut self.unc,
@@ -197,7 +197,9 @@ pub(super) struct Held {
 impl Held {
     /// Integrates `y` over the period under the command `u`, with the
     /// variation `var` over the first sub-step and the first RK4 stage
-    /// `k1` when it is already known.
+    /// `k1` when it is already known. False, with the sub-steps before
+    /// it integrated, where the plant is stiffer than [`MAX_REFINE`] RK4
+    /// steps a sub-step can follow ([`resolvable`]).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(super) fn integrate<P: Plant>(
@@ -209,7 +211,7 @@ impl Held {
         u: f64,
         var: P::Variation,
         k1: Option<PlantAct<P::State>>,
-    ) {
+    ) -> bool {
         let Held { t, j0, hs, m, .. } = self;
         if P::STEPS_ITSELF {
             // A co-simulation FMU: one call over the period under the
@@ -222,7 +224,7 @@ impl Held {
                     rk4_step(|_, a, da| act.deriv(a, u, da), ts, &mut y.a, hs);
                 }
             }
-            return;
+            return true;
         }
         // A valve without spool dynamics gives the plant the same
         // input at every stage, and its state derivative is zero:
@@ -240,8 +242,12 @@ impl Held {
             // A stiff plant (Plant::stiffness) splits this step so
             // that RK4 stays stable; never for the paper's plants,
             // whose step is then the one below, untouched.
-            let n = refinement(plant.stiffness(ts, &y.x, act.output(&y.a, u), &v), hs);
+            let lambda = plant.stiffness(ts, &y.x, act.output(&y.a, u), &v);
+            let n = refinement(lambda, hs);
             if n > 1 {
+                if n == MAX_REFINE && !resolvable(lambda, hs) {
+                    return false;
+                }
                 let hr = hs / f64::from(n);
                 for i in 0..n {
                     rk4_step(
@@ -291,5 +297,6 @@ impl Held {
             }
             plant.limit_state(&mut y.x);
         }
+        true
     }
 }

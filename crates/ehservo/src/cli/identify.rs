@@ -191,6 +191,35 @@ pub(super) fn excite(a: ExciteArgs, w: &mut impl Write) -> Result<()> {
     Ok(())
 }
 
+/// `--free` and `--fix` agree with themselves and each other, before any
+/// file is read: no empty or repeated name in `--free` (a column twice in
+/// the Jacobian makes it singular), no key fixed twice (which value?), no
+/// key both fixed and free.
+fn check_free_and_fix(free: Option<&[String]>, fix: &[(String, f64)]) -> Result<()> {
+    let free = free.unwrap_or_default();
+    for (i, f) in free.iter().enumerate() {
+        if f.trim().is_empty() {
+            crate::bad_input!(
+                "--free: an empty name in the list (give names separated by single commas)"
+            );
+        }
+        if free[..i].contains(f) {
+            crate::bad_input!("--free {f}: named twice (each parameter is free once)");
+        }
+    }
+    for (i, (k, _)) in fix.iter().enumerate() {
+        if fix[..i].iter().any(|(j, _)| j == k) {
+            crate::bad_input!("--fix {k}: given twice (one value holds it)");
+        }
+        if free.contains(k) {
+            crate::bad_input!(
+                "--fix {k} and --free {k}: a parameter is either held or fitted, not both"
+            );
+        }
+    }
+    Ok(())
+}
+
 /// `ehservo identify`.
 pub(super) fn identify(a: IdentifyArgs, w: &mut impl Write) -> Result<()> {
     use crate::identify::{data, fit, identify, report, Options};
@@ -204,6 +233,7 @@ pub(super) fn identify(a: IdentifyArgs, w: &mut impl Write) -> Result<()> {
         })?;
         fix.push((k.trim().to_string(), v));
     }
+    check_free_and_fix(a.free.as_deref(), &fix)?;
     if !(a.period_tolerance.is_finite() && a.period_tolerance > 0.0 && a.period_tolerance < 0.5) {
         crate::bad_input!(
             "--period-tolerance {}: must be in (0, 0.5)",

@@ -537,7 +537,7 @@ impl StateSpace {
             return Err(LinearError("already a discrete-time model".into()));
         }
         if !(h.is_finite() && h > 0.0) {
-            return Err(LinearError(format!("the period must be > 0 (got {h})")));
+            return Err(LinearError(format!("the period must be > 0 (got {h:?})")));
         }
         if !self.is_finite() {
             return Err(LinearError("the model is not finite".into()));

@@ -71,14 +71,17 @@ impl Tolerance {
 
     pub(super) fn check(&self, levels: usize, reading: &str) -> Result<()> {
         if !(self.rtol > 0.0 && self.rtol < 1.0) {
-            crate::bad_input!("[convergence] rtol: must be in (0, 1) (got {})", self.rtol);
+            crate::bad_input!(
+                "[convergence] rtol: must be in (0, 1) (got {:?})",
+                self.rtol
+            );
         }
         for (k, v) in &self.atol {
             if !super::derived::is_metric(k) {
                 crate::bad_input!("[convergence] atol: unknown metric `{k}`");
             }
             if !(v.is_finite() && *v >= 0.0) {
-                crate::bad_input!("[convergence] atol.{k}: must be finite and ≥ 0 (got {v})");
+                crate::bad_input!("[convergence] atol.{k}: must be finite and ≥ 0 (got {v:?})");
             }
         }
         if self.min_levels < 2 {

@@ -17,7 +17,16 @@ fn every_bad_file_is_rejected_clearly() {
             .arg(&out)
             .output()
             .unwrap();
-        common::rejected_naming(&c.name, &o, &c.expect);
+        let err = common::rejected_naming(&c.name, &o, &c.expect);
+        // One short line: at most 300 characters besides the file's path
+        // (a figure is quoted as 1e300, never as its 301 digits).
+        let rest = err.trim().replace(&c.path.display().to_string(), "");
+        assert!(
+            rest.chars().count() <= 300,
+            "{}: {} characters besides the path: {err}",
+            c.name,
+            rest.chars().count()
+        );
         assert!(!out.exists(), "{}: output written for bad input", c.name);
     }
     // Nothing was left behind in the parent either (no staging directories).

@@ -144,6 +144,48 @@ fn a_bad_prior_is_named_before_any_fit() {
     }
 }
 
+/// `--free` and `--fix` that contradict themselves (issue 46, round four:
+/// `--free bulk_modulus,bulk_modulus` and `--fix viscous=1000 --free
+/// viscous` were fitted, exit 0) are refused with the flag and the name,
+/// before the log is read: the log given does not exist, so a refusal
+/// that names it would mean the flags were checked after reading.
+#[test]
+fn contradictory_free_and_fix_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("not-read.csv");
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["--free", "bulk_modulus,bulk_modulus"],
+            "--free bulk_modulus: named twice",
+        ),
+        (
+            &["--free", "bulk_modulus,,viscous"],
+            "--free: an empty name",
+        ),
+        (
+            &["--fix", "viscous=1000", "--fix", "viscous=2000"],
+            "--fix viscous: given twice",
+        ),
+        (
+            &["--fix", "viscous=1000", "--free", "viscous,rated_flow"],
+            "--fix viscous and --free viscous",
+        ),
+    ];
+    for (flags, expect) in cases {
+        let out = dir.path().join("out");
+        let mut args: Vec<&std::ffi::OsStr> = vec!["identify".as_ref(), missing.as_os_str()];
+        args.extend(flags.iter().map(std::ffi::OsStr::new));
+        args.extend(["--out".as_ref(), out.as_os_str()]);
+        let o = run_within(&args, Duration::from_secs(20));
+        let err = crate::common::rejected("free/fix", &o, expect);
+        assert!(
+            !err.contains("not-read.csv"),
+            "checked before the log: {err}"
+        );
+        assert!(!out.exists(), "nothing written");
+    }
+}
+
 /// `excite` on a linear axis (the slide of issue 45) writes a scenario
 /// that `ehservo check` accepts, open and closed loop: no paper's
 /// `uncertainty.a_bias` on a cylinder, the reference in mm (`t,y_mm`), a
