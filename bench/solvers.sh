@@ -57,3 +57,6 @@ done
 for tol in 1e-3 1e-6; do
     row bs32 "rtol = $tol" "b$tol" --set simulation.substeps=1 --set 'simulation.solver="bs32"' --set "simulation.rtol=$tol" --set 'simulation.atol=[1e-12, 1e-9, 1.0, 1.0, 1.0, 1e-12]'
 done
+for tol in 1e-3 1e-6; do
+    row rosenbrock23 "rtol = $tol" "r$tol" --set simulation.substeps=1 --set 'simulation.solver="rosenbrock23"' --set "simulation.rtol=$tol" --set 'simulation.atol=[1e-12, 1e-9, 1.0, 1.0, 1.0, 1e-12]'
+done

@@ -164,7 +164,7 @@ pub fn refinement(lambda: f64, h: f64) -> u32 {
 pub trait Plant {
     /// The plant's state: its components in SI units, in a fixed order
     /// (the order of a per-state `simulation.atol`).
-    type State: OdeState + AsRef<[f64]>;
+    type State: OdeState + AsRef<[f64]> + AsMut<[f64]>;
     /// What one hold interval's variation is for this plant.
     type Variation: Copy + Debug;
     /// What [`Plant::prepare`] computes of a state before the command is

@@ -48,6 +48,7 @@
 
 pub mod bs32;
 pub mod dopri5;
+pub mod rosenbrock23;
 
 use crate::rk4::OdeState;
 
@@ -88,6 +89,68 @@ impl Tableau {
     /// The number of stages s (function evaluations per step).
     pub fn stages(&self) -> usize {
         self.b.len()
+    }
+}
+
+/// A one-step method with an embedded error estimate, as
+/// [`Adaptive::integrate`] drives it: an explicit pair ([`Tableau`]) or a
+/// linearly implicit one ([`rosenbrock23::Rosenbrock23`]).
+pub trait Method<S: OdeState> {
+    /// The order p of the propagated solution (the first step's guess).
+    fn order(&self) -> u32;
+    /// The order p̂ whose local error the estimate is (exponent 1/(p̂+1)).
+    fn error_order(&self) -> u32;
+    /// The PI controller's β.
+    fn beta(&self) -> f64;
+    /// The factor the caller's error norm is multiplied by at the relative
+    /// tolerance `rtol` (1: the norm as it is). A method that propagates
+    /// the lower-order solution sets it above 1 so that its global error
+    /// stays proportional to the tolerance
+    /// ([`rosenbrock23::Rosenbrock23`]).
+    fn error_weight(&self, _rtol: f64) -> f64 {
+        1.0
+    }
+    /// Right-hand side evaluations a step takes for a state of `dim`
+    /// components (the work a step counts against a run's limit).
+    fn evaluations(&self, dim: usize) -> usize;
+    /// One trial step from (t, y) with `f0` = f(t, y): the solution y₁ and
+    /// the error estimate ê, or `None` when no step of size `h` can be
+    /// formed there (a singular iteration matrix): the step is then
+    /// rejected and shrunk like one whose error is not finite.
+    fn trial<F: FnMut(f64, &S, &mut S)>(
+        &self,
+        f: &mut F,
+        t: f64,
+        y: &S,
+        f0: &S,
+        h: f64,
+    ) -> Option<(S, S)>;
+}
+
+impl<S: OdeState> Method<S> for Tableau {
+    fn order(&self) -> u32 {
+        self.order
+    }
+    fn error_order(&self) -> u32 {
+        self.error_order
+    }
+    fn beta(&self) -> f64 {
+        self.beta
+    }
+    fn evaluations(&self, _dim: usize) -> usize {
+        self.stages()
+    }
+    fn trial<F: FnMut(f64, &S, &mut S)>(
+        &self,
+        f: &mut F,
+        t: f64,
+        y: &S,
+        f0: &S,
+        h: f64,
+    ) -> Option<(S, S)> {
+        let mut k = [S::zero(); MAX_STAGES];
+        k[0] = *f0;
+        Some(trial(self, f, t, y, &mut k, h))
     }
 }
 
@@ -198,15 +261,15 @@ impl Adaptive {
         self.h
     }
 
-    /// Integrates `ẏ = f(t, y)` from `t0` to exactly `t1` with the pair
-    /// `tab`, the error norm `norm(y₀, y₁, ê)` (1 = at the tolerance,
+    /// Integrates `ẏ = f(t, y)` from `t0` to exactly `t1` with the method
+    /// `tab` (a pair's [`Tableau`], or any [`Method`]), the error norm `norm(y₀, y₁, ê)` (1 = at the tolerance,
     /// e.g. [`scaled_rms`]) and `limit` applied to the state after every
     /// accepted step (a limited integrator's bounds). No step crosses
     /// `t1`; the step size carries over to the next call.
     #[allow(clippy::too_many_arguments)]
-    pub fn integrate<S, F, N, L>(
+    pub fn integrate<S, M, F, N, L>(
         &mut self,
-        tab: &Tableau,
+        tab: &M,
         ctl: &StepControl,
         mut f: F,
         norm: N,
@@ -217,6 +280,7 @@ impl Adaptive {
     ) -> Result<(), Failure>
     where
         S: OdeState,
+        M: Method<S>,
         F: FnMut(f64, &S, &mut S),
         N: Fn(&S, &S, &S) -> f64,
         L: FnMut(&mut S),
@@ -224,13 +288,15 @@ impl Adaptive {
         if t1 <= t0 || t1.is_nan() || t0.is_nan() {
             return Ok(());
         }
-        let mut k = [S::zero(); MAX_STAGES];
+        let mut f0 = S::zero();
         let mut t = t0;
-        f(t, y, &mut k[0]);
+        f(t, y, &mut f0);
         if !(self.h > 0.0 && self.h.is_finite()) {
-            self.h = initial_step(tab, &mut f, &norm, t, y, &k[0], ctl.max_step.min(t1 - t0));
+            let cap = ctl.max_step.min(t1 - t0);
+            self.h = initial_step(tab.order(), &mut f, &norm, t, y, &f0, cap);
         }
-        let expo = 1.0 / f64::from(tab.error_order + 1) - 0.75 * tab.beta;
+        let beta = tab.beta();
+        let expo = 1.0 / f64::from(tab.error_order() + 1) - 0.75 * beta;
         let mut after_reject = false;
         // Bounded: every pass counts a step against max_steps, or returns.
         loop {
@@ -249,18 +315,23 @@ impl Adaptive {
             if self.counts.total() >= ctl.max_steps {
                 return Err(Failure::StepBudget { t });
             }
-            let (y1, e) = trial(tab, &mut f, t, y, &mut k, h);
-            let err = norm(y, &y1, &e);
-            let err = if err.is_finite() && y1.all_finite() {
-                err
-            } else {
-                f64::INFINITY
+            let err = match tab.trial(&mut f, t, y, &f0, h) {
+                Some((y1, e)) => {
+                    let err = norm(y, &y1, &e);
+                    if err.is_finite() && y1.all_finite() {
+                        Some((err, y1))
+                    } else {
+                        None
+                    }
+                }
+                None => None,
             };
+            let (err, y1) = err.unwrap_or((f64::INFINITY, *y));
             // err^α, 0 for a zero error (the growth is then FAC_MAX).
             let fac11 = libm::pow(err, expo);
             if err <= 1.0 {
                 self.counts.accepted = self.counts.accepted.saturating_add(1);
-                let fac = (fac11 / libm::pow(self.err_old, tab.beta) / SAFETY)
+                let fac = (fac11 / libm::pow(self.err_old, beta) / SAFETY)
                     .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
                 let mut h_new = h / fac;
                 if after_reject {
@@ -278,7 +349,7 @@ impl Adaptive {
                 }
                 self.h = h_new;
                 t += h;
-                f(t, y, &mut k[0]);
+                f(t, y, &mut f0);
             } else {
                 self.counts.rejected = self.counts.rejected.saturating_add(1);
                 let shrink = (fac11 / SAFETY).min(1.0 / FAC_MIN);
@@ -332,7 +403,7 @@ fn trial<S: OdeState, F: FnMut(f64, &S, &mut S)>(
 /// sizes of y and f in the error norm, one explicit Euler step to gauge
 /// f's change, at most `cap`.
 fn initial_step<S: OdeState, F: FnMut(f64, &S, &mut S), N: Fn(&S, &S, &S) -> f64>(
-    tab: &Tableau,
+    order: u32,
     f: &mut F,
     norm: &N,
     t: f64,
@@ -359,7 +430,7 @@ fn initial_step<S: OdeState, F: FnMut(f64, &S, &mut S), N: Fn(&S, &S, &S) -> f64
     let h1 = if dm <= 1e-15 || !dm.is_finite() {
         (h0 * 1e-3).max(1e-6)
     } else {
-        libm::pow(0.01 / dm, 1.0 / f64::from(tab.order))
+        libm::pow(0.01 / dm, 1.0 / f64::from(order))
     };
     (100.0 * h0).min(h1).min(cap)
 }

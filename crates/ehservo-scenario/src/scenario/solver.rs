@@ -2,6 +2,7 @@
 //! and made into the sampled loop's adaptive solver.
 
 use super::{AtolCfg, Scenario};
+use ehservo_core::solver::rosenbrock23::MAX_DIM;
 use ehservo_sim::error::KeyError;
 use ehservo_sim::simulation::{AdaptiveConfig, Atol, Mode, MAX_ATOL};
 
@@ -27,7 +28,7 @@ fn bad<T>(key: &str, reason: impl Into<ehservo_sim::error::Reason>) -> Result<T,
 /// continuous mode with an adaptive solver.
 pub(super) fn adaptive(s: &Scenario, plant_dim: usize) -> Result<Option<AdaptiveConfig>, KeyError> {
     let sim = &s.simulation;
-    let Some(tab) = sim.solver.tableau() else {
+    let Some(scheme) = sim.solver.scheme() else {
         let given = [
             ("simulation.rtol", sim.rtol.is_some()),
             ("simulation.atol", sim.atol.is_some()),
@@ -36,7 +37,7 @@ pub(super) fn adaptive(s: &Scenario, plant_dim: usize) -> Result<Option<Adaptive
         if let Some((key, _)) = given.iter().find(|g| g.1) {
             return bad(
                 key,
-                "is an adaptive solver's key, and solver = \"rk4\" has a fixed step (simulation.substeps): set solver = \"dopri5\" or \"bs32\", or remove it",
+                "is an adaptive solver's key, and solver = \"rk4\" has a fixed step (simulation.substeps): set solver = \"dopri5\", \"bs32\" or \"rosenbrock23\", or remove it",
             );
         }
         return Ok(None);
@@ -112,7 +113,17 @@ pub(super) fn adaptive(s: &Scenario, plant_dim: usize) -> Result<Option<Adaptive
             ),
         );
     }
-    let budget = crate::limits::adaptive_step_budget(s, tab.stages());
+    if scheme.needs_jacobian() && plant_dim + 2 > MAX_DIM {
+        return bad(
+            "simulation.solver",
+            format!(
+                "\"{name}\" factors a matrix of the plant's and the actuator's states, at most {MAX_DIM}: plant.model = \"{}\" has {}",
+                s.plant.model(),
+                plant_dim + 2
+            ),
+        );
+    }
+    let budget = crate::limits::adaptive_step_budget(s, scheme.evaluations(plant_dim + 2));
     // Every sample takes at least ⌈step/max_step⌉ steps: a max_step that
     // plans more steps than the budget is refused before any work, not
     // found out as `solver-step-budget` after it.
@@ -136,7 +147,7 @@ pub(super) fn adaptive(s: &Scenario, plant_dim: usize) -> Result<Option<Adaptive
             format!(
                 "{max_step:e} s makes at least {:.3e} steps of the {budget} a run may take (the run limit of 4e8 evaluations, {} a step, less the law's): raise max_step to at least {:.3e} s",
                 (sim.horizon / max_step).ceil(),
-                tab.stages(),
+                scheme.evaluations(plant_dim + 2),
                 sim.horizon / (budget.max(1) as f64)
             ),
         );

@@ -16,14 +16,50 @@ use crate::plant::Plant;
 use ehservo_core::control::Controller;
 use ehservo_core::error::ParamError;
 use ehservo_core::reference::Reference;
-use ehservo_core::solver::{scaled_rms, Adaptive, Failure, StepControl, Tableau};
+use ehservo_core::solver::rosenbrock23::{self, Components, FiniteDifference, Rosenbrock23};
+use ehservo_core::solver::{scaled_rms, Adaptive, Failure, Method, StepControl, Tableau};
 use serde::{Deserialize, Serialize};
 
 /// The most plant states a per-state `atol` may list.
 pub const MAX_ATOL: usize = 8;
 
+/// How an adaptive kind steps: an explicit pair, or the linearly
+/// implicit (stiff) Rosenbrock triple with its Jacobian.
+#[derive(Debug, Clone, Copy)]
+pub enum Scheme {
+    /// An embedded explicit Runge–Kutta pair.
+    Explicit(&'static Tableau),
+    /// `ode23s`'s Rosenbrock triple, J by forward differences.
+    Rosenbrock23,
+}
+
+impl Scheme {
+    /// The method's name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Explicit(t) => t.name,
+            Self::Rosenbrock23 => rosenbrock23::NAME,
+        }
+    }
+
+    /// Right-hand side evaluations a step takes for `dim` integrated
+    /// components (the plant's and the actuator's two).
+    pub fn evaluations(&self, dim: usize) -> usize {
+        match self {
+            Self::Explicit(t) => t.stages(),
+            Self::Rosenbrock23 => Method::<[f64; 1]>::evaluations(&ROS_FD, dim),
+        }
+    }
+
+    /// Whether the method needs a Jacobian (and so a state of at most
+    /// [`rosenbrock23::MAX_DIM`] components).
+    pub fn needs_jacobian(&self) -> bool {
+        matches!(self, Self::Rosenbrock23)
+    }
+}
+
 macro_rules! solver_kinds {
-    ($($(#[$doc:meta])* $variant:ident $name:literal => $tableau:expr),* $(,)?) => {
+    ($($(#[$doc:meta])* $variant:ident $name:literal => $scheme:expr),* $(,)?) => {
         /// `simulation.solver`: how the plant is integrated between samples.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
         pub enum SolverKind {
@@ -41,10 +77,10 @@ macro_rules! solver_kinds {
                 }
             }
 
-            /// The embedded pair, `None` for the fixed-step RK4.
-            pub fn tableau(&self) -> Option<&'static Tableau> {
+            /// How it steps, `None` for the fixed-step RK4.
+            pub fn scheme(&self) -> Option<Scheme> {
                 match self {
-                    $(Self::$variant => $tableau,)*
+                    $(Self::$variant => $scheme,)*
                 }
             }
         }
@@ -56,9 +92,11 @@ solver_kinds! {
     #[default]
     Rk4 "rk4" => None,
     /// Dormand–Prince 5(4) with error control.
-    Dopri5 "dopri5" => Some(&ehservo_core::solver::dopri5::DOPRI5),
+    Dopri5 "dopri5" => Some(Scheme::Explicit(&ehservo_core::solver::dopri5::DOPRI5)),
     /// Bogacki–Shampine 3(2) with error control (loose tolerances).
-    Bs32 "bs32" => Some(&ehservo_core::solver::bs32::BS32),
+    Bs32 "bs32" => Some(Scheme::Explicit(&ehservo_core::solver::bs32::BS32)),
+    /// The stiff `ode23s` Rosenbrock triple (Shampine & Reichelt 1997).
+    Rosenbrock23 "rosenbrock23" => Some(Scheme::Rosenbrock23),
 }
 
 /// The absolute tolerance: one value for every state, or one per plant
@@ -110,7 +148,7 @@ impl Atol {
 #[derive(Debug, Clone, Copy)]
 pub struct AdaptiveConfig {
     kind: SolverKind,
-    tableau: &'static Tableau,
+    scheme: Scheme,
     rtol: f64,
     atol: Atol,
     control: StepControl,
@@ -127,7 +165,7 @@ impl AdaptiveConfig {
         max_step: f64,
         max_steps: u64,
     ) -> Result<Self, ParamError> {
-        let Some(tableau) = kind.tableau() else {
+        let Some(scheme) = kind.scheme() else {
             return Err(ParamError::new(
                 "solver",
                 "has no error control (rk4)",
@@ -153,7 +191,7 @@ impl AdaptiveConfig {
         }
         Ok(Self {
             kind,
-            tableau,
+            scheme,
             rtol,
             atol,
             control: StepControl {
@@ -169,7 +207,7 @@ impl AdaptiveConfig {
     }
 }
 
-/// The tableau is the kind's: equal kinds, tolerances and bounds are equal.
+/// The scheme is the kind's: equal kinds, tolerances and bounds are equal.
 impl PartialEq for AdaptiveConfig {
     fn eq(&self, o: &Self) -> bool {
         (self.kind, self.rtol, self.atol, self.control) == (o.kind, o.rtol, o.atol, o.control)
@@ -179,7 +217,12 @@ impl PartialEq for AdaptiveConfig {
 impl AdaptiveConfig {
     /// The solver's name.
     pub fn name(&self) -> &'static str {
-        self.tableau.name
+        self.scheme.name()
+    }
+
+    /// How it steps.
+    pub fn scheme(&self) -> Scheme {
+        self.scheme
     }
 
     /// The relative tolerance.
@@ -228,11 +271,45 @@ fn norm<S: AsRef<[f64]> + ehservo_core::rk4::OdeState>(
     let m = n.min(MAX_ATOL);
     atol[m] = cfg.rtol * SPOOL_SCALE;
     atol[m + 1] = cfg.rtol * SPOOL_SCALE;
-    scaled_rms(
+    let w = match cfg.scheme {
+        Scheme::Explicit(t) => Method::<[f64; 1]>::error_weight(t, cfg.rtol),
+        Scheme::Rosenbrock23 => Method::<[f64; 1]>::error_weight(&ROS_FD, cfg.rtol),
+    };
+    w * scaled_rms(
         &[(x0, x1, ex), (&y0.a, &y1.a, &e.a)],
         cfg.rtol,
         &atol[..m + 2],
     )
+}
+
+/// The stiff method with forward differences (no floor: each column's
+/// increment follows the component and the step).
+const ROS_FD: Rosenbrock23<FiniteDifference> = Rosenbrock23 {
+    jacobian: FiniteDifference {
+        floor: [0.0; rosenbrock23::MAX_DIM],
+    },
+};
+
+impl<S: AsRef<[f64]> + AsMut<[f64]> + ehservo_core::rk4::OdeState> Components for PlantAct<S> {
+    fn dim(&self) -> usize {
+        self.x.as_ref().len() + 2
+    }
+    fn get(&self, i: usize) -> f64 {
+        let x = self.x.as_ref();
+        if i < x.len() {
+            x[i]
+        } else {
+            self.a[i - x.len()]
+        }
+    }
+    fn set(&mut self, i: usize, v: f64) {
+        let n = self.x.as_ref().len();
+        if i < n {
+            self.x.as_mut()[i] = v;
+        } else {
+            self.a[i - n] = v;
+        }
+    }
 }
 
 /// The adaptive integration's state in a simulation.
@@ -258,19 +335,17 @@ impl<P: Plant, C: Controller, R: Reference> Simulation<P, C, R> {
         };
         let (plant, act): (&P, &Actuator) = (&self.plant, &self.actuator);
         let cfg = run.cfg;
-        let result = run.state.integrate(
-            cfg.tableau,
-            &cfg.control,
-            |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
-                plant.deriv(tt, &s.x, act.output(&s.a, u), var, &mut ds.x);
-                act.deriv(&s.a, u, &mut ds.a);
-            },
-            |y0, y1, e| norm(&cfg, y0, y1, e),
-            |y| plant.limit_state(&mut y.x),
-            t,
-            t_next,
-            &mut self.y.pa,
-        );
+        let f = |tt: f64, s: &PlantAct<P::State>, ds: &mut PlantAct<P::State>| {
+            plant.deriv(tt, &s.x, act.output(&s.a, u), var, &mut ds.x);
+            act.deriv(&s.a, u, &mut ds.a);
+        };
+        let nrm = |y0: &_, y1: &_, e: &_| norm(&cfg, y0, y1, e);
+        let lim = |y: &mut PlantAct<P::State>| plant.limit_state(&mut y.x);
+        let (ctl, y) = (&cfg.control, &mut self.y.pa);
+        let result = match cfg.scheme {
+            Scheme::Explicit(tab) => run.state.integrate(tab, ctl, f, nrm, lim, t, t_next, y),
+            Scheme::Rosenbrock23 => run.state.integrate(&ROS_FD, ctl, f, nrm, lim, t, t_next, y),
+        };
         self.outcome.solver_steps = run.state.counts;
         match result {
             Ok(()) => true,

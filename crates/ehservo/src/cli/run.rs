@@ -446,10 +446,15 @@ fn print_summary(
             format!(", {} RK4 substep(s)", sim.substeps)
         } else if sim.mode == crate::simulation::Mode::Sampled {
             format!(
-                ", {}: {} steps accepted, {} rejected",
+                ", {}: {} steps accepted, {} rejected{}",
                 sim.solver.as_str(),
                 r.outcome.solver_steps.accepted,
-                r.outcome.solver_steps.rejected
+                r.outcome.solver_steps.rejected,
+                if sim.solver.scheme().is_some_and(|s| s.needs_jacobian()) {
+                    format!(", {} Jacobian", crate::output::JACOBIAN_FD)
+                } else {
+                    String::new()
+                }
             )
         } else {
             String::new()

@@ -265,9 +265,7 @@ pub fn linearisation_json(l: &Linearised) -> Value {
         (crate::axis::Axis::Rotary, false) => {
             "C = −u/θm: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
         }
-        (_, false) => {
-            "C = −u/ym: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string()
-        }
+        (_, false) => "C = −u/ym: negative feedback, L = C·z^−ns·Gd·z^−nc".to_string(),
         (_, true) => {
             let x = if axis == crate::axis::Axis::Rotary {
                 "θ"

@@ -327,7 +327,13 @@ pub struct SolverInfo {
     /// Steps tried and rejected over the run (adaptive).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rejected_steps: Option<u64>,
+    /// Where a stiff method's Jacobian comes from: `"finite-difference"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub jacobian: Option<&'static str>,
 }
+
+/// How summary.json and the run's line name a Jacobian by differences.
+pub const JACOBIAN_FD: &str = "finite-difference";
 
 impl SolverInfo {
     /// The solver of `lp` and the steps of the run that ended in `outcome`.
@@ -340,6 +346,7 @@ impl SolverInfo {
                 max_step: None,
                 accepted_steps: None,
                 rejected_steps: None,
+                jacobian: None,
             },
             Some(a) => Self {
                 kind: a.kind().as_str(),
@@ -348,6 +355,7 @@ impl SolverInfo {
                 max_step: Some(a.max_step()),
                 accepted_steps: Some(outcome.solver_steps.accepted),
                 rejected_steps: Some(outcome.solver_steps.rejected),
+                jacobian: a.scheme().needs_jacobian().then_some(JACOBIAN_FD),
             },
         }
     }

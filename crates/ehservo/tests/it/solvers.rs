@@ -151,16 +151,14 @@ fn rejected_steps_are_counted_and_reported() {
     assert_eq!(s["solver"], serde_json::json!({"kind": "rk4"}));
 }
 
-/// A sweep under dopri5 (4 runs of the Fig. 8 case, 1 s, a drawn γ1) gives
-/// the same results.csv on one thread and on two.
+/// A sweep under dopri5, and under rosenbrock23 (4 runs of the Fig. 8
+/// case, 1 s, a drawn γ1), gives the same results.csv on one thread and
+/// on two.
 #[test]
 fn an_adaptive_sweep_is_the_same_on_any_thread_count() {
     let tmp = tempfile::tempdir().unwrap();
-    let study = tmp.path().join("s.toml");
-    std::fs::write(
-        &study,
-        format!(
-            r#"name = "adaptive"
+    let text = format!(
+        r#"name = "adaptive"
 base = "{}"
 seed = 5
 set = ["simulation.horizon=1", "simulation.settle=0.5", "simulation.solver=\"dopri5\"", "simulation.rtol=1e-7"]
@@ -173,12 +171,12 @@ dist = "uniform"
 low = 80.0
 high = 120.0
 "#,
-            repo().join("scenarios/paper/fig8.toml").display()
-        ),
-    )
-    .unwrap();
-    let sweep = |threads: &str| {
-        let out = tmp.path().join(format!("t{threads}"));
+        repo().join("scenarios/paper/fig8.toml").display()
+    );
+    let sweep = |threads: &str, solver: &str| {
+        let out = tmp.path().join(format!("t{threads}{solver}"));
+        let study = tmp.path().join(format!("{solver}.toml"));
+        std::fs::write(&study, text.replace("dopri5", solver)).unwrap();
         let o = ehservo()
             .arg("sweep")
             .arg(&study)
@@ -190,11 +188,112 @@ high = 120.0
         succeeded("sweep", &o);
         std::fs::read(out.join("results.csv")).unwrap()
     };
-    let one = sweep("1");
-    assert_eq!(one, sweep("2"));
-    assert_eq!(
-        String::from_utf8(one).unwrap().lines().count(),
-        5,
-        "header + 4 runs"
-    );
+    for solver in ["dopri5", "rosenbrock23"] {
+        let one = sweep("1", solver);
+        assert_eq!(one, sweep("2", solver), "{solver}");
+        assert_eq!(
+            String::from_utf8(one).unwrap().lines().count(),
+            5,
+            "{solver}: header + 4 runs"
+        );
+    }
+}
+
+/// The stiff method against RK4 at 1000 sub-steps, at rtol 1e-6, held to
+/// 10·(atol + rtol·|y|max) on the position at every sample: the paper's
+/// Fig. 2 (atol 1e-9 rad: about 9e-7 rad at |θ|max ≈ 0.092 rad; seen
+/// 4.4e-10) and Hopsan's Position Servo over 0–3 s, its relief valve
+/// working after the step at 1 s (atol per state as docs/solvers.md's
+/// table: about 8e-6 m at |y|max ≈ 0.81 m; seen 4.0e-7 m).
+#[test]
+fn rosenbrock23_agrees_with_a_fine_rk4() {
+    let cases = [
+        ("scenarios/paper/fig2.toml", "1e-9", 1e-9, "10"),
+        (
+            "scenarios/hopsan/position-servo.toml",
+            "[1e-12, 1e-9, 1.0, 1.0, 1.0, 1e-12]",
+            1e-12,
+            "3",
+        ),
+    ];
+    for (f, atol_set, atol, horizon) in cases {
+        let h = format!("simulation.horizon={horizon}");
+        let (reference, _) = positions(f, &["simulation.substeps=1000", &h]);
+        let amp = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let (y, r) = positions(
+            f,
+            &[
+                &h,
+                "simulation.substeps=1",
+                "simulation.solver=\"rosenbrock23\"",
+                "simulation.rtol=1e-6",
+                &format!("simulation.atol={atol_set}"),
+            ],
+        );
+        let tol = 10.0 * (atol + 1e-6 * amp);
+        let g = gap(&y, &reference);
+        std::println!("{f}: {g:e} (tol {tol:e}) {:?}", r.outcome.solver_steps);
+        assert!(g <= tol, "{f}: {g:e} > {tol:e}");
+    }
+}
+
+/// The steps of `solver` on Chrono's cylinder made stiff, from
+/// summary.json: (accepted + rejected, the summary's solver block).
+fn stiff_cylinder_steps(out: &std::path::Path, solver: &str) -> (u64, serde_json::Value) {
+    let o = ehservo()
+        .arg("run")
+        .arg(repo().join("scenarios/cylinders/chrono-single-rod.toml"))
+        .args([
+            "--set",
+            "plant.load.mass=0.5",
+            "--set",
+            "simulation.horizon=1",
+        ])
+        .args([
+            "--set",
+            "simulation.substeps=1",
+            "--set",
+            "simulation.rtol=1e-4",
+        ])
+        .args(["--set", &format!("simulation.solver=\"{solver}\"")])
+        .args([
+            "--set",
+            "simulation.atol=[1e-12, 1e-9, 1.0, 1.0, 1.0, 1e-12]",
+        ])
+        .args(["--no-plot", "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    succeeded("run", &o);
+    if solver == "rosenbrock23" {
+        let said =
+            String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+        let n = said.matches("finite-difference Jacobian").count();
+        assert_eq!(n, 1, "{said}");
+    }
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let v = &s["solver"];
+    let n = v["accepted_steps"].as_u64().unwrap() + v["rejected_steps"].as_u64().unwrap();
+    (n, v.clone())
+}
+
+/// Chrono's single-rod cylinder made stiff: its 500 kg load replaced by
+/// 0.5 kg. The rod's viscous friction c = 1e5 N·s/m then gives the
+/// velocity an eigenvalue near −c/m = −2·10⁵ /s, and the hydraulic
+/// natural frequency √(βe·A_A²/(V_A·m)) = √(8.38e8 · (5.03e-3)² /
+/// (7.85e-4 · 0.5)) ≈ 7.3e3 rad/s (√1000 ≈ 32× the 500 kg axis's 232
+/// rad/s; V_A = A_A·0.142 m + 7.16e-5 m³). dopri5's stability bound
+/// h·|λ| ≲ 3.3 holds it to ~16 µs steps, 60 a 1 ms sample; the stiff
+/// method takes its steps for accuracy alone. Counted from summary.json
+/// (seen: 62 008 against 3 138 at rtol 1e-4), and the summary names the
+/// finite-difference Jacobian.
+#[test]
+fn rosenbrock23_takes_far_fewer_steps_on_a_stiff_cylinder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (dp, _) = stiff_cylinder_steps(&tmp.path().join("dp"), "dopri5");
+    let (ros, v) = stiff_cylinder_steps(&tmp.path().join("ros"), "rosenbrock23");
+    assert_eq!(v["jacobian"], "finite-difference");
+    assert!(dp > 50_000, "dopri5 {dp}");
+    assert!(ros * 10 < dp, "rosenbrock23 {ros} vs dopri5 {dp}");
 }
