@@ -585,7 +585,14 @@ impl StateSpace {
         if n > STACK_STATES || self.inputs.is_empty() || self.outputs.is_empty() {
             return self.at(self.point(w)).map(|m| m[(0, 0)]);
         }
-        siso_at(self, self.point(w))
+        let p = self.point(w);
+        // The smallest stack array that holds the model: zeroing a larger
+        // one would cost more than the solve.
+        match n {
+            0..=6 => siso_at::<6, 7>(self, p),
+            7..=12 => siso_at::<12, 13>(self, p),
+            _ => siso_at::<STACK_STATES, { STACK_STATES + 1 }>(self, p),
+        }
     }
 
     /// The poles (eigenvalues of A), sorted.
@@ -714,15 +721,15 @@ pub const STACK_STATES: usize = 24;
 /// by Gaussian elimination with partial pivoting (the pivot of largest
 /// |re| + |im|, as nalgebra's LU picks it) on the augmented `[pI − A | b]`
 /// in a stack array; None when a pivot vanishes (p is a pole) or the value
-/// is not finite. Needs `n ≤ STACK_STATES`.
-fn siso_at(m: &StateSpace, p: C64) -> Option<C64> {
+/// is not finite. Needs `n ≤ N` and `W = N + 1`.
+fn siso_at<const N: usize, const W: usize>(m: &StateSpace, p: C64) -> Option<C64> {
     let n = m.n();
     let d = m.d[(0, 0)];
     if n == 0 {
         return Some(C64::new(d, 0.0));
     }
     let zero = C64::new(0.0, 0.0);
-    let mut g = [[zero; STACK_STATES + 1]; STACK_STATES];
+    let mut g = [[zero; W]; N];
     for (i, row) in g.iter_mut().enumerate().take(n) {
         for (j, v) in row.iter_mut().enumerate().take(n) {
             *v = C64::new(-m.a[(i, j)], 0.0);
@@ -754,7 +761,7 @@ fn siso_at(m: &StateSpace, p: C64) -> Option<C64> {
             }
         }
     }
-    let mut x = [zero; STACK_STATES];
+    let mut x = [zero; N];
     for i in (0..n).rev() {
         let mut acc = g[i][n];
         for j in i + 1..n {
