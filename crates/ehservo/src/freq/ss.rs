@@ -750,13 +750,13 @@ fn siso_at<const N: usize, const W: usize>(m: &StateSpace, p: C64) -> Option<C64
             return None;
         }
         g.swap(k, piv);
-        let pivot = g[k][k];
-        for i in k + 1..n {
-            let f = g[i][k] / pivot;
+        let (top, below) = g.split_at_mut(k + 1);
+        let row_k = &top[k];
+        for row in below.iter_mut().take(n - k - 1) {
+            let f = row[k] / row_k[k];
             if f != zero {
-                for j in k + 1..=n {
-                    let v = g[k][j];
-                    g[i][j] -= f * v;
+                for (v, &vk) in row[k + 1..=n].iter_mut().zip(&row_k[k + 1..=n]) {
+                    *v -= f * vk;
                 }
             }
         }
