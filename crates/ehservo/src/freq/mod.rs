@@ -386,6 +386,23 @@ mod tests {
         assert!(m.lp.g.b[(2, 0)] > p.lp.g.b[(2, 0)]);
     }
 
+    /// A state feedback that reads the estimator's velocity and
+    /// acceleration has no loop model: the note says why, and the
+    /// linearisation is made (it failed composing L, "series: 1 outputs
+    /// into 3 inputs").
+    #[test]
+    fn state_feedback_on_an_estimator_is_named_not_failed() {
+        let toml = "[simulation]\nstep = 0.001\n[sensor]\nmeasured = [\"theta\"]\n[estimator]\nkind = \"luenberger\"\npoles = [-300.0, -350.0, -400.0]\n[controller]\nkind = \"state-feedback\"\n";
+        let s = Loop::parse(toml).unwrap();
+        let l = linearise(&s, "e.toml", None, Some(Side::Plus), Discretisation::Zoh).unwrap();
+        assert!(l.lp.loop_l.is_none() && l.lp.feedback.is_none());
+        assert!(
+            l.lp.notes.iter().any(|n| n.contains("estimator")),
+            "{:?}",
+            l.lp.notes
+        );
+    }
+
     /// The state feedback's loop closes on the polynomial placed by hand.
     /// The plant linearised at rest is `θ⃛ = −α1θ − α2θ̇ − α3θ̈ + β·u`
     /// (read off its companion form: A's last row, B's last entry), and the

@@ -27,6 +27,9 @@
 //! is `C(s)·G(s)` at `s = jω`, the controller's law itself.
 
 use super::controllers::{controller_model, observer_model, ControllerModel};
+
+#[path = "response_parts.rs"]
+mod parts;
 use super::linearize::{ActuatorStage, Chain, Delay, Kink, Linearize, Point, Side};
 use super::oppoint::{LinPlant, OperatingPoint};
 use super::ss::{Quantity, StateSpace, C64};
@@ -34,6 +37,7 @@ use crate::axis::Axis;
 use crate::scenario::{KeyError, Loop};
 use crate::simulation::Mode;
 use ehservo_sim::estimator::AnyEstimator;
+use parts::{compensated_gain, discretise, measured_path, open_loop, Delays};
 
 /// How the plant is discretised in the sampled loop.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -238,130 +242,6 @@ fn controller_models(
     })
 }
 
-/// The gain a compensating law divides by at `op`: the nominal model's
-/// `b(x, s)` (floored as the law floors it) at the point's position and
-/// speed, at rest in acceleration, in the valve direction `s` of `side`.
-fn compensated_gain(setup: &Loop, op: &OperatingPoint, side: Side) -> f64 {
-    let speed = match (op.v_m_s, op.theta_dot_deg_s) {
-        (Some(v), _) => v,
-        (None, Some(d)) => d * ehservo_core::math::DR,
-        (None, None) => 0.0,
-    };
-    let x = [op.position(), speed, 0.0];
-    let model = &setup.design().model;
-    let b0 = model.b_at_rest();
-    model.gain_for(&x, side.sign(), 1e-3 * b0).0
-}
-
-/// G discretised as `discretisation` says, at the loop's period.
-fn discretise(
-    g: &StateSpace,
-    discretisation: Discretisation,
-    setup: &Loop,
-) -> Result<StateSpace, KeyError> {
-    let h = setup.sim().step;
-    match discretisation {
-        Discretisation::Zoh => g.zoh(h),
-        Discretisation::Rk4 => g.rk4_map(h, setup.sim().substeps),
-    }
-    .map_err(|e| KeyError::new("plant", e.to_string()))
-}
-
-/// G with the outputs (θ, θ̇, θ̈), continuous, when the law reads the
-/// three (the state feedback) from the sensors; None for a law that reads
-/// θm alone, or (with a note) when the law's channels are not G's
-/// derivatives: an estimator supplies some, or G's input reaches θ sooner
-/// than its third integral.
-fn measured_path(
-    setup: &Loop,
-    g: &StateSpace,
-    controller: Option<&ControllerModel>,
-    notes: &mut Vec<String>,
-) -> Option<StateSpace> {
-    if controller.is_none_or(|c| c.measured == 1) {
-        return None;
-    }
-    if !setup.stages().sensor.measured().is_all() {
-        notes.push(
-            "controller: the law reads the estimator's x̂ for the channels the sensors do not measure; the estimator in the loop is not modelled, so the loop is not computed"
-                .into(),
-        );
-        return None;
-    }
-    let names = vec![
-        Quantity::new("theta", "rad"),
-        Quantity::new("theta_dot", "rad/s"),
-        Quantity::new("theta_ddot", "rad/s²"),
-    ];
-    let g3 = g.with_derivatives(names);
-    if g3.is_none() {
-        notes.push(
-            "controller: the plant's command reaches θ sooner than its third integral, so θ̇m and θ̈m are not G's derivatives; the loop is not computed"
-                .into(),
-        );
-    }
-    g3
-}
-
-/// The loop's delays: the sample period and the samples of the sensor's
-/// and the computation's delays.
-struct Delays {
-    h: f64,
-    sensor: usize,
-    computation: usize,
-}
-
-/// L as one model, when the law is linear: C ∘ z^{−n_s} ∘ G_d ∘ z^{−n_c}
-/// in sampled mode, C ∘ G in continuous time.
-fn open_loop(
-    g: &StateSpace,
-    g_d: Option<&StateSpace>,
-    feedback: Option<&StateSpace>,
-    delays: &Delays,
-) -> Result<Option<StateSpace>, KeyError> {
-    let h = delays.h;
-    if let (Some(c), true) = (feedback, g.outputs.len() > 1) {
-        // Several measured channels, each delayed alike: the delays
-        // commute with G, so both sit on the command, z^{−(n_s + n_c)}.
-        let u = Quantity::new("u", "V");
-        let m = match g_d {
-            Some(gd) => StateSpace::delay(delays.computation + delays.sensor, h, &u).series(gd),
-            None => Ok(g.clone()),
-        };
-        return m
-            .and_then(|m| m.series(c))
-            .map(Some)
-            .map_err(|e| KeyError::new("loop", e.0));
-    }
-    Ok(match (feedback, g_d) {
-        (Some(c), Some(gd)) => {
-            let theta = Quantity::new("theta", "rad");
-            let u = Quantity::new("u", "V");
-            let comp = Delay {
-                n: delays.computation,
-                h,
-                signal: u.clone(),
-            };
-            let sens = Delay {
-                n: delays.sensor,
-                h,
-                signal: theta.clone(),
-            };
-            let comp_m = StateSpace::delay(comp.n, h, &u);
-            let sens_m = StateSpace::delay(sens.n, h, &theta);
-            Some(
-                comp_m
-                    .series(gd)
-                    .and_then(|m| m.series(&sens_m))
-                    .and_then(|m| m.series(c))
-                    .map_err(|e| KeyError::new("loop", e.0))?,
-            )
-        }
-        (Some(c), None) => Some(g.series(c).map_err(|e| KeyError::new("loop", e.0))?),
-        _ => None,
-    })
-}
-
 impl LoopModel {
     /// The loop of `setup` at the operating point `op`, on `side` at a kink.
     pub fn new(
@@ -435,6 +315,14 @@ impl LoopModel {
             computation: computation_delay,
         };
         let measured = measured_path(setup, &g, controller.as_ref(), &mut notes);
+        // A law that reads three channels with no model of them has no loop
+        // (the note says why): drop it before L is composed.
+        let (controller, controller_loop, feedback) =
+            if measured.is_none() && controller.as_ref().is_some_and(|c| c.measured > 1) {
+                (None, None, None)
+            } else {
+                (controller, controller_loop, feedback)
+            };
         let measured_d = match (&measured, sampled) {
             (Some(g3), true) => Some(discretise(g3, discretisation, setup)?),
             _ => None,
@@ -444,13 +332,6 @@ impl LoopModel {
             None => open_loop(&g, g_d.as_ref(), feedback.as_ref(), &delays)?,
         };
         let measured = if sampled { measured_d } else { measured };
-        let (controller, controller_loop, feedback) =
-            if measured.is_none() && controller.as_ref().is_some_and(|c| c.measured > 1) {
-                (None, None, None)
-            } else {
-                (controller, controller_loop, feedback)
-            };
-        let loop_l = if feedback.is_some() { loop_l } else { None };
         let observer = match &setup.stages().estimator {
             Some(AnyEstimator::Linear(o)) if sampled => Some(observer_model(o, h)),
             _ => None,
